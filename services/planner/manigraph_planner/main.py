@@ -1,0 +1,27 @@
+"""``manigraph planner``: entry point (torch is imported only when a GNN policy is served)."""
+
+from __future__ import annotations
+
+import argparse
+
+from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
+from manigraph_shared.cli import Command
+
+
+def _configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--policy", default="expert", help="registered policy name or checkpoint path"
+    )
+    add_bus_arguments(parser)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from manigraph_planner.policies import load_policy
+    from manigraph_planner.service import PlannerService
+    from manigraph_shared.service import run_service
+
+    policy = load_policy(args.policy)
+    return run_service(lambda bus: PlannerService(bus, policy), bus_config_from_args(args))
+
+
+command = Command(help="run the planner service (policy -> Action)", configure=_configure, run=_run)

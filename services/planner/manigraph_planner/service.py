@@ -1,0 +1,35 @@
+"""The planner service: serves one policy over the bus."""
+
+from __future__ import annotations
+
+from manigraph_shared.bus import Bus
+from manigraph_shared.messages import EpisodeEvent, Scene, SkillStatus
+from manigraph_shared.service import Service
+from manigraph_planner.decisions import DecisionMaker
+from manigraph_planner.policies.base import Policy
+
+
+class PlannerService(Service):
+    name = "planner"
+
+    def __init__(self, bus: Bus, policy: Policy) -> None:
+        super().__init__(bus)
+        self.decisions = DecisionMaker(policy)
+
+    def setup(self) -> None:
+        self.on(EpisodeEvent, self.decisions.on_episode)
+        self.on(SkillStatus, self.decisions.on_status)
+        self.on(Scene, self._on_scene)
+        self.log.info("serving policy '%s'", self.decisions.policy.name)
+
+    def _on_scene(self, scene: Scene) -> None:
+        action = self.decisions.on_scene(scene)
+        if action is not None:
+            self.log.info(
+                "%s: %s -> %s (scene %d)",
+                action.decision_id,
+                action.object_id,
+                action.goal_id,
+                action.scene_sequence,
+            )
+            self.bus.publish(action)

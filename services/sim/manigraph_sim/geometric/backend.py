@@ -1,0 +1,144 @@
+"""The geometric world as a sim backend: episodes, observations and a magic gripper."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from manigraph_shared.errors import SkillError
+from manigraph_shared.messages import (
+    EpisodeEvent,
+    EpisodePhase,
+    EpisodeRequest,
+    GoalCategory,
+    GripperOp,
+    ObjectCategory,
+    RobotCommand,
+    RobotFeedback,
+    Scene,
+    SceneGoal,
+    SceneObject,
+    Vector3,
+)
+from manigraph_sim.backend import SimBackend, register_backend
+from manigraph_sim.geometric.world import GeometricWorld
+from manigraph_sim.tasks import get_task
+from manigraph_sim.tasks.base import TaskParams
+
+
+def _vec(values: np.ndarray) -> Vector3:
+    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
+
+
+@register_backend("geometric")
+class GeometricBackend(SimBackend):
+    def __init__(self, goal_tolerance: float = 0.01) -> None:
+        self.goal_tolerance = goal_tolerance
+        self.world: GeometricWorld | None = None
+        self.request: EpisodeRequest | None = None
+        self.steps = 0
+        self.max_steps = 0
+        self.sequence = 0
+        self.ended = True
+        self._end_reported = True
+
+    def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
+        task = get_task(request.task, TaskParams(blocks=request.blocks, stacks=request.stacks))
+        layout = task.layout(np.random.default_rng(request.seed))
+        self.world = GeometricWorld(layout.bodies, layout.goals, self.goal_tolerance)
+        self.request = request
+        self.steps = 0
+        self.max_steps = request.max_steps or task.max_steps(len(layout.goals))
+        self.ended = False
+        self._end_reported = False
+        return self._event(EpisodePhase.START, stamp)
+
+    def scene(self, stamp: float) -> Scene | None:
+        if self.world is None or self.request is None:
+            return None
+        world = self.world
+        occupancy = world.occupancy()
+        in_goal = set(occupancy.values())
+        objects = [
+            SceneObject(
+                id=body.id,
+                category=ObjectCategory(body.category),
+                position=_vec(body.position),
+                size=_vec(body.size),
+                filled=body.id in in_goal,
+                visible=not body.hidden,
+            )
+            for body in world.bodies.values()
+        ]
+        goals = [
+            SceneGoal(
+                id=goal.id,
+                category=GoalCategory(goal.category),
+                position=_vec(goal.position),
+                filled=goal.id in occupancy,
+                visible=not goal.hidden,
+            )
+            for goal in world.goals.values()
+        ]
+        self.sequence += 1
+        return Scene(
+            episode_id=self.request.episode_id,
+            stamp=stamp,
+            sequence=self.sequence,
+            objects=objects,
+            goals=goals,
+        )
+
+    def execute(self, command: RobotCommand, stamp: float) -> RobotFeedback:
+        try:
+            if self.world is None or self.ended:
+                raise SkillError("no_episode", "no episode is running")
+            if command.op is GripperOp.PICK:
+                self.steps += 1  # every attempted pick counts against the step budget
+                self.world.pick(command.object_id)
+            else:
+                self.world.place(command.object_id, np.array(command.position.as_tuple()))
+        except SkillError as exc:
+            self._check_end()
+            return RobotFeedback(
+                command_id=command.command_id,
+                ok=False,
+                reason=exc.reason,
+                detail=exc.detail,
+                stamp=stamp,
+            )
+        self._check_end()
+        return RobotFeedback(command_id=command.command_id, ok=True, stamp=stamp)
+
+    def _check_end(self) -> None:
+        if self.world is None or self.ended or self.world.held is not None:
+            return
+        if self.world.goals_filled() == len(self.world.goals) or self.steps >= self.max_steps:
+            self.ended = True
+
+    def end_event(self, stamp: float) -> EpisodeEvent | None:
+        if not self.ended or self._end_reported or self.world is None:
+            return None
+        self._end_reported = True
+        return self._event(EpisodePhase.END, stamp)
+
+    def _event(self, phase: EpisodePhase, stamp: float) -> EpisodeEvent:
+        assert self.world is not None and self.request is not None
+        filled = self.world.goals_filled()
+        total = len(self.world.goals)
+        success = None
+        reason = ""
+        if phase is EpisodePhase.END:
+            success = filled == total
+            reason = "all goals filled" if success else f"step budget {self.max_steps} spent"
+        return EpisodeEvent(
+            episode_id=self.request.episode_id,
+            phase=phase,
+            task=self.request.task,
+            seed=self.request.seed,
+            goals_total=total,
+            goals_filled=filled,
+            steps=self.steps,
+            success=success,
+            reason=reason,
+            stamp=stamp,
+        )

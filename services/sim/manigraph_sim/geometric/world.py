@@ -1,0 +1,132 @@
+"""A block world with honest geometry and no dynamics.
+
+Bodies are axis-aligned boxes. A body rests on the highest body under its footprint, or on the
+table; picking a body that has another body on top of it fails; a body released above a goal
+falls until it rests on something, so a goal is filled only when what is below it is there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from manigraph_shared.errors import SkillError
+
+#: Footprints must overlap by more than this (metres) to support or cover one another.
+CONTACT_MARGIN = 0.002
+
+
+@dataclass
+class Body:
+    id: str
+    category: str  # "block" | "cover"
+    size: np.ndarray  # full extents (x, y, z), metres
+    position: np.ndarray  # centre, metres
+    #: Hidden from observation (inside a closed box) until revealed.
+    hidden: bool = False
+
+    @property
+    def bottom(self) -> float:
+        return float(self.position[2] - self.size[2] / 2)
+
+    @property
+    def top(self) -> float:
+        return float(self.position[2] + self.size[2] / 2)
+
+
+@dataclass
+class Goal:
+    id: str
+    category: str  # "block" | "cover": which objects fill it
+    position: np.ndarray
+    hidden: bool = False
+
+
+def footprints_overlap(a_pos: np.ndarray, a_size: np.ndarray, b: Body) -> bool:
+    gap = np.abs(a_pos[:2] - b.position[:2]) - (a_size[:2] + b.size[:2]) / 2
+    return bool(np.all(gap < -CONTACT_MARGIN))
+
+
+class GeometricWorld:
+    def __init__(
+        self,
+        bodies: list[Body],
+        goals: list[Goal],
+        goal_tolerance: float = 0.01,
+        table_z: float = 0.0,
+    ) -> None:
+        self.bodies = {body.id: body for body in bodies}
+        self.goals = {goal.id: goal for goal in goals}
+        self.goal_tolerance = goal_tolerance
+        self.table_z = table_z
+        self.held: str | None = None
+
+    # --- queries ----------------------------------------------------------------------------
+    def resting(self) -> list[Body]:
+        return [b for b in self.bodies.values() if b.id != self.held]
+
+    def covering(self, body: Body) -> list[Body]:
+        """Bodies resting on top of ``body``."""
+        return [
+            other
+            for other in self.resting()
+            if other is not body
+            and other.bottom >= body.top - CONTACT_MARGIN
+            and footprints_overlap(other.position, other.size, body)
+        ]
+
+    def rest_height(self, position: np.ndarray, size: np.ndarray, ignore: str) -> float:
+        """Centre height at which a body of ``size`` released above ``position`` comes to rest."""
+        floor = self.table_z
+        for other in self.resting():
+            if other.id != ignore and footprints_overlap(position, size, other):
+                floor = max(floor, other.top)
+        return floor + float(size[2]) / 2
+
+    def occupancy(self) -> dict[str, str]:
+        """Goal id -> id of the resting body of its category within ``goal_tolerance``."""
+        bodies = self.resting()
+        goals = list(self.goals.values())
+        if not bodies or not goals:
+            return {}
+        body_xyz = np.array([b.position for b in bodies])
+        goal_xyz = np.array([g.position for g in goals])
+        distance = np.linalg.norm(goal_xyz[:, None, :] - body_xyz[None, :, :], axis=-1)
+        same = np.array([[g.category == b.category for b in bodies] for g in goals])
+        distance[~same] = np.inf
+        filled = {}
+        for row, goal in enumerate(goals):
+            column = int(np.argmin(distance[row]))
+            if distance[row, column] <= self.goal_tolerance:
+                filled[goal.id] = bodies[column].id
+        return filled
+
+    def goals_filled(self) -> int:
+        return len(self.occupancy())
+
+    # --- actions ----------------------------------------------------------------------------
+    def pick(self, body_id: str) -> None:
+        if self.held is not None:
+            raise SkillError("gripper_full", f"already holding {self.held}")
+        body = self.bodies.get(body_id)
+        if body is None:
+            raise SkillError("unknown_object", body_id)
+        if body.hidden:
+            raise SkillError("object_not_reachable", f"{body_id} is inside a closed box")
+        on_top = self.covering(body)
+        if on_top:
+            names = ", ".join(sorted(b.id for b in on_top))
+            raise SkillError("object_covered", f"{body_id} is under {names}")
+        self.held = body_id
+
+    def place(self, body_id: str, target: np.ndarray) -> np.ndarray:
+        """Release the held body above ``target``; it falls to rest. Returns where it rests."""
+        if self.held != body_id:
+            raise SkillError("not_holding", f"not holding {body_id}")
+        body = self.bodies[body_id]
+        rest = np.array(target, dtype=float)
+        rest[2] = self.rest_height(rest, body.size, ignore=body_id)
+        body.position = rest
+        self.held = None
+        return rest

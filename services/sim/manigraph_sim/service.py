@@ -1,0 +1,94 @@
+"""The sim service: wires a sim backend to the bus."""
+
+from __future__ import annotations
+
+import time
+
+from manigraph_shared.bus import Bus
+from manigraph_shared.messages import (
+    EpisodeEvent,
+    EpisodeRequest,
+    RobotCommand,
+    SkillStatus,
+)
+from manigraph_shared.service import Service
+from manigraph_sim.backend import SimBackend
+
+
+class SimService(Service):
+    """Publishes ``Scene`` at ``publish_hz`` and right after every change, resets episodes on
+    request, executes robot commands and reports episode start and end."""
+
+    name = "sim"
+
+    def __init__(self, bus: Bus, backend: SimBackend, publish_hz: float = 10.0) -> None:
+        super().__init__(bus)
+        self.backend = backend
+        self.tick_period = 1.0 / publish_hz
+
+    def setup(self) -> None:
+        # Resets arrive on a Zenoh thread; hand them to the service thread and wait.
+        self.bus.serve(EpisodeRequest, self._reset_from_query)
+        self.on(RobotCommand, self._execute)
+        self.on(SkillStatus, self._on_skill_status)
+
+    def _reset_from_query(self, request: EpisodeRequest) -> EpisodeEvent:
+        import queue
+
+        answer: queue.SimpleQueue[EpisodeEvent | BaseException] = queue.SimpleQueue()
+
+        def reset(_: object) -> None:
+            try:
+                answer.put(self._reset(request))
+            except BaseException as exc:  # handed back to the querier as an error reply
+                answer.put(exc)
+
+        self.call_soon(reset)
+        result = answer.get(timeout=30)
+        if isinstance(result, BaseException):
+            raise result
+        return result
+
+    def _reset(self, request: EpisodeRequest) -> EpisodeEvent:
+        event = self.backend.reset(request, time.time())
+        self.log.info(
+            "episode %s: %s K=%d s=%d seed %d",
+            request.episode_id,
+            request.task,
+            request.blocks,
+            request.stacks,
+            request.seed,
+        )
+        self.bus.publish(event)
+        self._publish_scene()
+        return event
+
+    def _execute(self, command: RobotCommand) -> None:
+        feedback = self.backend.execute(command, time.time())
+        if not feedback.ok:
+            self.log.info("%s %s failed: %s", command.op, command.object_id, feedback.reason)
+        self._publish_scene()
+        self.bus.publish(feedback)
+        end = self.backend.end_event(time.time())
+        if end is not None:
+            self.log.info(
+                "episode %s ended: %s (%d/%d goals, %d steps)",
+                end.episode_id,
+                "success" if end.success else "failure",
+                end.goals_filled,
+                end.goals_total,
+                end.steps,
+            )
+            self.bus.publish(end)
+
+    def _on_skill_status(self, status: SkillStatus) -> None:
+        if status.state.terminal:
+            self._publish_scene()  # a fresh observation for the next decision, now
+
+    def _publish_scene(self) -> None:
+        scene = self.backend.scene(time.time())
+        if scene is not None:
+            self.bus.publish(scene)
+
+    def tick(self) -> None:
+        self._publish_scene()

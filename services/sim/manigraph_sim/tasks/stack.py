@@ -1,0 +1,41 @@
+"""K-block stacking and its multi-stack variant."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from manigraph_shared.errors import TaskError
+from manigraph_sim.tasks.base import (
+    BLOCK_SIZE,
+    Layout,
+    Task,
+    register_task,
+    sample_sites,
+    stack_bodies,
+    stack_goals,
+)
+
+
+@register_task("stack")
+class StackTask(Task):
+    """K-block stacking.
+
+    **Task Description**: K blocks stand in one stack; build the inverted stack at another
+    place (the top block goes to the bottom goal).
+
+    **Randomizations**: the stack's and the goal stack's table positions, uniformly in the
+    workspace, at least three block widths apart.
+
+    **Success Conditions**: every goal holds a block (centre within the goal tolerance).
+    """
+
+    def validate(self) -> None:
+        if self.params.stacks != 1:
+            raise TaskError("stacks: stack has exactly one stack; use multistack for more")
+        if not 1 <= self.params.blocks <= 64:
+            raise TaskError("blocks: must be in 1..64")
+
+    def layout(self, rng: np.random.Generator) -> Layout:
+        start, goal = sample_sites(rng, 2, min_distance=3 * BLOCK_SIZE)
+        k = self.params.blocks
+        return Layout(stack_bodies("block", start, k), stack_goals("goal", goal, k))

@@ -1,0 +1,39 @@
+"""The newest Scene, updated from the Zenoh thread, waitable from the service thread."""
+
+from __future__ import annotations
+
+import threading
+
+from manigraph_shared.messages import Scene
+
+
+class SceneCache:
+    def __init__(self) -> None:
+        self._scene: Scene | None = None
+        self._changed = threading.Condition()
+
+    def update(self, scene: Scene) -> None:
+        with self._changed:
+            current = self._scene
+            if (
+                current is not None
+                and current.episode_id == scene.episode_id
+                and current.sequence > scene.sequence
+            ):
+                return  # an older sample overtaken on the way
+            self._scene = scene
+            self._changed.notify_all()
+
+    def wait_for(self, episode_id: str, sequence: int, timeout: float) -> Scene | None:
+        """The newest scene of ``episode_id`` at least as new as ``sequence``, or the newest
+        scene at all once ``timeout`` passes (the skill then reports what it sees)."""
+
+        def fresh() -> bool:
+            scene = self._scene
+            return (
+                scene is not None and scene.episode_id == episode_id and scene.sequence >= sequence
+            )
+
+        with self._changed:
+            self._changed.wait_for(fresh, timeout)
+            return self._scene

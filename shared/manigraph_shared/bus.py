@@ -1,0 +1,212 @@
+"""A typed layer over one Zenoh session: publish, subscribe, query and liveliness by message type.
+
+Every ``Message`` subclass already says which key it uses and how it is delivered, so callers
+publish and subscribe with types, never with raw keys or bytes. Decoding failures are handed to
+an error callback with the offending field named; they never reach the message callback and
+never kill the subscriber.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+import zenoh
+
+from manigraph_shared.bus_config import BusConfig
+from manigraph_shared.errors import BusError, ManigraphError, MessageError
+from manigraph_shared.messages import Delivery, Message
+
+log = logging.getLogger(__name__)
+
+M = TypeVar("M", bound=Message)
+R = TypeVar("R", bound=Message)
+
+ALIVE_PREFIX = "manigraph/alive"
+#: Zenoh's own default query timeout; queries here use less so an answer is never late.
+DEFAULT_QUERY_TIMEOUT = 5.0
+_ATTEMPT_MS = 2000
+
+
+def open_session(config: BusConfig) -> zenoh.Session:
+    """Open a session; a client retries until its router answers or ``wait_seconds`` pass."""
+    deadline = None if config.wait_seconds is None else time.monotonic() + config.wait_seconds
+    attempt = 0
+    while True:
+        attempt += 1
+        zconfig = zenoh.Config.from_file(str(config.config_file)) if config.config_file else None
+        zconfig = zconfig or zenoh.Config()
+        for key, value in config.zenoh_json().items():
+            zconfig.insert_json5(key, _json(value))
+        if config.mode != "router":
+            zconfig.insert_json5("connect/timeout_ms", str(_ATTEMPT_MS))
+            zconfig.insert_json5("connect/exit_on_failure", "true")
+        try:
+            return zenoh.open(zconfig)
+        except zenoh.ZError as exc:
+            if config.mode == "router" or (deadline is not None and time.monotonic() > deadline):
+                raise BusError(f"cannot open a {config.describe()} session: {exc}") from None
+            if attempt == 1 or attempt % 5 == 0:
+                log.info("waiting for the zenoh router at %s (%s)", ",".join(config.connect), exc)
+            time.sleep(0.2)
+
+
+def _json(value: object) -> str:
+    import json
+
+    return json.dumps(value)
+
+
+class Bus:
+    """One process's connection to the manigraph bus."""
+
+    def __init__(self, session: zenoh.Session) -> None:
+        self.session = session
+        self._publishers: dict[str, zenoh.Publisher] = {}
+        self._lock = threading.Lock()
+        self._declared: list[Any] = []
+
+    @classmethod
+    def open(cls, config: BusConfig) -> Bus:
+        return cls(open_session(config))
+
+    # --- pub/sub ----------------------------------------------------------------------------
+    def publish(self, message: Message) -> None:
+        key = message.key_for()
+        with self._lock:
+            publisher = self._publishers.get(key)
+            if publisher is None:
+                publisher = self.session.declare_publisher(
+                    key, reliability=zenoh.Reliability.RELIABLE, **_qos_for(message.delivery)
+                )
+                self._publishers[key] = publisher
+        publisher.put(message.encode(), encoding=_encoding(type(message)))
+
+    def subscribe(
+        self,
+        message_type: type[M],
+        on_message: Callable[[M], None],
+        on_error: Callable[[ManigraphError], None] | None = None,
+        key: str | None = None,
+    ) -> None:
+        """Call ``on_message`` (on a Zenoh thread) for each valid sample of ``message_type``."""
+        key = key or message_type.key_pattern()
+
+        def deliver(sample: zenoh.Sample) -> None:
+            sample_key = str(sample.key_expr)
+            try:
+                message = message_type.decode(sample.payload.to_bytes(), sample_key)
+            except MessageError as exc:
+                _report(on_error, exc)
+                return
+            try:
+                on_message(message)
+            except Exception as exc:  # a callback bug must not silence the subscriber
+                log.exception("handler for %s failed", message_type.type_name())
+                _report(on_error, ManigraphError(f"handler for {sample_key} failed: {exc!r}"))
+
+        self._declared.append(self.session.declare_subscriber(key, deliver))
+
+    def subscribe_raw(self, key: str, on_sample: Callable[[zenoh.Sample], None]) -> None:
+        """Every sample under ``key`` undecoded (the recorder's view)."""
+        self._declared.append(self.session.declare_subscriber(key, on_sample))
+
+    def put_raw(self, key: str, payload: bytes, delivery: Delivery = Delivery.RELIABLE) -> None:
+        """Publish bytes as recorded (replay): the receiver validates them as usual."""
+        self.session.put(key, payload, **_qos_for(delivery))
+
+    # --- request / reply --------------------------------------------------------------------
+    def serve(
+        self,
+        request_type: type[M],
+        handler: Callable[[M], Message],
+        key: str | None = None,
+    ) -> None:
+        """Answer queries on ``request_type.key``; errors become error replies, never silence."""
+        key = key or request_type.key
+
+        def answer(query: zenoh.Query) -> None:
+            try:
+                if query.payload is None:
+                    raise MessageError(request_type.type_name(), key, [("<payload>", "missing")])
+                request = request_type.decode(query.payload.to_bytes(), key)
+                reply = handler(request)
+                query.reply(key, reply.encode(), encoding=_encoding(type(reply)))
+            except ManigraphError as exc:
+                query.reply_err(str(exc))
+            except Exception as exc:
+                log.exception("queryable %s failed", key)
+                query.reply_err(f"internal error: {exc!r}")
+
+        self._declared.append(self.session.declare_queryable(key, answer))
+
+    def request(
+        self,
+        request: Message,
+        reply_type: type[R],
+        timeout: float = DEFAULT_QUERY_TIMEOUT,
+        key: str | None = None,
+    ) -> R:
+        """Send ``request`` to its queryable and decode the one reply, or raise ``BusError``."""
+        key = key or request.key_for()
+        replies = self.session.get(key, payload=request.encode(), timeout=timeout)
+        for reply in replies:
+            if reply.ok is not None:
+                return reply_type.decode(reply.ok.payload.to_bytes(), key)
+            raise BusError(f"{key}: {reply.err.payload.to_string()}")
+        raise BusError(f"{key}: no answer within {timeout:.1f} s (is the service running?)")
+
+    # --- liveliness -------------------------------------------------------------------------
+    def declare_alive(self, service: str) -> None:
+        self._declared.append(self.session.liveliness().declare_token(f"{ALIVE_PREFIX}/{service}"))
+
+    def alive_services(self, timeout: float = 2.0) -> set[str]:
+        names = set()
+        for reply in self.session.liveliness().get(f"{ALIVE_PREFIX}/**", timeout=timeout):
+            if reply.ok is not None:
+                names.add(str(reply.ok.key_expr).removeprefix(f"{ALIVE_PREFIX}/"))
+        return names
+
+    def close(self) -> None:
+        for entity in reversed(self._declared):
+            try:
+                entity.undeclare()
+            except zenoh.ZError:
+                pass
+        self._declared.clear()
+        if not self.session.is_closed():
+            self.session.close()
+
+    def __enter__(self) -> Bus:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
+
+
+def _report(on_error: Callable[[ManigraphError], None] | None, exc: ManigraphError) -> None:
+    if on_error is None:
+        log.warning("%s", exc)
+    else:
+        on_error(exc)
+
+
+def _qos_for(delivery: Delivery) -> dict[str, Any]:
+    if delivery is Delivery.LATEST:
+        return {
+            "congestion_control": zenoh.CongestionControl.DROP,
+            "priority": zenoh.Priority.DATA,
+            "express": True,
+        }
+    return {
+        "congestion_control": zenoh.CongestionControl.BLOCK,
+        "priority": zenoh.Priority.DATA,
+        "express": True,
+    }
+
+
+def _encoding(message_type: type[Message]) -> zenoh.Encoding:
+    return zenoh.Encoding.APPLICATION_JSON.with_schema(message_type.type_name())

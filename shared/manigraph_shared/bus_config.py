@@ -1,0 +1,169 @@
+"""Zenoh session settings from the standard flags and their environment variables.
+
+The flags are zenoh-python's usual ones (``--mode --connect --listen --config
+--no-multicast-scouting``); each has an environment variable so containers can be configured
+without a command line. Flags win over the environment.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from manigraph_shared.errors import ConfigError
+
+DEFAULT_ROUTER = "tcp/127.0.0.1:7447"
+MODES = ("client", "peer", "router")
+
+ENV = {
+    "mode": "MANIGRAPH_ZENOH_MODE",
+    "connect": "MANIGRAPH_ZENOH_CONNECT",
+    "listen": "MANIGRAPH_ZENOH_LISTEN",
+    "config": "MANIGRAPH_ZENOH_CONFIG",
+    "no_multicast_scouting": "MANIGRAPH_ZENOH_NO_MULTICAST_SCOUTING",
+    "wait_seconds": "MANIGRAPH_ZENOH_WAIT_SECONDS",
+}
+
+
+@dataclass(frozen=True)
+class BusConfig:
+    """How a process joins the manigraph bus.
+
+    The default is a client of the router on ``tcp/127.0.0.1:7447`` with multicast scouting
+    off, which is what ``manigraph up`` and ``compose.yaml`` start.
+    """
+
+    mode: str = "client"
+    connect: tuple[str, ...] = (DEFAULT_ROUTER,)
+    listen: tuple[str, ...] = ()
+    config_file: Path | None = None
+    multicast_scouting: bool = False
+    #: How long a client waits for its router; ``None`` waits forever (services do).
+    wait_seconds: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.mode not in MODES:
+            raise ConfigError("mode", f"'{self.mode}' is not one of {', '.join(MODES)}")
+        for name in ("connect", "listen"):
+            for endpoint in getattr(self, name):
+                if "/" not in endpoint:
+                    raise ConfigError(name, f"'{endpoint}' is not an endpoint like tcp/HOST:PORT")
+        if self.mode == "client" and not self.connect:
+            raise ConfigError("connect", "client mode needs at least one router endpoint")
+        if self.wait_seconds is not None and self.wait_seconds < 0:
+            raise ConfigError("wait_seconds", "must be >= 0")
+        if self.config_file is not None and not self.config_file.is_file():
+            raise ConfigError("config", f"no such file: {self.config_file}")
+
+    def zenoh_json(self) -> dict[str, object]:
+        """The settings as Zenoh configuration keys (applied over ``config_file``)."""
+        settings: dict[str, object] = {
+            "mode": self.mode,
+            "scouting/multicast/enabled": self.multicast_scouting,
+        }
+        if self.connect:
+            settings["connect/endpoints"] = list(self.connect)
+        if self.listen:
+            settings["listen/endpoints"] = list(self.listen)
+        return settings
+
+    def describe(self) -> str:
+        where = ",".join(self.listen if self.mode == "router" else self.connect) or "-"
+        return f"{self.mode} {where}"
+
+
+def add_bus_arguments(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("zenoh")
+    group.add_argument("-m", "--mode", choices=MODES, help=f"session mode [{ENV['mode']}]")
+    group.add_argument(
+        "-e", "--connect", action="append", help=f"endpoint to connect to [{ENV['connect']}]"
+    )
+    group.add_argument(
+        "-l", "--listen", action="append", help=f"endpoint to listen on [{ENV['listen']}]"
+    )
+    group.add_argument("-c", "--config", type=Path, help=f"zenoh JSON5 config [{ENV['config']}]")
+    group.add_argument(
+        "--no-multicast-scouting",
+        action="store_true",
+        default=None,
+        help=f"disable multicast scouting (the default) [{ENV['no_multicast_scouting']}]",
+    )
+    group.add_argument(
+        "--multicast-scouting",
+        dest="no_multicast_scouting",
+        action="store_false",
+        help="enable multicast scouting",
+    )
+    group.add_argument(
+        "--wait-seconds",
+        type=float,
+        help=f"how long to wait for the router (default: forever) [{ENV['wait_seconds']}]",
+    )
+
+
+def bus_config_from_args(
+    args: argparse.Namespace,
+    *,
+    mode: str | None = None,
+    wait_seconds: float | None = None,
+    environ: dict[str, str] | None = None,
+) -> BusConfig:
+    """Flags first, then ``MANIGRAPH_ZENOH_*`` variables, then the defaults."""
+    env = os.environ if environ is None else environ
+
+    def pick(name: str) -> object:
+        value = getattr(args, name, None)
+        return value if value is not None else env.get(ENV[name]) or None
+
+    chosen_mode = pick("mode") or mode or "client"
+    connect = _endpoints(pick("connect"))
+    listen = _endpoints(pick("listen"))
+    if not connect and chosen_mode == "client":
+        connect = (DEFAULT_ROUTER,)
+    if chosen_mode == "router" and not listen:
+        listen = (DEFAULT_ROUTER,)
+    no_scouting = pick("no_multicast_scouting")
+    multicast = _flag_false(no_scouting, ENV["no_multicast_scouting"])
+    wait = pick("wait_seconds")
+    config = pick("config")
+    return BusConfig(
+        mode=str(chosen_mode),
+        connect=connect,
+        listen=listen,
+        config_file=Path(str(config)) if config else None,
+        multicast_scouting=multicast,
+        wait_seconds=_seconds(wait, ENV["wait_seconds"]) if wait is not None else wait_seconds,
+    )
+
+
+def _endpoints(value: object) -> tuple[str, ...]:
+    if value is None:
+        return ()
+    items = value if isinstance(value, list) else str(value).split(",")
+    return tuple(item.strip() for item in items if item.strip())
+
+
+def _flag_false(value: object, name: str) -> bool:
+    """Multicast scouting is on only if explicitly asked for."""
+    if value is None or isinstance(value, bool):
+        return value is False
+    text = str(value).strip().lower()
+    if text in ("1", "true", "yes", "on"):
+        return False
+    if text in ("0", "false", "no", "off"):
+        return True
+    raise ConfigError(name, f"'{value}' is not a boolean (1/0, true/false)")
+
+
+def _seconds(value: object, name: str) -> float:
+    try:
+        return float(str(value))
+    except ValueError:
+        raise ConfigError(name, f"'{value}' is not a number of seconds") from None
+
+
+def json5_value(value: object) -> str:
+    return json.dumps(value)

@@ -1,0 +1,49 @@
+"""The message contract: every type on the bus, declared once beside its key expression."""
+
+from manigraph_shared.messages.base import (
+    MAX_PAYLOAD_BYTES,
+    Delivery,
+    Message,
+    Quaternion,
+    Vector3,
+    key_matches,
+    message_type_for_key,
+)
+from manigraph_shared.messages.decision import Action, SkillState, SkillStatus, TrayAction
+from manigraph_shared.messages.episode import EpisodeEvent, EpisodePhase, EpisodeRequest
+from manigraph_shared.messages.robot import GripperOp, RobotCommand, RobotFeedback
+from manigraph_shared.messages.scene import (
+    GoalCategory,
+    ObjectCategory,
+    Scene,
+    SceneGoal,
+    SceneObject,
+)
+from manigraph_shared.messages.status import ServiceState, ServiceStatus
+
+__all__ = [
+    "MAX_PAYLOAD_BYTES",
+    "Action",
+    "Delivery",
+    "EpisodeEvent",
+    "EpisodePhase",
+    "EpisodeRequest",
+    "GoalCategory",
+    "GripperOp",
+    "Message",
+    "ObjectCategory",
+    "Quaternion",
+    "RobotCommand",
+    "RobotFeedback",
+    "Scene",
+    "SceneGoal",
+    "SceneObject",
+    "ServiceState",
+    "ServiceStatus",
+    "SkillState",
+    "SkillStatus",
+    "TrayAction",
+    "Vector3",
+    "key_matches",
+    "message_type_for_key",
+]

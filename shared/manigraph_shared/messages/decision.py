@@ -1,0 +1,72 @@
+"""What the planner decided and what became of it."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import ClassVar, Self
+
+from pydantic import Field, model_validator
+
+from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp
+
+
+class TrayAction(StrEnum):
+    """The dishwasher's extra action head (paper, section 'Dishwasher loading')."""
+
+    NONE = "none"
+    TOGGLE_TOP = "toggle_top"
+    TOGGLE_BOTTOM = "toggle_bottom"
+
+
+class Action(Message):
+    """Move ``object_id`` to ``goal_id`` (PickAndPlace), or toggle a tray."""
+
+    key: ClassVar[str] = "manigraph/planner/action"
+    delivery: ClassVar[Delivery] = Delivery.RELIABLE
+    publisher: ClassVar[str] = "planner"
+
+    decision_id: Identifier = Field(description="'<episode>:<step>', unique per decision")
+    episode_id: Identifier
+    scene_sequence: int = Field(ge=0, description="sequence of the Scene this decision used")
+    object_id: Identifier
+    goal_id: Identifier
+    orientation_index: int | None = Field(
+        None, ge=0, le=5, description="one of six discrete orientations"
+    )
+    tray_action: TrayAction = TrayAction.NONE
+    policy: str = Field(max_length=128, description="name of the policy that decided")
+    stamp: Stamp
+
+
+class SkillState(StrEnum):
+    ACCEPTED = "accepted"
+    RUNNING = "running"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+
+    @property
+    def terminal(self) -> bool:
+        return self in (SkillState.SUCCEEDED, SkillState.FAILED)
+
+
+class SkillStatus(Message):
+    """Progress of the skill executing one decision."""
+
+    key: ClassVar[str] = "manigraph/skills/status"
+    delivery: ClassVar[Delivery] = Delivery.RELIABLE
+    publisher: ClassVar[str] = "skills"
+
+    decision_id: Identifier
+    skill: str = Field(max_length=64, description="e.g. pick_and_place")
+    state: SkillState
+    reason: str | None = Field(
+        None, max_length=64, description="machine-readable cause, required when failed"
+    )
+    detail: str = Field("", max_length=1024)
+    stamp: Stamp
+
+    @model_validator(mode="after")
+    def _failure_has_reason(self) -> Self:
+        if self.state is SkillState.FAILED and not self.reason:
+            raise ValueError("reason: a failed status must say why")
+        return self

@@ -1,0 +1,54 @@
+"""The robot-driver boundary: commands skills send and the driver's answers."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import ClassVar
+
+from pydantic import Field
+
+from manigraph_shared.messages.base import (
+    Delivery,
+    Identifier,
+    Message,
+    Quaternion,
+    Stamp,
+    Vector3,
+)
+
+
+class GripperOp(StrEnum):
+    #: Close on ``object_id`` at ``position`` and lift it clear.
+    PICK = "pick"
+    #: Lower the held object to ``position`` and open.
+    PLACE = "place"
+
+
+class RobotCommand(Message):
+    """One Cartesian gripper command for a robot driver (the geometric world's robot)."""
+
+    key: ClassVar[str] = "manigraph/robot/command"
+    delivery: ClassVar[Delivery] = Delivery.RELIABLE
+    publisher: ClassVar[str] = "skills"
+
+    command_id: Identifier
+    decision_id: Identifier
+    op: GripperOp
+    object_id: Identifier
+    position: Vector3 = Field(description="grasp or release position of the object centre")
+    orientation: Quaternion = Quaternion()
+    stamp: Stamp
+
+
+class RobotFeedback(Message):
+    """The driver's answer to one ``RobotCommand``."""
+
+    key: ClassVar[str] = "manigraph/robot/feedback"
+    delivery: ClassVar[Delivery] = Delivery.RELIABLE
+    publisher: ClassVar[str] = "sim | robot driver"
+
+    command_id: Identifier
+    ok: bool
+    reason: str | None = Field(None, max_length=64, description="why it failed")
+    detail: str = Field("", max_length=1024)
+    stamp: Stamp

@@ -1,0 +1,32 @@
+"""Service health, published periodically and on every error."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import ClassVar
+
+from pydantic import Field
+
+from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp
+
+
+class ServiceState(StrEnum):
+    STARTING = "starting"
+    OK = "ok"
+    ERROR = "error"
+    STOPPING = "stopping"
+
+
+class ServiceStatus(Message):
+    """Heartbeat and error report of one service."""
+
+    key: ClassVar[str] = "manigraph/status/{service}"
+    delivery: ClassVar[Delivery] = Delivery.RELIABLE
+    publisher: ClassVar[str] = "every service"
+
+    service: Identifier
+    state: ServiceState
+    detail: str = Field("", max_length=2048, description="last error, or what it is doing")
+    messages_in: int = Field(0, ge=0)
+    messages_rejected: int = Field(0, ge=0)
+    stamp: Stamp
