@@ -8,6 +8,7 @@ never kill the subscriber.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 import time
@@ -156,7 +157,8 @@ class Bus:
         for reply in replies:
             if reply.ok is not None:
                 return reply_type.decode(reply.ok.payload.to_bytes(), key)
-            raise BusError(f"{key}: {reply.err.payload.to_string()}")
+            error = reply.err.payload.to_string() if reply.err is not None else "error reply"
+            raise BusError(f"{key}: {error}")
         raise BusError(f"{key}: no answer within {timeout:.1f} s (is the service running?)")
 
     # --- liveliness -------------------------------------------------------------------------
@@ -172,10 +174,8 @@ class Bus:
 
     def close(self) -> None:
         for entity in reversed(self._declared):
-            try:
+            with contextlib.suppress(zenoh.ZError):
                 entity.undeclare()
-            except zenoh.ZError:
-                pass
         self._declared.clear()
         if not self.session.is_closed():
             self.session.close()

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from manigraph_shared.errors import ConfigError
@@ -111,14 +111,21 @@ def bus_config_from_args(
     wait_seconds: float | None = None,
     environ: dict[str, str] | None = None,
 ) -> BusConfig:
-    """Flags first, then ``MANIGRAPH_ZENOH_*`` variables, then the defaults."""
+    """Flags first, then ``MANIGRAPH_ZENOH_*`` variables, then the defaults.
+
+    ``mode="router"`` is binding: a router ignores the environment's mode and connect
+    endpoints, which in a stack name the router itself.
+    """
     env = os.environ if environ is None else environ
+    is_router = mode == "router"
 
     def pick(name: str) -> object:
         value = getattr(args, name, None)
-        return value if value is not None else env.get(ENV[name]) or None
+        if value is not None or (is_router and name in ("mode", "connect")):
+            return value
+        return env.get(ENV[name]) or None
 
-    chosen_mode = pick("mode") or mode or "client"
+    chosen_mode = "router" if is_router else pick("mode") or mode or "client"
     connect = _endpoints(pick("connect"))
     listen = _endpoints(pick("listen"))
     if not connect and chosen_mode == "client":

@@ -14,6 +14,7 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
 from manigraph_shared.episodes import EpisodePlan, run_episodes
+from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
 from manigraph_shared.recorder import Recorder
 from manigraph_shared.replay import ActionCheck, Replayer, recorded_actions
@@ -71,35 +72,40 @@ def _replay_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--wait-for", nargs="*", default=None, help="services that must be alive before playing"
     )
-    parser.add_argument("--settle", type=float, default=2.0, help="seconds to wait for decisions")
+    parser.add_argument(
+        "--decision-timeout", type=float, default=5.0, help="seconds to wait for each decision"
+    )
     add_bus_arguments(parser)
 
 
 def _replay_run(args: argparse.Namespace) -> int:
-    exclude = list(args.exclude)
-    if args.expect_actions:
-        exclude.append(Action.key)
-    wait_for = args.wait_for if args.wait_for is not None else (
-        ["planner"] if args.expect_actions else []
+    withhold = [Action.key] if args.expect_actions else []
+    wait_for = (
+        args.wait_for if args.wait_for is not None else (["planner"] if args.expect_actions else [])
     )
     with Bus.open(bus_config_from_args(args, wait_seconds=30.0)) as bus:
         check = ActionCheck(expected=recorded_actions(args.file) if args.expect_actions else {})
         if args.expect_actions:
-            bus.subscribe(Action, lambda a: check.received.__setitem__(a.decision_id, a))
+            bus.subscribe(Action, check.receive)
         _wait_services(bus, wait_for)
-        replayer = Replayer(bus, args.file, args.speed, args.topics, exclude)
+        replayer = Replayer(bus, args.file, args.speed, args.topics, args.exclude, withhold)
+
+        def await_live_decision(item: LoggedMessage) -> None:
+            decision_id = Action.decode(item.data, item.topic).decision_id
+            check.wait_for(decision_id, args.decision_timeout)
+
         stop = threading.Event()
         print(f"replaying {len(replayer.messages)} messages from {args.file}", file=sys.stderr)
         try:
             while True:
-                replayer.play(stop)
+                replayer.play(stop, on_withheld=await_live_decision)
                 if not args.loop:
                     break
         except KeyboardInterrupt:
             stop.set()
         if not args.expect_actions:
             return 0
-        time.sleep(args.settle)
+        time.sleep(0.5)  # a decision the log does not have would arrive now
         problems = check.mismatches()
         for line in problems:
             print(f"MISMATCH {line}", file=sys.stderr)

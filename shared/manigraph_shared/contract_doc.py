@@ -23,7 +23,7 @@ def key_table() -> str:
         "|---|---|---|---|---|",
     ]
     for cls in Message.registry.values():
-        summary = (cls.__doc__ or "").strip().splitlines()[0]
+        summary = (cls.__doc__ or "").strip().splitlines()[0].replace("``", "`")
         lines.append(
             f"| `{cls.key}` | `{cls.__name__}` | {DELIVERY_NOTE[cls.delivery]} "
             f"| {cls.publisher} | {summary} |"

@@ -42,7 +42,9 @@ class Service:
         self.stop_event = threading.Event()
 
     # --- wiring -----------------------------------------------------------------------------
-    def on(self, message_type: type[M], handler: Callable[[M], None], key: str | None = None) -> None:
+    def on(
+        self, message_type: type[M], handler: Callable[[M], None], key: str | None = None
+    ) -> None:
         """Run ``handler`` on the service thread for every valid ``message_type`` sample."""
 
         def enqueue(message: M) -> None:

@@ -27,5 +27,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 command = Command(
-    help="run camera perception (not implemented yet: fails clearly)", configure=_configure, run=_run
+    help="run camera perception (not implemented yet: fails clearly)",
+    configure=_configure,
+    run=_run,
 )

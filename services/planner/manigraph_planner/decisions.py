@@ -9,6 +9,7 @@ from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene,
 from manigraph_planner.policies.base import Policy
 
 _REMEMBERED = 1024
+_HELD = 256
 
 
 class DecisionMaker:
@@ -16,8 +17,11 @@ class DecisionMaker:
 
     A decision is made on a scene only if no earlier decision is still executing and the scene
     was observed after the last skill ended (its stamp is later than that skill's terminal
-    status), so the planner never acts twice on a stale world. Decision ids are
-    ``<episode>:<step>``: the same log therefore drives a fresh planner to the same ids.
+    status), so the planner never acts twice on a stale world. Scenes and statuses come from
+    different publishers and may arrive in either order, so scenes seen while a skill runs are
+    kept, and the earliest one observed after the skill ended is decided on as soon as its
+    status arrives: the choice depends on stamps, never on arrival order. Decision ids are
+    ``<episode>:<step>``; the same log therefore drives a fresh planner to the same decisions.
     """
 
     def __init__(self, policy: Policy) -> None:
@@ -26,6 +30,7 @@ class DecisionMaker:
         self.step = 0
         self.pending: str | None = None
         self.ready_after = 0.0
+        self._held: list[Scene] = []  # scenes that arrived while a skill ran
         self._finished: OrderedDict[str, float] = OrderedDict()
         self._ended: OrderedDict[str, None] = OrderedDict()
 
@@ -35,21 +40,37 @@ class DecisionMaker:
         elif event.episode_id != self.episode_id:
             self._start(event.episode_id)
 
-    def on_status(self, status: SkillStatus) -> None:
+    def on_status(self, status: SkillStatus) -> Action | None:
         if not status.state.terminal:
-            return
+            return None
         _remember(self._finished, status.decision_id, status.stamp)
-        if status.decision_id == self.pending:
-            self.pending = None
-            self.ready_after = status.stamp
+        if status.decision_id != self.pending:
+            return None
+        self.pending = None
+        self.ready_after = status.stamp
+        return self._decide_on_held()
 
     def on_scene(self, scene: Scene) -> Action | None:
         if scene.episode_id in self._ended:
             return None
         if scene.episode_id != self.episode_id:
             self._start(scene.episode_id)
-        if self.pending is not None or scene.stamp <= self.ready_after:
+        if self.pending is not None:
+            self._held.append(scene)
+            del self._held[:-_HELD]
             return None
+        if scene.stamp <= self.ready_after:
+            return None
+        return self._decide(scene)
+
+    def _decide_on_held(self) -> Action | None:
+        fresh = [s for s in self._held if s.stamp > self.ready_after]
+        self._held.clear()
+        if not fresh or fresh[0].episode_id in self._ended:
+            return None
+        return self._decide(min(fresh, key=lambda s: (s.stamp, s.sequence)))
+
+    def _decide(self, scene: Scene) -> Action | None:
         decision = self.policy.decide(scene)
         if decision is None:
             return None
@@ -76,6 +97,7 @@ class DecisionMaker:
         self.step = 0
         self.pending = None
         self.ready_after = 0.0
+        self._held.clear()
 
 
 def _remember(store: OrderedDict, key: str, value: object) -> None:

@@ -14,8 +14,12 @@ def is_covered(scene: Scene, item: SceneObject) -> bool:
         if other.id == item.id:
             continue
         bottom = other.position.z - other.size.z / 2
-        overlap_x = abs(other.position.x - item.position.x) < (other.size.x + item.size.x) / 2 - MARGIN
-        overlap_y = abs(other.position.y - item.position.y) < (other.size.y + item.size.y) / 2 - MARGIN
+        overlap_x = (
+            abs(other.position.x - item.position.x) < (other.size.x + item.size.x) / 2 - MARGIN
+        )
+        overlap_y = (
+            abs(other.position.y - item.position.y) < (other.size.y + item.size.y) / 2 - MARGIN
+        )
         if overlap_x and overlap_y and bottom >= top - MARGIN:
             return True
     return False

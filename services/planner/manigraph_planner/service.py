@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.messages import EpisodeEvent, Scene, SkillStatus
+from manigraph_shared.messages import Action, EpisodeEvent, Scene, SkillStatus
 from manigraph_shared.service import Service
 from manigraph_planner.decisions import DecisionMaker
 from manigraph_planner.policies.base import Policy
@@ -18,12 +18,11 @@ class PlannerService(Service):
 
     def setup(self) -> None:
         self.on(EpisodeEvent, self.decisions.on_episode)
-        self.on(SkillStatus, self.decisions.on_status)
-        self.on(Scene, self._on_scene)
+        self.on(SkillStatus, lambda status: self._act(self.decisions.on_status(status)))
+        self.on(Scene, lambda scene: self._act(self.decisions.on_scene(scene)))
         self.log.info("serving policy '%s'", self.decisions.policy.name)
 
-    def _on_scene(self, scene: Scene) -> None:
-        action = self.decisions.on_scene(scene)
+    def _act(self, action: Action | None) -> None:
         if action is not None:
             self.log.info(
                 "%s: %s -> %s (scene %d)",

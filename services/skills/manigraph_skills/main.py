@@ -9,7 +9,9 @@ from manigraph_shared.cli import Command
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--driver", default="sim-gripper", help="robot driver (default sim-gripper)")
+    parser.add_argument(
+        "--driver", default="sim-gripper", help="robot driver (default sim-gripper)"
+    )
     parser.add_argument(
         "--workspace",
         default=None,
@@ -20,6 +22,7 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from manigraph_shared.service import run_service
+
     from manigraph_skills.drivers import DRIVERS, create_driver
     from manigraph_skills.service import SkillsService
     from manigraph_skills.workspace import Workspace
@@ -33,4 +36,6 @@ def _run(args: argparse.Namespace) -> int:
     )
 
 
-command = Command(help="run the skills service (Action -> PickAndPlace)", configure=_configure, run=_run)
+command = Command(
+    help="run the skills service (Action -> PickAndPlace)", configure=_configure, run=_run
+)

@@ -93,7 +93,6 @@ class Message(Struct):
     publisher: ClassVar[str]
     registry: ClassVar[dict[str, type[Message]]] = {}
 
-
     @classmethod
     def __pydantic_init_subclass__(cls, **kwargs: Any) -> None:
         super().__pydantic_init_subclass__(**kwargs)
@@ -147,8 +146,14 @@ def _placeholders(key: str) -> list[str]:
 def _problems(exc: ValidationError) -> list[tuple[str, str]]:
     problems = []
     for error in exc.errors(include_url=False):
-        field = ".".join(str(part) for part in error["loc"]) or "<payload>"
-        problems.append((field, error["msg"]))
+        field = ".".join(str(part) for part in error["loc"])
+        message = error["msg"]
+        # Model-level checks say "field: why"; give them the field they are about.
+        named = re.match(r"Value error, ([a-z_.]+): (.*)", message)
+        if named:
+            field = ".".join(part for part in (field, named.group(1)) if part)
+            message = named.group(2)
+        problems.append((field or "<payload>", message))
     return problems
 
 

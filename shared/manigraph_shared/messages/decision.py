@@ -25,7 +25,7 @@ class Action(Message):
     delivery: ClassVar[Delivery] = Delivery.RELIABLE
     publisher: ClassVar[str] = "planner"
 
-    decision_id: Identifier = Field(description="'<episode>:<step>', unique per decision")
+    decision_id: Identifier = Field(description="`<episode>:<step>`, unique per decision")
     episode_id: Identifier
     scene_sequence: int = Field(ge=0, description="sequence of the Scene this decision used")
     object_id: Identifier

@@ -45,7 +45,7 @@ class RobotFeedback(Message):
 
     key: ClassVar[str] = "manigraph/robot/feedback"
     delivery: ClassVar[Delivery] = Delivery.RELIABLE
-    publisher: ClassVar[str] = "sim | robot driver"
+    publisher: ClassVar[str] = "sim or robot driver"
 
     command_id: Identifier
     ok: bool

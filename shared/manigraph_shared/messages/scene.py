@@ -68,7 +68,7 @@ class Scene(Message):
 
     key: ClassVar[str] = "manigraph/world/scene"
     delivery: ClassVar[Delivery] = Delivery.LATEST
-    publisher: ClassVar[str] = "sim | perception"
+    publisher: ClassVar[str] = "sim or perception"
 
     episode_id: Identifier
     frame_id: str = Field("world", max_length=64, description="frame of every position")
@@ -80,9 +80,10 @@ class Scene(Message):
     @model_validator(mode="after")
     def _unique_ids(self) -> Self:
         seen: set[str] = set()
-        for entity in [*self.objects, *self.goals]:
+        entities: list[SceneObject | SceneGoal] = [*self.objects, *self.goals]
+        for entity in entities:
             if entity.id in seen:
-                raise ValueError(f"id '{entity.id}' is used twice")
+                raise ValueError(f"id: '{entity.id}' is used twice")
             seen.add(entity.id)
         return self
 

@@ -49,7 +49,9 @@ def load_policy(spec: str) -> Policy:
     loader = POLICY_FILE_LOADERS.get(path.suffix)
     if loader is None:
         known = ", ".join(sorted(POLICIES))
-        raise PolicyError(f"policy: '{spec}' is neither a registered policy ({known}) nor a checkpoint")
+        raise PolicyError(
+            f"policy: '{spec}' is neither a registered policy ({known}) nor a checkpoint"
+        )
     if not path.is_file():
         raise PolicyError(f"policy: no such checkpoint file: {path}")
     return loader(path)

@@ -17,7 +17,9 @@ class ExpertPolicy(Policy):
         movable = [
             o
             for o in scene.objects
-            if o.visible and not o.filled and not is_covered(scene, o)
+            if o.visible
+            and not o.filled
+            and not is_covered(scene, o)
             and any(g.category.value == o.category.value for g in free_goals)
         ]
         if not movable:

@@ -15,11 +15,15 @@ class RobotDriver(ABC):
     name: str
 
     @abstractmethod
-    def pick(self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion) -> None:
+    def pick(
+        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+    ) -> None:
         """Grasp ``object_id`` whose centre is at ``position`` and lift it clear."""
 
     @abstractmethod
-    def place(self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion) -> None:
+    def place(
+        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+    ) -> None:
         """Carry the held object so its centre is at ``position`` and release it."""
 
     def close(self) -> None:

@@ -9,6 +9,7 @@ import time
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import GripperOp, Quaternion, RobotCommand, RobotFeedback, Vector3
+
 from manigraph_skills.drivers.base import RobotDriver, register_driver
 
 
@@ -32,8 +33,14 @@ class BusGripperDriver(RobotDriver):
                 self._answers[feedback.command_id] = feedback
                 event.set()
 
-    def _send(self, op: GripperOp, decision_id: str, object_id: str, position: Vector3,
-              orientation: Quaternion) -> None:
+    def _send(
+        self,
+        op: GripperOp,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+    ) -> None:
         command_id = f"{decision_id}.{next(self._ids)}"
         event = threading.Event()
         with self._lock:
@@ -59,8 +66,12 @@ class BusGripperDriver(RobotDriver):
         if not feedback.ok:
             raise SkillError(feedback.reason or "driver_error", feedback.detail)
 
-    def pick(self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion) -> None:
+    def pick(
+        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+    ) -> None:
         self._send(GripperOp.PICK, decision_id, object_id, position, orientation)
 
-    def place(self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion) -> None:
+    def place(
+        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+    ) -> None:
         self._send(GripperOp.PLACE, decision_id, object_id, position, orientation)

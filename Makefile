@@ -1,0 +1,37 @@
+# One command per habit; CI runs exactly these.
+SHELL := /bin/bash
+PYTHON ?= python3
+UV := $(PYTHON) -m uv
+RUN := $(UV) run --frozen --all-packages
+UV_VERSION := 0.13.9
+
+.PHONY: install up test test-fast lint format bench clean
+
+install:  ## install uv and every package of the workspace (uv.lock)
+	@$(PYTHON) -m uv --version >/dev/null 2>&1 || $(PYTHON) -m pip install --quiet "uv==$(UV_VERSION)"
+	@$(UV) sync --frozen --all-packages
+
+up: install  ## run a 4-block stacking episode through router, sim, planner and skills
+	$(RUN) manigraph up --task stack --blocks 4 --episodes 1 --seed 0 --record logs/make-up.mcap
+
+test: install lint  ## lint, then every test tier
+	$(RUN) pytest -q -ra
+
+test-fast: install  ## unit tests only
+	$(RUN) pytest -q -m "not integration and not docker"
+
+lint: install
+	$(RUN) ruff check .
+	$(RUN) ruff format --check .
+	$(RUN) mypy shared/manigraph_shared
+
+format: install
+	$(RUN) ruff format .
+	$(RUN) ruff check --fix .
+
+bench: install  ## speed figures (not tests): medians and ratios
+	$(RUN) python bench/bench_roundtrip.py
+	$(RUN) python bench/bench_recorder.py
+
+clean:
+	rm -rf .venv logs .pytest_cache .ruff_cache .mypy_cache

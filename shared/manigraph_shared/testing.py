@@ -1,0 +1,120 @@
+"""Helpers for tests that run real manigraph processes on loopback.
+
+No mocks: a test starts the router and services as real processes on a free port with
+multicast scouting off, talks to them over a real Zenoh session, and stops them at the end.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from manigraph_shared.bus import Bus
+from manigraph_shared.bus_config import BusConfig
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+class Stack:
+    """Processes of one test stack sharing one router endpoint."""
+
+    def __init__(self, port: int, log_dir: Path) -> None:
+        self.port = port
+        self.endpoint = f"tcp/127.0.0.1:{port}"
+        self.log_dir = log_dir
+        self.processes: dict[str, subprocess.Popen[bytes]] = {}
+
+    @property
+    def env(self) -> dict[str, str]:
+        return {
+            **os.environ,
+            "MANIGRAPH_ZENOH_MODE": "client",
+            "MANIGRAPH_ZENOH_CONNECT": self.endpoint,
+            "MANIGRAPH_ZENOH_NO_MULTICAST_SCOUTING": "1",
+            "PYTHONUNBUFFERED": "1",
+        }
+
+    def start(self, name: str, *args: str) -> subprocess.Popen[bytes]:
+        if name == "router" and not args:
+            args = ("router", "--listen", self.endpoint)
+        log = (self.log_dir / f"{name}.log").open("ab")
+        process = subprocess.Popen(
+            [sys.executable, "-m", "manigraph_shared.cli", *args],
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            env=self.env,
+        )
+        self.processes[name] = process
+        return process
+
+    def run(self, *args: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
+        """Run one manigraph command to completion against this stack."""
+        return subprocess.run(
+            [sys.executable, "-m", "manigraph_shared.cli", *args],
+            capture_output=True,
+            text=True,
+            env=self.env,
+            timeout=timeout,
+            check=False,
+        )
+
+    def log(self, name: str) -> str:
+        path = self.log_dir / f"{name}.log"
+        return path.read_text(errors="replace") if path.exists() else ""
+
+    def stop(self, name: str, sig: int = signal.SIGTERM, timeout: float = 10.0) -> int:
+        process = self.processes.pop(name)
+        if process.poll() is None:
+            process.send_signal(sig)
+            try:
+                process.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+        return int(process.returncode)
+
+    def stop_all(self) -> None:
+        for name in reversed(list(self.processes)):
+            self.stop(name)
+
+    @contextmanager
+    def client(self, wait_seconds: float = 20.0) -> Iterator[Bus]:
+        bus = Bus.open(BusConfig(connect=(self.endpoint,), wait_seconds=wait_seconds))
+        try:
+            yield bus
+        finally:
+            bus.close()
+
+    def wait_alive(self, bus: Bus, *names: str, timeout: float = 30.0) -> set[str]:
+        deadline = time.monotonic() + timeout
+        while True:
+            alive = bus.alive_services(timeout=1.0)
+            if set(names) <= alive:
+                return alive
+            for name, process in self.processes.items():
+                if process.poll() is not None:
+                    raise AssertionError(f"{name} exited ({process.returncode}):\n{self.log(name)}")
+            if time.monotonic() > deadline:
+                raise AssertionError(f"not alive after {timeout} s: {set(names) - alive}")
+            time.sleep(0.1)
+
+
+@contextmanager
+def stack(log_dir: Path) -> Iterator[Stack]:
+    running = Stack(free_port(), log_dir)
+    try:
+        yield running
+    finally:
+        running.stop_all()

@@ -1,0 +1,207 @@
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+from manigraph_shared.errors import MessageError
+from manigraph_shared.messages import (
+    MAX_PAYLOAD_BYTES,
+    Action,
+    EpisodeEvent,
+    EpisodeRequest,
+    Message,
+    RobotCommand,
+    RobotFeedback,
+    Scene,
+    SceneGoal,
+    SceneObject,
+    ServiceStatus,
+    SkillStatus,
+    Vector3,
+    message_type_for_key,
+)
+
+NOW = 1_700_000_000.0
+
+
+def scene(**overrides: object) -> Scene:
+    fields: dict[str, object] = {
+        "episode_id": "ep-1",
+        "stamp": NOW,
+        "sequence": 3,
+        "objects": [
+            SceneObject(
+                id="block_0",
+                category="block",
+                position=Vector3(x=0.5, y=0.1, z=0.02),
+                size=Vector3(x=0.04, y=0.04, z=0.04),
+            )
+        ],
+        "goals": [
+            SceneGoal(id="goal_0", category="block", position=Vector3(x=0.4, y=-0.1, z=0.02))
+        ],
+    }
+    fields.update(overrides)
+    return Scene(**fields)
+
+
+SAMPLES: list[Message] = [
+    scene(),
+    Action(
+        decision_id="ep-1:0",
+        episode_id="ep-1",
+        scene_sequence=3,
+        object_id="block_0",
+        goal_id="goal_0",
+        orientation_index=5,
+        policy="expert",
+        stamp=NOW,
+    ),
+    SkillStatus(
+        decision_id="ep-1:0", skill="pick_and_place", state="failed", reason="x", stamp=NOW
+    ),
+    EpisodeEvent(
+        episode_id="ep-1",
+        phase="end",
+        task="stack",
+        seed=1,
+        goals_total=4,
+        goals_filled=4,
+        steps=4,
+        success=True,
+        stamp=NOW,
+    ),
+    EpisodeRequest(episode_id="ep-1", task="stack", blocks=40, seed=7),
+    RobotCommand(
+        command_id="c1",
+        decision_id="ep-1:0",
+        op="pick",
+        object_id="block_0",
+        position=Vector3(x=0.5, y=0.1, z=0.02),
+        stamp=NOW,
+    ),
+    RobotFeedback(command_id="c1", ok=False, reason="object_covered", stamp=NOW),
+    ServiceStatus(service="planner", state="error", detail="bad scene", stamp=NOW),
+]
+
+
+@pytest.mark.parametrize("message", SAMPLES, ids=lambda m: type(m).__name__)
+def test_round_trip_is_lossless(message: Message) -> None:
+    decoded = type(message).decode(message.encode(), message.key_for())
+    assert decoded == message
+
+
+@pytest.mark.parametrize("message", SAMPLES, ids=lambda m: type(m).__name__)
+def test_every_type_is_found_by_its_key(message: Message) -> None:
+    if type(message).delivery.value == "query":
+        pytest.skip("queries are not published")
+    assert message_type_for_key(message.key_for()) is type(message)
+
+
+def test_status_key_carries_the_service_name() -> None:
+    status = ServiceStatus(service="skills", state="ok", stamp=NOW)
+    assert status.key_for() == "manigraph/status/skills"
+    assert message_type_for_key("manigraph/status/skills") is ServiceStatus
+    assert message_type_for_key("manigraph/elsewhere") is None
+
+
+def rejected_fields(payload: bytes, message_type: type[Message] = Scene) -> list[str]:
+    with pytest.raises(MessageError) as caught:
+        message_type.decode(payload, "manigraph/test")
+    assert caught.value.key == "manigraph/test"
+    return caught.value.fields
+
+
+def good_scene_json() -> dict[str, object]:
+    return json.loads(scene().encode())
+
+
+def test_truncated_payload_is_rejected() -> None:
+    payload = scene().encode()
+    assert rejected_fields(payload[: len(payload) // 2]) == ["<payload>"]
+
+
+def test_malformed_json_is_rejected() -> None:
+    assert rejected_fields(b"{not json") == ["<payload>"]
+
+
+def test_payload_of_the_wrong_type_names_the_missing_fields() -> None:
+    fields = rejected_fields(SAMPLES[1].encode())
+    assert {"sequence", "objects", "goals"} <= set(fields)
+    assert "decision_id" in fields  # extra fields are refused, not silently dropped
+
+
+@pytest.mark.parametrize("bad", ["NaN", "Infinity", "-Infinity"])
+def test_non_finite_numbers_are_rejected(bad: str) -> None:
+    payload = scene().encode().replace(b'"x":0.5', f'"x":{bad}'.encode())
+    assert rejected_fields(payload) == ["objects.0.position.x"]
+
+
+def test_out_of_range_values_name_the_field() -> None:
+    data = good_scene_json()
+    data["goals"][0]["position"]["z"] = 250.0  # type: ignore[index]
+    assert rejected_fields(json.dumps(data).encode()) == ["goals.0.position.z"]
+    data = good_scene_json()
+    data["sequence"] = -1
+    assert rejected_fields(json.dumps(data).encode()) == ["sequence"]
+
+
+def test_non_unit_quaternion_is_rejected() -> None:
+    data = good_scene_json()
+    data["objects"][0]["orientation"] = {"x": 0.5, "y": 0.0, "z": 0.0, "w": 0.5}  # type: ignore[index]
+    assert rejected_fields(json.dumps(data).encode()) == ["objects.0.orientation"]
+
+
+def test_duplicate_ids_are_rejected() -> None:
+    data = good_scene_json()
+    data["goals"][0]["id"] = "block_0"  # type: ignore[index]
+    with pytest.raises(MessageError, match="block_0") as caught:
+        Scene.decode(json.dumps(data).encode())
+    assert caught.value.fields == ["id"]
+
+
+def test_oversized_payload_is_rejected_unread() -> None:
+    payload = b" " * (MAX_PAYLOAD_BYTES + 1)
+    with pytest.raises(MessageError, match="exceeds"):
+        Scene.decode(payload)
+
+
+def test_failed_status_must_give_a_reason() -> None:
+    payload = json.dumps(
+        {"decision_id": "a", "skill": "s", "state": "failed", "stamp": time.time()}
+    ).encode()
+    assert rejected_fields(payload, SkillStatus) == ["reason"]
+
+
+def test_ended_episode_must_say_whether_it_succeeded() -> None:
+    payload = json.dumps(
+        {
+            "episode_id": "e",
+            "phase": "end",
+            "task": "stack",
+            "seed": 0,
+            "goals_total": 2,
+            "goals_filled": 1,
+            "stamp": NOW,
+        }
+    ).encode()
+    assert rejected_fields(payload, EpisodeEvent) == ["success"]
+
+
+def test_non_positive_size_names_the_object() -> None:
+    data = good_scene_json()
+    data["objects"][0]["size"]["z"] = 0.0  # type: ignore[index]
+    assert rejected_fields(json.dumps(data).encode()) == ["objects.0.size"]
+
+
+def test_bad_identifier_is_rejected() -> None:
+    data = good_scene_json()
+    data["episode_id"] = "has space"
+    assert rejected_fields(json.dumps(data).encode()) == ["episode_id"]
+
+
+def test_schema_is_json_schema_titled_by_type() -> None:
+    schema = json.loads(Scene.mcap_schema())
+    assert schema["title"] == "manigraph.Scene"
+    assert {"objects", "goals", "stamp"} <= set(schema["properties"])

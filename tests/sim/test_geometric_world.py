@@ -1,0 +1,96 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from manigraph_shared.errors import SkillError, TaskError
+from manigraph_sim.geometric.world import Body, GeometricWorld, Goal
+from manigraph_sim.tasks import get_task
+from manigraph_sim.tasks.base import BLOCK_SIZE, TaskParams
+
+SIZE = np.full(3, BLOCK_SIZE)
+
+
+def block(name: str, x: float, y: float, level: int) -> Body:
+    return Body(name, "block", SIZE.copy(), np.array([x, y, (level + 0.5) * BLOCK_SIZE]))
+
+
+def goal(name: str, x: float, y: float, level: int) -> Goal:
+    return Goal(name, "block", np.array([x, y, (level + 0.5) * BLOCK_SIZE]))
+
+
+def two_stack_world() -> GeometricWorld:
+    bodies = [block("a", 0.5, 0.0, 0), block("b", 0.5, 0.0, 1)]
+    goals = [goal("g0", 0.4, 0.2, 0), goal("g1", 0.4, 0.2, 1)]
+    return GeometricWorld(bodies, goals)
+
+
+def test_picking_a_covered_block_fails_and_names_what_covers_it() -> None:
+    world = two_stack_world()
+    with pytest.raises(SkillError) as caught:
+        world.pick("a")
+    assert caught.value.reason == "object_covered"
+    assert "b" in caught.value.detail
+    assert world.held is None
+
+
+def test_placing_in_the_air_falls_onto_what_is_below() -> None:
+    world = two_stack_world()
+    world.pick("b")
+    rest = world.place("b", np.array([0.4, 0.2, 1.5 * BLOCK_SIZE]))  # g1, but g0 is empty
+    assert rest[2] == pytest.approx(0.5 * BLOCK_SIZE)
+    assert world.occupancy() == {"g0": "b"}  # it landed in the lower goal, not g1
+
+
+def test_inverting_the_stack_fills_every_goal() -> None:
+    world = two_stack_world()
+    for name, target in (("b", "g0"), ("a", "g1")):
+        world.pick(name)
+        world.place(name, world.goals[target].position)
+    assert world.occupancy() == {"g0": "b", "g1": "a"}
+    assert world.goals_filled() == 2
+
+
+def test_a_block_dropped_beside_a_stack_rests_on_the_table() -> None:
+    world = two_stack_world()
+    world.pick("b")
+    rest = world.place("b", np.array([0.6, 0.0, 0.3]))
+    assert rest[2] == pytest.approx(0.5 * BLOCK_SIZE)
+
+
+def test_gripper_holds_one_object_at_a_time() -> None:
+    world = GeometricWorld([block("a", 0.5, 0, 0), block("c", 0.6, 0, 0)], [])
+    world.pick("a")
+    with pytest.raises(SkillError, match="gripper_full"):
+        world.pick("c")
+    with pytest.raises(SkillError, match="not_holding"):
+        world.place("c", np.zeros(3))
+
+
+def test_goal_tolerance_decides_filled() -> None:
+    world = GeometricWorld([block("a", 0.5, 0.0, 0)], [goal("g", 0.5 + 0.009, 0.0, 0)])
+    assert world.goals_filled() == 1
+    world.goals["g"].position[0] = 0.5 + 0.011
+    assert world.goals_filled() == 0
+
+
+def test_stack_layout_is_seeded() -> None:
+    task = get_task("stack", TaskParams(blocks=5))
+    first = task.layout(np.random.default_rng(7))
+    again = task.layout(np.random.default_rng(7))
+    other = task.layout(np.random.default_rng(8))
+    assert [b.position.tolist() for b in first.bodies] == [
+        b.position.tolist() for b in again.bodies
+    ]
+    assert first.bodies[0].position.tolist() != other.bodies[0].position.tolist()
+    assert len(first.bodies) == len(first.goals) == 5
+    # The goal stack stands apart from the start stack.
+    assert (
+        np.linalg.norm(first.bodies[0].position[:2] - first.goals[0].position[:2]) >= 3 * BLOCK_SIZE
+    )
+
+
+def test_unknown_task_and_bad_parameters_are_named() -> None:
+    with pytest.raises(TaskError, match="unknown task 'tower'"):
+        get_task("tower", TaskParams())
+    with pytest.raises(TaskError, match="stacks"):
+        get_task("stack", TaskParams(stacks=2))

@@ -1,0 +1,22 @@
+"""The README's contract table is generated from the declarations; it must not drift."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from manigraph_shared.contract_doc import key_table
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def test_readme_key_table_matches_the_message_declarations() -> None:
+    text = README.read_text()
+    block = re.search(r"<!-- keys:start -->\n(.*?)\n<!-- keys:end -->", text, re.S)
+    assert block is not None, "README lost its keys:start/keys:end markers"
+    assert block.group(1).strip() == key_table().strip(), "run `manigraph keys` and paste it"
+
+
+def test_readme_names_the_two_commands() -> None:
+    text = README.read_text()
+    assert "make up" in text and "make test" in text
