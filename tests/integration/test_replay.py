@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
+
 from manigraph_shared.mcap_log import McapLogWriter, read_log
 from manigraph_shared.messages import Action, Scene
 from manigraph_shared.testing import Stack, free_port

@@ -10,10 +10,11 @@ import time
 from pathlib import Path
 
 import pytest
+from mcap.reader import make_reader
+
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, Scene, ServiceStatus
 from manigraph_shared.testing import Stack, free_port
-from mcap.reader import make_reader
 
 pytestmark = pytest.mark.integration
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 import argparse
 
 import pytest
+
 from manigraph_shared.bus_config import (
     DEFAULT_ROUTER,
     BusConfig,

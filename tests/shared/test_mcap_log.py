@@ -5,10 +5,11 @@ import time
 from pathlib import Path
 
 import pytest
+from mcap.reader import make_reader
+
 from manigraph_shared.errors import LogError
 from manigraph_shared.mcap_log import McapLogWriter, read_log
 from manigraph_shared.messages import Action, ServiceStatus
-from mcap.reader import make_reader
 
 
 def action(step: int) -> Action:

@@ -4,6 +4,7 @@ import json
 import time
 
 import pytest
+
 from manigraph_shared.errors import MessageError
 from manigraph_shared.messages import (
     MAX_PAYLOAD_BYTES,

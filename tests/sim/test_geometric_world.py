@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from manigraph_shared.errors import SkillError, TaskError
 from manigraph_sim.geometric.world import Body, GeometricWorld, Goal
 from manigraph_sim.tasks import get_task

@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import pytest
+
 from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_shared.messages import (
     Action,

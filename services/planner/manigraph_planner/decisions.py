@@ -5,8 +5,8 @@ from __future__ import annotations
 import time
 from collections import OrderedDict
 
-from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene, SkillStatus
 from manigraph_planner.policies.base import Policy
+from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene, SkillStatus
 
 _REMEMBERED = 1024
 _HELD = 256

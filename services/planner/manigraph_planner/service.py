@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
+from manigraph_planner.decisions import DecisionMaker
+from manigraph_planner.policies.base import Policy
 from manigraph_shared.bus import Bus
 from manigraph_shared.messages import Action, EpisodeEvent, Scene, SkillStatus
 from manigraph_shared.service import Service
-from manigraph_planner.decisions import DecisionMaker
-from manigraph_planner.policies.base import Policy
 
 
 class PlannerService(Service):

@@ -22,7 +22,6 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 def _run(args: argparse.Namespace) -> int:
     from manigraph_shared.errors import ConfigError
     from manigraph_shared.service import run_service
-
     from manigraph_sim import geometric  # noqa: F401  (registers the backend)
     from manigraph_sim.backend import create_backend
     from manigraph_sim.service import SimService

@@ -12,7 +12,6 @@ from manigraph_shared.messages import (
     SkillStatus,
 )
 from manigraph_shared.service import Service
-
 from manigraph_sim.backend import SimBackend
 
 

@@ -22,7 +22,6 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from manigraph_shared.service import run_service
-
     from manigraph_skills.drivers import DRIVERS, create_driver
     from manigraph_skills.service import SkillsService
     from manigraph_skills.workspace import Workspace

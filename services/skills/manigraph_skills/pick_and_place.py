@@ -7,7 +7,6 @@ from collections.abc import Callable
 
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus, TrayAction
-
 from manigraph_skills.drivers.base import RobotDriver
 from manigraph_skills.workspace import Workspace
 

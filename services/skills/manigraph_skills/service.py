@@ -5,7 +5,6 @@ from __future__ import annotations
 from manigraph_shared.bus import Bus
 from manigraph_shared.messages import Action, Scene
 from manigraph_shared.service import Service
-
 from manigraph_skills.drivers.base import RobotDriver
 from manigraph_skills.pick_and_place import PickAndPlace
 from manigraph_skills.scene_cache import SceneCache

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from manigraph_shared.messages import Scene
 from manigraph_planner.policies.base import Decision, Policy, register_policy
 from manigraph_planner.scene_geometry import is_covered
+from manigraph_shared.messages import Scene
 
 
 @register_policy("expert")

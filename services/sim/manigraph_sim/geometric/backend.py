@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
     EpisodeEvent,
@@ -18,7 +19,6 @@ from manigraph_shared.messages import (
     SceneObject,
     Vector3,
 )
-
 from manigraph_sim.backend import SimBackend, register_backend
 from manigraph_sim.geometric.world import GeometricWorld
 from manigraph_sim.tasks import get_task

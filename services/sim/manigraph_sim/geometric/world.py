@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from manigraph_shared.errors import SkillError
 
 #: Footprints must overlap by more than this (metres) to support or cover one another.

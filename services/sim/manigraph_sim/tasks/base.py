@@ -7,8 +7,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from manigraph_shared.errors import TaskError
 
+from manigraph_shared.errors import TaskError
 from manigraph_sim.geometric.world import Body, Goal
 
 BLOCK_SIZE = 0.04

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from manigraph_shared.errors import TaskError
 
+from manigraph_shared.errors import TaskError
 from manigraph_sim.tasks.base import (
     BLOCK_SIZE,
     Layout,

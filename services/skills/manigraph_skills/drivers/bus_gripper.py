@@ -9,7 +9,6 @@ import time
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import GripperOp, Quaternion, RobotCommand, RobotFeedback, Vector3
-
 from manigraph_skills.drivers.base import RobotDriver, register_driver
 
 
