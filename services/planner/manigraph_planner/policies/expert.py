@@ -3,33 +3,68 @@
 from __future__ import annotations
 
 from manigraph_planner.policies.base import Decision, Policy, register_policy
-from manigraph_planner.scene_geometry import is_covered
-from manigraph_shared.messages import Scene
+from manigraph_planner.scene_geometry import is_covered, objects_above_goal, objects_over
+from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneGoal, SceneObject
+
+
+def _lowest(goals: list[SceneGoal]) -> SceneGoal:
+    return min(goals, key=lambda g: (round(g.position.z, 4), g.id))
+
+
+def _highest(objects: list[SceneObject]) -> SceneObject:
+    return min(objects, key=lambda o: (-round(o.position.z, 4), o.id))
 
 
 @register_policy("expert")
 class ExpertPolicy(Policy):
-    """Pick the highest visible, uncovered object not yet in a goal; place it in the lowest
-    free goal of its category. Ties go to the smaller id, so decisions are deterministic."""
+    """What the demonstrations show, in three rules (ties go to the smaller id):
+
+    1. Blocks: move the highest movable block that is in no goal to the lowest free block goal
+       that nothing lies over.
+    2. Opening: if a cover lies over a free block goal or over a block still to move, move the
+       highest such cover to the lowest free cover goal (a storage place on the table).
+    3. Closing: once no block can be moved, move the cover in the lowest cover goal to the
+       highest free cover goal (back onto its box).
+
+    It sees only what the Scene shows: with everything still hidden in closed boxes it has
+    nothing to do (box rearrangement is a test of the learned policy, not of the expert).
+    """
 
     def decide(self, scene: Scene) -> Decision | None:
-        free_goals = [g for g in scene.goals if g.visible and not g.filled]
-        movable = [
+        objects = [o for o in scene.objects if o.visible]
+        goals = [g for g in scene.goals if g.visible]
+        free_block_goals = [g for g in goals if g.category is GoalCategory.BLOCK and not g.filled]
+        blocks_to_move = [o for o in objects if o.category is ObjectCategory.BLOCK and not o.filled]
+
+        open_goals = [g for g in free_block_goals if not objects_above_goal(scene, g)]
+        movable = [o for o in blocks_to_move if not is_covered(scene, o)]
+        if open_goals and movable:
+            return Decision(_highest(movable).id, _lowest(open_goals).id)
+
+        free_cover_goals = [g for g in goals if g.category is GoalCategory.COVER and not g.filled]
+        if free_block_goals and blocks_to_move:
+            in_the_way = {
+                o.id: o
+                for goal in free_block_goals
+                for o in objects_above_goal(scene, goal)
+                if o.category is ObjectCategory.COVER
+            }
+            for block in blocks_to_move:
+                for o in objects_over(scene, block):
+                    if o.category is ObjectCategory.COVER:
+                        in_the_way[o.id] = o
+            covers = [o for o in in_the_way.values() if not is_covered(scene, o)]
+            if covers and free_cover_goals:
+                return Decision(_highest(covers).id, _lowest(free_cover_goals).id)
+
+        covers_in_goals = [
             o
-            for o in scene.objects
-            if o.visible
-            and not o.filled
-            and not is_covered(scene, o)
-            and any(g.category.value == o.category.value for g in free_goals)
+            for o in objects
+            if o.category is ObjectCategory.COVER and o.filled and not is_covered(scene, o)
         ]
-        if not movable:
-            return None
-        target = max(movable, key=lambda o: (o.position.z, _neg(o.id)))
-        goals = [g for g in free_goals if g.category.value == target.category.value]
-        goal = min(goals, key=lambda g: (round(g.position.z, 4), g.id))
-        return Decision(object_id=target.id, goal_id=goal.id)
-
-
-def _neg(text: str) -> tuple[int, ...]:
-    """Sort key that prefers the smaller id under ``max``."""
-    return tuple(-ord(c) for c in text)
+        if covers_in_goals and free_cover_goals:
+            cover = min(covers_in_goals, key=lambda o: (round(o.position.z, 4), o.id))
+            target = max(free_cover_goals, key=lambda g: (round(g.position.z, 4), g.id))
+            if target.position.z > cover.position.z + 1e-3:
+                return Decision(cover.id, target.id)
+        return None

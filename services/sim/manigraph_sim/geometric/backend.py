@@ -34,6 +34,7 @@ class GeometricBackend(SimBackend):
     def __init__(self, goal_tolerance: float = 0.01) -> None:
         self.goal_tolerance = goal_tolerance
         self.world: GeometricWorld | None = None
+        self.required: set[str] = set()
         self.request: EpisodeRequest | None = None
         self.steps = 0
         self.max_steps = 0
@@ -44,7 +45,15 @@ class GeometricBackend(SimBackend):
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
         task = get_task(request.task, TaskParams(blocks=request.blocks, stacks=request.stacks))
         layout = task.layout(np.random.default_rng(request.seed))
-        self.world = GeometricWorld(layout.bodies, layout.goals, self.goal_tolerance)
+        layout.validate()
+        self.world = GeometricWorld(
+            layout.bodies,
+            layout.goals,
+            self.goal_tolerance,
+            containers=layout.containers,
+            hide_inside_closed=layout.partially_observable,
+        )
+        self.required = layout.required_goals()
         self.request = request
         self.steps = 0
         self.max_steps = request.max_steps or task.max_steps(len(layout.goals))
@@ -65,7 +74,7 @@ class GeometricBackend(SimBackend):
                 position=_vec(body.position),
                 size=_vec(body.size),
                 filled=body.id in in_goal,
-                visible=not body.hidden,
+                visible=not world.is_hidden(body.position),
             )
             for body in world.bodies.values()
         ]
@@ -75,7 +84,7 @@ class GeometricBackend(SimBackend):
                 category=GoalCategory(goal.category),
                 position=_vec(goal.position),
                 filled=goal.id in occupancy,
-                visible=not goal.hidden,
+                visible=not world.is_hidden(goal.position),
             )
             for goal in world.goals.values()
         ]
@@ -112,8 +121,12 @@ class GeometricBackend(SimBackend):
     def _check_end(self) -> None:
         if self.world is None or self.ended or self.world.held is not None:
             return
-        if self.world.goals_filled() == len(self.world.goals) or self.steps >= self.max_steps:
+        if self.required_filled() == len(self.required) or self.steps >= self.max_steps:
             self.ended = True
+
+    def required_filled(self) -> int:
+        assert self.world is not None
+        return len(self.required & self.world.occupancy().keys())
 
     def end_event(self, stamp: float) -> EpisodeEvent | None:
         if not self.ended or self._end_reported or self.world is None:
@@ -123,8 +136,8 @@ class GeometricBackend(SimBackend):
 
     def _event(self, phase: EpisodePhase, stamp: float) -> EpisodeEvent:
         assert self.world is not None and self.request is not None
-        filled = self.world.goals_filled()
-        total = len(self.world.goals)
+        filled = self.required_filled()
+        total = len(self.required)
         success = None
         reason = ""
         if phase is EpisodePhase.END:

@@ -3,6 +3,8 @@
 Bodies are axis-aligned boxes. A body rests on the highest body under its footprint, or on the
 table; picking a body that has another body on top of it fails; a body released above a goal
 falls until it rests on something, so a goal is filled only when what is below it is there.
+Containers (open-top boxes) are static: a body that fits inside rests on the floor, a wider
+one (a cover) rests on the rim and closes the box; what is inside a closed box can be hidden.
 """
 
 from __future__ import annotations
@@ -23,8 +25,6 @@ class Body:
     category: str  # "block" | "cover"
     size: np.ndarray  # full extents (x, y, z), metres
     position: np.ndarray  # centre, metres
-    #: Hidden from observation (inside a closed box) until revealed.
-    hidden: bool = False
 
     @property
     def bottom(self) -> float:
@@ -40,7 +40,30 @@ class Goal:
     id: str
     category: str  # "block" | "cover": which objects fill it
     position: np.ndarray
-    hidden: bool = False
+
+
+@dataclass
+class Container:
+    """A static open-top box standing on the table."""
+
+    id: str
+    centre: np.ndarray  # (x, y)
+    inner: np.ndarray  # inner extents (x, y), metres
+    wall: float
+    height: float  # rim height above the table
+
+    def fits_inside(self, position: np.ndarray, size: np.ndarray) -> bool:
+        gap = np.abs(position[:2] - self.centre) + size[:2] / 2 - self.inner / 2
+        return bool(np.all(gap <= CONTACT_MARGIN))
+
+    def touches(self, position: np.ndarray, size: np.ndarray) -> bool:
+        outer = self.inner + 2 * self.wall
+        gap = np.abs(position[:2] - self.centre) - (size[:2] + outer) / 2
+        return bool(np.all(gap < -CONTACT_MARGIN))
+
+    def holds_point(self, point: np.ndarray) -> bool:
+        inside = np.all(np.abs(point[:2] - self.centre) <= self.inner / 2)
+        return bool(inside and point[2] < self.height)
 
 
 def footprints_overlap(a_pos: np.ndarray, a_size: np.ndarray, b: Body) -> bool:
@@ -55,11 +78,16 @@ class GeometricWorld:
         goals: list[Goal],
         goal_tolerance: float = 0.01,
         table_z: float = 0.0,
+        containers: list[Container] | None = None,
+        hide_inside_closed: bool = False,
     ) -> None:
         self.bodies = {body.id: body for body in bodies}
         self.goals = {goal.id: goal for goal in goals}
         self.goal_tolerance = goal_tolerance
         self.table_z = table_z
+        self.containers = containers or []
+        #: Partial observability: what is inside a closed container is not observed.
+        self.hide_inside_closed = hide_inside_closed
         self.held: str | None = None
 
     # --- queries ----------------------------------------------------------------------------
@@ -79,10 +107,28 @@ class GeometricWorld:
     def rest_height(self, position: np.ndarray, size: np.ndarray, ignore: str) -> float:
         """Centre height at which a body of ``size`` released above ``position`` comes to rest."""
         floor = self.table_z
+        for box in self.containers:
+            if not box.fits_inside(position, size) and box.touches(position, size):
+                floor = max(floor, self.table_z + box.height)
         for other in self.resting():
             if other.id != ignore and footprints_overlap(position, size, other):
                 floor = max(floor, other.top)
         return floor + float(size[2]) / 2
+
+    def is_closed(self, box: Container) -> bool:
+        """A body rests on the rim over the whole opening."""
+        return any(
+            body.bottom >= self.table_z + box.height - CONTACT_MARGIN
+            and box.touches(body.position, body.size)
+            and not box.fits_inside(body.position, body.size)
+            and np.all(body.size[:2] >= box.inner)
+            for body in self.resting()
+        )
+
+    def is_hidden(self, point: np.ndarray) -> bool:
+        if not self.hide_inside_closed:
+            return False
+        return any(box.holds_point(point) and self.is_closed(box) for box in self.containers)
 
     def occupancy(self) -> dict[str, str]:
         """Goal id -> id of the resting body of its category within ``goal_tolerance``."""
@@ -112,8 +158,6 @@ class GeometricWorld:
         body = self.bodies.get(body_id)
         if body is None:
             raise SkillError("unknown_object", body_id)
-        if body.hidden:
-            raise SkillError("object_not_reachable", f"{body_id} is inside a closed box")
         on_top = self.covering(body)
         if on_top:
             names = ", ".join(sorted(b.id for b in on_top))

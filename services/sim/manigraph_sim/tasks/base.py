@@ -4,23 +4,37 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from manigraph_shared.errors import TaskError
-from manigraph_sim.geometric.world import Body, Goal
+from manigraph_sim.geometric.world import Body, Container, Goal
 
 BLOCK_SIZE = 0.04
-#: Where stacks may be placed, robot frame, metres: in front of a Panda on the table.
-WORKSPACE_X = (0.35, 0.65)
-WORKSPACE_Y = (-0.30, 0.30)
+#: Where stacks and boxes may be placed, robot frame, metres: in front of a Panda.
+WORKSPACE_X = (0.30, 0.70)
+WORKSPACE_Y = (-0.35, 0.35)
 
 
 @dataclass
 class Layout:
     bodies: list[Body]
     goals: list[Goal]
+    containers: list[Container] = field(default_factory=list)
+    #: Goals that may stay empty at the end (storage places for covers).
+    optional_goals: set[str] = field(default_factory=set)
+    partially_observable: bool = False
+
+    def required_goals(self) -> set[str]:
+        return {goal.id for goal in self.goals} - self.optional_goals
+
+    def validate(self) -> None:
+        names = [b.id for b in self.bodies] + [g.id for g in self.goals]
+        if len(names) != len(set(names)):
+            raise TaskError("layout: object and goal ids must be unique")
+        if not self.required_goals():
+            raise TaskError("layout: at least one goal must be required")
 
 
 @dataclass(frozen=True)

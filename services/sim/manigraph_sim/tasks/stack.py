@@ -39,3 +39,30 @@ class StackTask(Task):
         start, goal = sample_sites(rng, 2, min_distance=3 * BLOCK_SIZE)
         k = self.params.blocks
         return Layout(stack_bodies("block", start, k), stack_goals("goal", goal, k))
+
+
+@register_task("multistack")
+class MultiStackTask(Task):
+    """K-block s-stack.
+
+    **Task Description**: s stacks of K blocks each; build s inverted goal stacks elsewhere.
+
+    **Randomizations**: the 2s stack sites, uniformly in the workspace, three block widths apart.
+
+    **Success Conditions**: every goal holds a block.
+    """
+
+    def validate(self) -> None:
+        if not 1 <= self.params.stacks <= 6:
+            raise TaskError("stacks: must be in 1..6")
+        if not 1 <= self.params.blocks <= 16:
+            raise TaskError("blocks: must be in 1..16 per stack")
+
+    def layout(self, rng: np.random.Generator) -> Layout:
+        k, s = self.params.blocks, self.params.stacks
+        sites = sample_sites(rng, 2 * s, min_distance=3 * BLOCK_SIZE)
+        bodies, goals = [], []
+        for i in range(s):
+            bodies += stack_bodies("block", sites[i], k, first=i * k)
+            goals += stack_goals("goal", sites[s + i], k, first=i * k)
+        return Layout(bodies, goals)
