@@ -1,0 +1,1 @@
+"""manigraph lab: offline tools that run the sim and planner logic in one process."""

@@ -1,0 +1,71 @@
+"""The lab's subcommands: ``demos`` and ``eval`` (training lives with the planner)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from manigraph_shared.cli import Command
+
+
+def _demos_configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("-o", "--output", type=Path, default=Path("data/demos.mcap"))
+    parser.add_argument("--tasks", nargs="+", default=["box-pack", "box-unpack"])
+    parser.add_argument("--blocks", type=int, nargs="+", default=[3, 4])
+    parser.add_argument("--trajectories", type=int, default=20)
+    parser.add_argument("--seed", type=int, default=0)
+
+
+def _demos_run(args: argparse.Namespace) -> int:
+    from manigraph_lab.demos import DemoProtocol, record_demos
+    from manigraph_planner.policies import load_policy
+
+    protocol = DemoProtocol(tuple(args.tasks), tuple(args.blocks), args.trajectories, args.seed)
+    summary = record_demos(load_policy("expert"), protocol, args.output)
+    print(json.dumps(summary))
+    return 0
+
+
+demos_command = Command(
+    help="record expert demonstrations as MCAP (default: the paper's 20 box pack/unpack runs)",
+    configure=_demos_configure,
+    run=_demos_run,
+)
+
+
+def _eval_configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--policy", default="expert", help="policy name or checkpoint file")
+    parser.add_argument("--task", default="stack")
+    parser.add_argument("--blocks", type=int, default=4)
+    parser.add_argument("--stacks", type=int, default=1)
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--noise", type=float, default=0.0, help="observation noise sigma, m")
+    parser.add_argument("--json", action="store_true", help="last line: one JSON object")
+
+
+def _eval_run(args: argparse.Namespace) -> int:
+    from manigraph_lab.evaluate import EvalSpec, evaluate
+    from manigraph_planner.policies import load_policy
+    from manigraph_shared.errors import ConfigError
+
+    if args.noise < 0:
+        raise ConfigError("noise", "must be >= 0 metres")
+    if args.episodes < 1:
+        raise ConfigError("episodes", "must be >= 1")
+    spec = EvalSpec(args.task, args.blocks, args.stacks, args.episodes, args.seed, args.noise)
+    summary = evaluate(load_policy(args.policy), spec)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        for key, value in summary.items():
+            print(f"{key:>22}: {value}")
+    return 0
+
+
+eval_command = Command(
+    help="evaluate a policy on seeded episodes in one process (--json: one JSON line)",
+    configure=_eval_configure,
+    run=_eval_run,
+)

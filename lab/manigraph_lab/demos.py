@@ -1,0 +1,75 @@
+"""``manigraph demos``: expert demonstrations recorded as MCAP through the message contract.
+
+A demonstration log holds, per step, the ``Scene`` the expert decided on and its ``Action``
+(with ``scene_sequence`` pointing at that scene), plus the episode's start and end events. A
+log recorded from a running stack (``manigraph up --record``) has the same channels, so a
+user's own runs are training data too.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TextIO
+
+from manigraph_lab.episode_loop import run_episode
+from manigraph_planner.policies.base import Policy
+from manigraph_shared.mcap_log import McapLogWriter
+from manigraph_shared.messages import EpisodeRequest
+
+
+@dataclass(frozen=True)
+class DemoProtocol:
+    """The paper's default: 20 trajectories of box packing and unpacking with K = 3, 4."""
+
+    tasks: tuple[str, ...] = ("box-pack", "box-unpack")
+    blocks: tuple[int, ...] = (3, 4)
+    trajectories: int = 20
+    seed: int = 0
+
+    def requests(self) -> list[EpisodeRequest]:
+        combos = [(t, k) for t in self.tasks for k in self.blocks]
+        return [
+            EpisodeRequest(
+                episode_id=f"demo-{i:03d}-{combos[i % len(combos)][0]}",
+                task=combos[i % len(combos)][0],
+                blocks=combos[i % len(combos)][1],
+                seed=self.seed + i,
+            )
+            for i in range(self.trajectories)
+        ]
+
+
+def record_demos(
+    expert: Policy, protocol: DemoProtocol, path: Path, progress: TextIO = sys.stderr
+) -> dict[str, object]:
+    log = McapLogWriter(path)
+    steps = successes = 0
+    time_ns = 0
+    try:
+        for request in protocol.requests():
+            record = run_episode(expert, request)
+            if not record.success:
+                print(f"  skipped {request.episode_id}: the expert failed", file=progress)
+                continue
+            successes += 1
+            for message in [record.start, *_interleave(record), record.end]:
+                time_ns += 1_000_000
+                log.write(message.key_for(), message.encode(), time_ns)
+            steps += len(record.steps)
+            print(
+                f"  {request.episode_id}: {request.task} K={request.blocks}, "
+                f"{len(record.steps)} steps",
+                file=progress,
+                flush=True,
+            )
+    finally:
+        log.close()
+    return {"file": str(path), "trajectories": successes, "decisions": steps}
+
+
+def _interleave(record):  # type: ignore[no-untyped-def]
+    for step in record.steps:
+        yield step.scene
+        yield step.action

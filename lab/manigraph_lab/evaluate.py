@@ -1,0 +1,87 @@
+"""``manigraph eval``: a policy over N seeded episodes of one task, in one process."""
+
+from __future__ import annotations
+
+import statistics
+import sys
+import time
+from dataclasses import dataclass
+from typing import TextIO
+
+from manigraph_lab.episode_loop import EpisodeRecord, run_episode
+from manigraph_planner.policies.base import Policy
+from manigraph_shared.messages import EpisodeRequest
+
+
+@dataclass(frozen=True)
+class EvalSpec:
+    task: str
+    blocks: int
+    stacks: int = 1
+    episodes: int = 100
+    seed: int = 0
+    noise: float = 0.0
+
+    def requests(self) -> list[EpisodeRequest]:
+        return [
+            EpisodeRequest(
+                episode_id=f"eval-{self.task}-{self.blocks}-{self.seed + i}",
+                task=self.task,
+                blocks=self.blocks,
+                stacks=self.stacks,
+                seed=self.seed + i,
+            )
+            for i in range(self.episodes)
+        ]
+
+
+def evaluate(
+    policy: Policy, spec: EvalSpec, progress: TextIO | None = sys.stderr
+) -> dict[str, object]:
+    records: list[EpisodeRecord] = []
+    started = time.perf_counter()
+    decisions = 0
+    for index, request in enumerate(spec.requests()):
+        record = run_episode(policy, request, noise=spec.noise)
+        records.append(record)
+        decisions += len(record.steps)
+        if progress is not None and (index + 1) % max(1, spec.episodes // 10) == 0:
+            rate = sum(r.success for r in records) / len(records)
+            print(
+                f"  {spec.task} K={spec.blocks}: {index + 1}/{spec.episodes} episodes, "
+                f"success so far {rate:.3f}",
+                file=progress,
+                flush=True,
+            )
+    seconds = time.perf_counter() - started
+    return summarize(policy.name, spec, records, seconds, decisions)
+
+
+def summarize(
+    policy: str, spec: EvalSpec, records: list[EpisodeRecord], seconds: float, decisions: int
+) -> dict[str, object]:
+    count = len(records)
+    failures: dict[str, int] = {}
+    for record in records:
+        for step in record.steps:
+            if not step.ok:
+                failures[step.reason or "unknown"] = failures.get(step.reason or "unknown", 0) + 1
+    return {
+        "policy": policy,
+        "task": spec.task,
+        "blocks": spec.blocks,
+        "stacks": spec.stacks,
+        "noise": spec.noise,
+        "seed": spec.seed,
+        "episodes": count,
+        "success_rate": sum(r.success for r in records) / count if count else 0.0,
+        "goals_filled_rate": statistics.fmean(
+            r.end.goals_filled / max(r.end.goals_total, 1) for r in records
+        )
+        if count
+        else 0.0,
+        "mean_steps": statistics.fmean(len(r.steps) for r in records) if count else 0.0,
+        "infeasible_actions": failures,
+        "decisions_per_second": decisions / seconds if seconds > 0 else 0.0,
+        "seconds": round(seconds, 3),
+    }

@@ -1,0 +1,270 @@
+"""GNN policy checkpoints: one ``.pt`` file that says exactly what it holds.
+
+The file is ``torch.save`` of a dict of plain types plus the network's ``state_dict``, so it
+loads with ``torch.load(weights_only=True)`` and never runs pickled code:
+
+============================  ==============================================================
+key                           value
+============================  ==============================================================
+``format``                    ``"manigraph.gnn-policy"``
+``format_version``            ``1``
+``manigraph_version``         version of ``manigraph-planner`` that wrote the file
+``model``                     :meth:`ModelConfig.to_dict` (architecture, sizes, scaling)
+``feature_spec``              :meth:`FeatureSpec.to_dict` of the features trained on
+``training_config``           the trainer's settings, plain types
+``data_hash``                 identifies the training data (e.g. a SHA-256 of the dataset)
+``metrics``                   plain-typed dict, or None
+``state_dict``                the network's parameters
+============================  ==============================================================
+
+Loading refuses, with a :class:`PolicyError` naming the field, anything that is not such a
+file, names an unknown architecture, or was built for a different feature spec.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import torch
+
+from manigraph_planner.gnn.features import FEATURE_SPEC
+from manigraph_planner.gnn.models import ARCHITECTURES, ModelConfig, PolicyNet
+from manigraph_shared.errors import ConfigError, PolicyError
+
+__all__ = ["CheckpointInfo", "LoadedCheckpoint", "load_checkpoint", "save_checkpoint"]
+
+FORMAT = "manigraph.gnn-policy"
+FORMAT_VERSION = 1
+_FIELDS: dict[str, type | tuple[type, ...]] = {
+    "format": str,
+    "format_version": int,
+    "manigraph_version": str,
+    "model": dict,
+    "feature_spec": dict,
+    "training_config": dict,
+    "data_hash": str,
+    "metrics": (dict, type(None)),
+    "state_dict": dict,
+}
+
+
+@dataclass(frozen=True)
+class CheckpointInfo:
+    """Everything a checkpoint records besides the weights."""
+
+    model: ModelConfig
+    feature_spec: dict[str, Any]
+    training_config: dict[str, Any]
+    data_hash: str
+    manigraph_version: str
+    metrics: dict[str, Any] | None
+
+    @property
+    def architecture(self) -> str:
+        return self.model.architecture
+
+
+class LoadedCheckpoint(NamedTuple):
+    net: PolicyNet
+    info: CheckpointInfo
+
+
+def manigraph_version() -> str:
+    try:
+        return version("manigraph-planner")
+    except PackageNotFoundError:  # running from a source tree that was never installed
+        return "unknown"
+
+
+def save_checkpoint(
+    path: str | os.PathLike[str],
+    net: PolicyNet,
+    *,
+    training_config: dict[str, Any],
+    data_hash: str,
+    metrics: dict[str, Any] | None = None,
+) -> Path:
+    """Write ``net`` and its provenance to ``path`` atomically (temp file, then rename).
+
+    Raises:
+        ValueError: ``training_config`` or ``metrics`` holds something other than plain
+            types (str, int, float, bool, None, lists/tuples and str-keyed dicts of them),
+            or ``data_hash`` is empty.
+    """
+    _check_plain(training_config, "training_config")
+    if metrics is not None:
+        _check_plain(metrics, "metrics")
+    if not isinstance(data_hash, str) or not data_hash:
+        raise ValueError("data_hash: must be a non-empty string")
+    payload = {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "manigraph_version": manigraph_version(),
+        "model": net.config.to_dict(),
+        "feature_spec": FEATURE_SPEC.to_dict(),
+        "training_config": training_config,
+        "data_hash": data_hash,
+        "metrics": metrics,
+        "state_dict": {k: v.detach().cpu().clone() for k, v in net.state_dict().items()},
+    }
+    target = Path(path)
+    partial = target.with_name(f".{target.name}.partial")
+    torch.save(payload, partial)
+    os.replace(partial, target)
+    return target
+
+
+def load_checkpoint(path: str | os.PathLike[str]) -> LoadedCheckpoint:
+    """The network (in eval mode) and provenance stored in ``path``.
+
+    Raises:
+        PolicyError: the file is unreadable or not a manigraph GNN checkpoint, its
+            architecture is not registered, its feature spec differs from this code's, or
+            its weights do not fit its architecture. The message names the field.
+    """
+    try:
+        payload = torch.load(Path(path), map_location="cpu", weights_only=True)
+    except FileNotFoundError:
+        raise PolicyError(f"checkpoint: no such file: {path}") from None
+    # torch.load raises a zoo of types on garbage (UnpicklingError, RuntimeError from the zip
+    # reader, EOFError, ...); all of them mean the same thing here.
+    except Exception as exc:
+        if isinstance(exc, pickle.UnpicklingError):
+            why = "not a torch file, or it holds pickled objects beyond plain types and tensors"
+        elif isinstance(exc, EOFError):
+            why = "the file ends early: empty or truncated"
+        else:
+            why = f"{type(exc).__name__}: {_first_sentence(exc)}"
+        raise PolicyError(
+            f"checkpoint: {path} is not a readable manigraph checkpoint ({why})"
+        ) from exc
+    _check_envelope(payload, path)
+    _check_feature_spec(payload["feature_spec"])
+    model = _model_config(payload["model"])
+    net = PolicyNet(model)
+    problem = _state_dict_problem(net, payload["state_dict"])
+    if problem:
+        raise PolicyError(
+            f"checkpoint state_dict: does not fit architecture '{model.architecture}' "
+            f"(hidden_channels={model.hidden_channels}, num_layers={model.num_layers}): {problem}"
+        )
+    net.load_state_dict(payload["state_dict"], strict=True)
+    net.eval()
+    info = CheckpointInfo(
+        model=model,
+        feature_spec=payload["feature_spec"],
+        training_config=payload["training_config"],
+        data_hash=payload["data_hash"],
+        manigraph_version=payload["manigraph_version"],
+        metrics=payload["metrics"],
+    )
+    return LoadedCheckpoint(net, info)
+
+
+def _check_envelope(payload: Any, path: str | os.PathLike[str]) -> None:
+    if not isinstance(payload, dict):
+        raise PolicyError(
+            f"checkpoint: {path} holds a {type(payload).__name__}, not a manigraph checkpoint"
+        )
+    if payload.get("format") != FORMAT:
+        raise PolicyError(
+            f"checkpoint format: file has {payload.get('format')!r} but this manigraph "
+            f"expects {FORMAT!r} (not a manigraph GNN policy checkpoint)"
+        )
+    if payload.get("format_version") != FORMAT_VERSION:
+        raise PolicyError(
+            f"checkpoint format_version: file has {payload.get('format_version')!r} but this "
+            f"manigraph reads {FORMAT_VERSION}"
+        )
+    missing = [key for key in _FIELDS if key not in payload]
+    if missing:
+        raise PolicyError(f"checkpoint {missing[0]}: missing (missing keys: {missing})")
+    unknown = sorted(str(key) for key in payload if key not in _FIELDS)
+    if unknown:
+        raise PolicyError(f"checkpoint {unknown[0]}: unexpected key (unexpected: {unknown})")
+    for key, expected in _FIELDS.items():
+        if not isinstance(payload[key], expected):
+            raise PolicyError(
+                f"checkpoint {key}: expected {_type_names(expected)}, "
+                f"file has {type(payload[key]).__name__}"
+            )
+
+
+def _check_feature_spec(stored: dict[str, Any]) -> None:
+    expected = FEATURE_SPEC.to_dict()
+    for key in sorted(set(stored) | set(expected)):
+        if key not in expected:
+            raise PolicyError(f"checkpoint feature_spec.{key}: unexpected key")
+        if key not in stored:
+            raise PolicyError(f"checkpoint feature_spec.{key}: missing")
+        have, want = stored[key], expected[key]
+        if isinstance(want, list):
+            have, want = tuple(have) if isinstance(have, list | tuple) else have, tuple(want)
+        if have != want:
+            raise PolicyError(
+                f"checkpoint feature_spec.{key}: file has {have!r} but this manigraph "
+                f"expects {want!r}"
+            )
+
+
+def _model_config(stored: dict[str, Any]) -> ModelConfig:
+    architecture = stored.get("architecture")
+    if architecture not in ARCHITECTURES:
+        known = tuple(sorted(ARCHITECTURES))
+        raise PolicyError(
+            f"checkpoint model.architecture: file has {architecture!r} but this manigraph "
+            f"knows {known}"
+        )
+    try:
+        return ModelConfig.from_dict(stored)
+    except ConfigError as exc:
+        raise PolicyError(f"checkpoint model.{exc}") from exc
+    except TypeError as exc:  # a value of a type the dataclass cannot even compare
+        raise PolicyError(f"checkpoint model: {exc}") from exc
+
+
+def _check_plain(value: Any, where: str) -> None:
+    if value is None or isinstance(value, str | int | float | bool):
+        return
+    if isinstance(value, list | tuple):
+        for index, item in enumerate(value):
+            _check_plain(item, f"{where}[{index}]")
+        return
+    if isinstance(value, dict):
+        for key, item in value.items():
+            if not isinstance(key, str):
+                raise ValueError(f"{where}: keys must be str, got {key!r}")
+            _check_plain(item, f"{where}.{key}")
+        return
+    raise ValueError(f"{where}: {type(value).__name__} is not a plain type")
+
+
+def _type_names(expected: type | tuple[type, ...]) -> str:
+    types = expected if isinstance(expected, tuple) else (expected,)
+    return " or ".join("None" if t is type(None) else t.__name__ for t in types)
+
+
+def _state_dict_problem(net: PolicyNet, stored: dict[str, Any]) -> str:
+    """The first way ``stored`` does not fit ``net``, or ``""``."""
+    expected = net.state_dict()
+    missing = [key for key in expected if key not in stored]
+    if missing:
+        return f"missing {missing[:3]}"
+    unexpected = [str(key) for key in stored if key not in expected]
+    if unexpected:
+        return f"unexpected {unexpected[:3]}"
+    for key, value in stored.items():
+        if not isinstance(value, torch.Tensor) or value.shape != expected[key].shape:
+            have = tuple(value.shape) if isinstance(value, torch.Tensor) else type(value).__name__
+            return f"{key} has shape {have}, expected {tuple(expected[key].shape)}"
+    return ""
+
+
+def _first_sentence(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.split(". ")[0].splitlines()[0] if text else "no detail"

@@ -1,0 +1,77 @@
+"""The swappable part of a GNN policy: message-passing layers, registered by name."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+
+from torch import Tensor, nn
+
+__all__ = ["ARCHITECTURES", "Backbone", "ConvStack", "register_architecture"]
+
+
+class Backbone(nn.Module, ABC):
+    """Maps node features to hidden node states by message passing over ``edge_index``.
+
+    Args:
+        in_channels: size of each input node feature.
+        hidden_channels: size of each hidden node state (the paper: 64).
+        num_layers: number of message-passing layers (the paper: 3).
+
+    Shapes:
+        - **input:** node features :math:`(N, F_{in})`, edge indices :math:`(2, E)`
+        - **output:** hidden node states :math:`(N, F_{hidden})`
+    """
+
+    name: str
+
+    def __init__(self, in_channels: int, hidden_channels: int, num_layers: int) -> None:
+        super().__init__()
+        self.in_channels = in_channels
+        self.hidden_channels = hidden_channels
+        self.num_layers = num_layers
+
+    @abstractmethod
+    def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
+        """Hidden node states."""
+
+
+class ConvStack(Backbone):
+    r"""``num_layers`` convolutions, each followed by ReLU:
+    :math:`h^l = \mathrm{ReLU}(\mathrm{conv}_l(h^{l-1}, E))`, :math:`h^0 = \phi`.
+
+    Subclasses only say which convolution to stack, in :meth:`make_conv`.
+    """
+
+    def __init__(self, in_channels: int, hidden_channels: int, num_layers: int) -> None:
+        super().__init__(in_channels, hidden_channels, num_layers)
+        sizes = [in_channels] + [hidden_channels] * num_layers
+        self.convs = nn.ModuleList(
+            self.make_conv(sizes[layer], sizes[layer + 1]) for layer in range(num_layers)
+        )
+
+    @abstractmethod
+    def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
+        """One message-passing layer, called as ``conv(x, edge_index)``."""
+
+    def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
+        for conv in self.convs:
+            x = conv(x, edge_index).relu()
+        return x
+
+
+#: Backbone classes by architecture name; checkpoints name one of these.
+ARCHITECTURES: dict[str, type[Backbone]] = {}
+
+
+def register_architecture(name: str) -> Callable[[type[Backbone]], type[Backbone]]:
+    """Class decorator adding a :class:`Backbone` to :data:`ARCHITECTURES` under ``name``."""
+
+    def register(cls: type[Backbone]) -> type[Backbone]:
+        if name in ARCHITECTURES:
+            raise ValueError(f"architecture: '{name}' is already registered")
+        cls.name = name
+        ARCHITECTURES[name] = cls
+        return cls
+
+    return register

@@ -1,0 +1,39 @@
+r"""The paper's "Gated" policy layers (Li et al., 2016, gated graph sequence networks).
+
+.. math::
+    h_i^0 = [\,\phi(v_i) \,\Vert\, \mathbf{0}\,], \qquad
+    h_i^l = \mathrm{GRU}\Big(h_i^{l-1},\; \sum_{j \in \mathcal{N}(i)} \theta_1^l h_j^{l-1}\Big),
+    \qquad \text{output } \mathrm{ReLU}(h_i^L)
+
+PyG's :class:`~torch_geometric.nn.conv.GatedGraphConv` with ``num_layers`` propagation steps:
+each step has its own :math:`\theta_1^l`, the GRU cell is shared across steps (as in the
+original GGNN). Input features are zero-padded to ``hidden_channels`` (``GatedGraphConv``
+needs ``in_channels <= hidden_channels``), so no learned input projection is added. One ReLU
+follows the last step, matching the other architectures' "ReLU hidden layers".
+"""
+
+from __future__ import annotations
+
+from torch import Tensor
+from torch_geometric.nn import GatedGraphConv
+
+from manigraph_planner.gnn.models.backbone import Backbone, register_architecture
+from manigraph_shared.errors import ConfigError
+
+
+@register_architecture("gated")
+class GatedBackbone(Backbone):
+    """One ``GatedGraphConv(hidden_channels, num_layers)`` followed by ReLU."""
+
+    def __init__(self, in_channels: int, hidden_channels: int, num_layers: int) -> None:
+        super().__init__(in_channels, hidden_channels, num_layers)
+        if hidden_channels < in_channels:
+            raise ConfigError(
+                "hidden_channels",
+                f"the gated architecture needs at least in_channels={in_channels}, "
+                f"got {hidden_channels}",
+            )
+        self.conv = GatedGraphConv(hidden_channels, num_layers, aggr="add")
+
+    def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
+        return self.conv(x, edge_index).relu()

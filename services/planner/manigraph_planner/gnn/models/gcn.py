@@ -1,0 +1,26 @@
+r"""The paper's "GCN" policy layers (Morris et al., 2019, "Weisfeiler and Leman go neural").
+
+.. math::
+    h_i^l = \mathrm{ReLU}\Big(\theta_1 h_i^{l-1}
+        + \theta_2 \sum_{j \in \mathcal{N}(i)} e_{j,i} \cdot h_j^{l-1}\Big)
+
+This is exactly PyG's :class:`~torch_geometric.nn.conv.GraphConv` with ``aggr="add"``
+(``lin_root`` is :math:`\theta_1`, ``lin_rel`` is :math:`\theta_2`); not PyG's ``GCNConv``,
+which normalises by node degree and has no separate root weight. The graph state carries no
+edge weights, so :math:`e_{j,i} = 1`.
+"""
+
+from __future__ import annotations
+
+from torch import nn
+from torch_geometric.nn import GraphConv
+
+from manigraph_planner.gnn.models.backbone import ConvStack, register_architecture
+
+
+@register_architecture("gcn")
+class GCNBackbone(ConvStack):
+    """Stacked ``GraphConv(aggr="add")`` layers with ReLU."""
+
+    def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
+        return GraphConv(in_channels, out_channels, aggr="add")

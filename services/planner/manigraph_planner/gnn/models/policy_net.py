@@ -1,0 +1,54 @@
+r"""A GNN policy network: registered message-passing backbone plus a one-logit node head.
+
+.. math::
+    h = \mathrm{backbone}(s \odot \phi,\; E), \qquad v_i = w^\top h_i + b
+
+with :math:`s` the fixed ``feature_scale``. The :math:`N` node logits :math:`v` are read as
+the paper's :math:`K + L` outputs: a softmax over the object nodes picks the object, a
+softmax over the goal nodes picks the goal (see :mod:`manigraph_planner.gnn.selection`).
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import Tensor, nn
+
+from manigraph_planner.gnn.models.backbone import ARCHITECTURES
+from manigraph_planner.gnn.models.config import ModelConfig
+
+__all__ = ["PolicyNet"]
+
+
+class PolicyNet(nn.Module):
+    """Node-scoring network of a GNN policy.
+
+    Args:
+        config: architecture and sizes.
+
+    Shapes:
+        - **input:** node features :math:`(N, 5)`, edge indices :math:`(2, E)`,
+          batch vector :math:`(N,)` (optional)
+        - **output:** node logits :math:`(N,)`
+    """
+
+    def __init__(self, config: ModelConfig) -> None:
+        super().__init__()
+        self.config = config
+        backbone = ARCHITECTURES[config.architecture]
+        self.backbone = backbone(config.in_channels, config.hidden_channels, config.num_layers)
+        self.head = nn.Linear(config.hidden_channels, 1)
+        # Not persistent: ModelConfig is the source of truth and travels in the checkpoint.
+        scale = torch.tensor(config.feature_scale, dtype=torch.float32)
+        self.feature_scale: Tensor
+        self.register_buffer("feature_scale", scale, persistent=False)
+
+    @property
+    def architecture(self) -> str:
+        return self.config.architecture
+
+    def forward(self, x: Tensor, edge_index: Tensor, batch: Tensor | None = None) -> Tensor:
+        """Node logits. ``batch`` is accepted for symmetry with PyG models; graphs in a batch
+        are disjoint, so message passing never needs it."""
+        del batch
+        hidden = self.backbone(x * self.feature_scale, edge_index)
+        return self.head(hidden).squeeze(-1)
