@@ -57,7 +57,9 @@ def add_noise(scene: Scene, sigma: float, rng: np.random.Generator) -> Scene:
 
     return scene.model_copy(
         update={
-            "objects": [o.model_copy(update={"position": jitter(o.position)}) for o in scene.objects],
+            "objects": [
+                o.model_copy(update={"position": jitter(o.position)}) for o in scene.objects
+            ],
             "goals": [g.model_copy(update={"position": jitter(g.position)}) for g in scene.goals],
         }
     )

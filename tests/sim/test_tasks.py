@@ -137,3 +137,18 @@ def test_rearrangement_hides_what_is_in_closed_boxes_until_opened() -> None:
 def test_out_of_range_parameters_are_named(task: str, params: TaskParams, field: str) -> None:
     with pytest.raises(TaskError, match=field):
         get_task(task, params)
+
+
+def test_what_was_seen_in_an_opened_box_stays_known_after_it_closes() -> None:
+    sim = GeometricBackend()
+    sim.reset(EpisodeRequest(episode_id="e", task="box-rearrangement", blocks=2, seed=3), 0.0)
+    scene = sim.scene(0.0)
+    assert scene is not None
+    lid, storage = scene.goal("lid_goal_0").position, scene.goal("storage_0").position
+    for target in (storage, lid):  # open box 0, then close it again
+        cover = sim.scene(0.0).object("cover_0")  # type: ignore[union-attr]
+        assert sim.execute(command(GripperOp.PICK, "cover_0", cover.position), 0.0).ok
+        assert sim.execute(command(GripperOp.PLACE, "cover_0", target), 0.0).ok
+    closed_again = sim.scene(0.0)
+    assert closed_again is not None and closed_again.goal("lid_goal_0").filled
+    assert closed_again.object("block_0").visible and closed_again.object("block_1").visible

@@ -38,9 +38,15 @@ class Probabilities:
 
 
 class GNNPolicy(Policy):
-    """Scene → graph state → node logits → (argmax object, argmax goal).
+    """Scene → graph state → node logits → the most likely compatible (object, goal) pair.
 
-    Ties go to the node that comes first (scene order), so decisions are deterministic.
+    The paper reads the node logits as two independent softmaxes and takes each argmax. We
+    take the argmax of ``log p(o) + log p(g)`` over pairs whose categories match (a block to a
+    block goal, a cover to a cover goal). Whenever the two independent argmaxes are compatible
+    (always, on the training distribution) this is the same decision; it differs only where
+    the paper's decoder would send a block to a cover's storage place, an action PickAndPlace
+    can never complete (e.g. box rearrangement before the second box is opened). Ties go to
+    the node that comes first (scene order), so decisions are deterministic.
     Sets torch to one thread: a single small graph is latency-bound, and the planner shares
     a 2-core machine with the simulator.
 
@@ -75,10 +81,37 @@ class GNNPolicy(Policy):
             return None
         with torch.inference_mode():
             logits = self.net(graph.x, graph.edge_index)
-        # torch.argmax returns the first maximal index: the deterministic tie-break.
-        object_index = int(logits[:k].argmax())
-        goal_index = int(logits[k:].argmax())
+        pair = best_compatible_pair(
+            logits[:k].log_softmax(0),
+            logits[k:].log_softmax(0),
+            graph.x[:k, 0],
+            graph.x[k:, 0],
+        )
+        if pair is None:
+            return None
+        object_index, goal_index = pair
         return Decision(graph.object_ids[object_index], graph.goal_ids[goal_index])
+
+
+def best_compatible_pair(
+    object_logp: Tensor, goal_logp: Tensor, object_codes: Tensor, goal_codes: Tensor
+) -> tuple[int, int] | None:
+    """Argmax of ``object_logp[o] + goal_logp[g]`` over category-compatible pairs (paper codes:
+    block 1 fills block-goal 2, cover 0 fills cover-goal 3). The first maximal pair wins; None
+    when no pair is compatible."""
+    compatible = goal_codes.round().unsqueeze(0) == _GOAL_CODE_FOR[
+        object_codes.round().long()
+    ].unsqueeze(1)
+    if not bool(compatible.any()):
+        return None
+    scores = object_logp.unsqueeze(1) + goal_logp.unsqueeze(0)
+    scores = scores.masked_fill(~compatible, float("-inf"))
+    flat = int(scores.flatten().argmax())  # the first maximal index: deterministic
+    return flat // scores.shape[1], flat % scores.shape[1]
+
+
+#: Object category code -> the code of the goals it can fill (paper: cover 0 -> 3, block 1 -> 2).
+_GOAL_CODE_FOR = torch.tensor([3.0, 2.0])
 
 
 POLICY_FILE_LOADERS[".pt"] = GNNPolicy.from_checkpoint

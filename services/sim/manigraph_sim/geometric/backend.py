@@ -65,6 +65,7 @@ class GeometricBackend(SimBackend):
         if self.world is None or self.request is None:
             return None
         world = self.world
+        world.observe()
         occupancy = world.occupancy()
         in_goal = set(occupancy.values())
         objects = [

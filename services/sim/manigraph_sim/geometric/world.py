@@ -86,8 +86,10 @@ class GeometricWorld:
         self.goal_tolerance = goal_tolerance
         self.table_z = table_z
         self.containers = containers or []
-        #: Partial observability: what is inside a closed container is not observed.
+        #: Partial observability: what is inside a container is not observed until it has
+        #: been open once (then it is known, as a robot that looked inside would know it).
         self.hide_inside_closed = hide_inside_closed
+        self.revealed: set[str] = set()
         self.held: str | None = None
 
     # --- queries ----------------------------------------------------------------------------
@@ -125,10 +127,18 @@ class GeometricWorld:
             for body in self.resting()
         )
 
+    def observe(self) -> None:
+        """Note which containers are open now: their contents stay observed from then on."""
+        for box in self.containers:
+            if box.id not in self.revealed and not self.is_closed(box):
+                self.revealed.add(box.id)
+
     def is_hidden(self, point: np.ndarray) -> bool:
         if not self.hide_inside_closed:
             return False
-        return any(box.holds_point(point) and self.is_closed(box) for box in self.containers)
+        return any(
+            box.holds_point(point) and box.id not in self.revealed for box in self.containers
+        )
 
     def occupancy(self) -> dict[str, str]:
         """Goal id -> id of the resting body of its category within ``goal_tolerance``."""

@@ -121,8 +121,8 @@ class BoxRearrangementTask(BoxTask):
 
     **Task Description**: two closed boxes, one holding K blocks; open both (covers onto
     storage places on the table), move every block into the other box, close both boxes.
-    What is inside a closed box is not observed: blocks and their goals appear as nodes only
-    once their box is opened.
+    What is inside a closed box is not observed until the box is opened: blocks and their goals
+    appear as nodes once their box has been open (and stay known after it is closed again).
 
     **Randomizations**: the two box sites and the two storage sites.
 

@@ -1,0 +1,58 @@
+"""``manigraph train``: learn a GNN policy from MCAP demonstrations, write a checkpoint."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from manigraph_shared.cli import Command
+
+
+def _configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("demos", type=Path, nargs="+", help="MCAP logs with scenes and actions")
+    parser.add_argument("--arch", default="sage", help="gcn, sage, gated or gat")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--epochs", type=int, default=150)
+    parser.add_argument("--copies", type=int, default=8, help="augmented copies per sample")
+    parser.add_argument("-o", "--output", type=Path, help="checkpoint (default checkpoints/)")
+
+
+def _run(args: argparse.Namespace) -> int:
+    import torch
+
+    from manigraph_planner.gnn import ARCHITECTURES, save_checkpoint
+    from manigraph_planner.training.augment import Augmentation
+    from manigraph_planner.training.dataset import load_demonstrations
+    from manigraph_planner.training.trainer import TrainConfig, default_output, train
+    from manigraph_shared.errors import ConfigError
+
+    if args.arch not in ARCHITECTURES:
+        raise ConfigError("arch", f"'{args.arch}' is not one of {', '.join(sorted(ARCHITECTURES))}")
+    try:
+        config = TrainConfig(
+            architecture=args.arch,
+            seed=args.seed,
+            epochs=args.epochs,
+            augmentation=Augmentation(copies=args.copies),
+        )
+    except ValueError as exc:
+        raise ConfigError(str(exc).split(":")[0], str(exc)) from None
+    torch.set_num_threads(2)
+    demos = load_demonstrations(args.demos)
+    net, metrics = train(demos, config)
+    output = args.output or default_output(args.arch, args.seed)
+    save_checkpoint(
+        output,
+        net,
+        training_config={**config.to_dict(), "demos": [str(p) for p in args.demos]},
+        data_hash=demos.data_hash,
+        metrics=metrics,
+    )
+    print(json.dumps({"checkpoint": str(output), **metrics}))
+    return 0
+
+
+command = Command(
+    help="train a GNN policy by imitation from MCAP demonstrations", configure=_configure, run=_run
+)

@@ -1,0 +1,1 @@
+"""Imitation learning of GNN policies from recorded demonstrations (paper, eq. (ce))."""
