@@ -24,7 +24,7 @@ from manigraph_planner.training.dataset import Sample
 class Augmentation:
     copies: int = 8
     translate_xy: float = 0.15
-    translate_z: float = 2.0
+    translate_z: float = 0.6
     noise: float = 0.004
 
     def __post_init__(self) -> None:
