@@ -1,0 +1,154 @@
+"""The container path users take: build, `docker compose up`, an episode, a killed service.
+
+Runs whenever a Docker engine answers; otherwise it is reported as skipped, with the reason.
+Every run uses its own compose project name and router port, and always ends with
+`docker compose down`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from manigraph_shared.mcap_log import read_log
+from manigraph_shared.messages import EpisodeEvent
+from manigraph_shared.testing import free_port
+
+pytestmark = [pytest.mark.docker, pytest.mark.integration]
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def docker_available() -> str | None:
+    if shutil.which("docker") is None:
+        return "no docker command on this machine"
+    if subprocess.run(["docker", "info"], capture_output=True, check=False).returncode != 0:
+        return "the Docker engine does not answer"
+    if subprocess.run(
+        ["docker", "compose", "version"], capture_output=True, check=False
+    ).returncode:
+        return "docker compose is not installed"
+    return None
+
+
+class Compose:
+    def __init__(self, project: str, logs: Path, port: int) -> None:
+        self.project = project
+        self.logs = logs
+        self.env = {
+            **os.environ,
+            "COMPOSE_PROJECT_NAME": project,
+            "COMPOSE_PROFILES": "sim",
+            "MANIGRAPH_ROUTER_PORT": str(port),
+        }
+
+    def __call__(
+        self, *args: str, timeout: float = 300, check: bool = True
+    ) -> subprocess.CompletedProcess[str]:
+        result = subprocess.run(
+            ["docker", "compose", *args],
+            cwd=REPO,
+            env=self.env,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            check=False,
+        )
+        if check and result.returncode != 0:
+            raise AssertionError(
+                f"docker compose {' '.join(args)}:\n{result.stdout}\n{result.stderr}"
+            )
+        return result
+
+    def tools(self, *args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
+        return self(
+            "run", "--rm", "--no-deps", "tools", "manigraph", *args, timeout=timeout, check=False
+        )
+
+    def wait_healthy(self, services: list[str], timeout: float = 180) -> None:
+        deadline = time.monotonic() + timeout
+        states: dict[str, str] = {}
+        while time.monotonic() < deadline:
+            result = self("ps", "--format", "json", check=False)
+            states = {}
+            for line in result.stdout.splitlines():
+                if line.strip():
+                    row = json.loads(line)
+                    states[row["Service"]] = row.get("Health") or row.get("State", "")
+            if all(states.get(name) == "healthy" for name in services):
+                return
+            time.sleep(2)
+        raise AssertionError(
+            f"not healthy after {timeout} s: {states}\n{self('logs', check=False).stdout[-4000:]}"
+        )
+
+
+@pytest.fixture(scope="module")
+def compose() -> Iterator[Compose]:
+    reason = docker_available()
+    if reason is not None:
+        pytest.skip(f"compose test skipped: {reason}")
+    build = subprocess.run(
+        ["bash", str(REPO / "docker" / "build.sh")],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=3600,
+        check=False,
+    )
+    assert build.returncode == 0, build.stdout[-4000:] + build.stderr[-4000:]
+    logs = REPO / "logs"
+    logs.mkdir(exist_ok=True)
+    logs.chmod(0o777)  # the images run as uid 1000
+    stack = Compose(f"manigraph-test-{os.getpid()}", logs, free_port())
+    try:
+        stack("up", "-d")
+        yield stack
+    finally:
+        stack("down", "--remove-orphans", "--timeout", "20", check=False)
+
+
+def ended_episodes(logs: Path, since: float) -> list[EpisodeEvent]:
+    events = []
+    for path in logs.glob("*.mcap"):
+        if path.stat().st_mtime < since:
+            continue
+        for item in read_log(path, [EpisodeEvent.key]):
+            event = EpisodeEvent.decode(item.data)
+            if event.phase == "end":
+                events.append(event)
+    return events
+
+
+def test_an_episode_succeeds_inside_containers_and_lands_in_logs(compose: Compose) -> None:
+    started = time.time()
+    compose.wait_healthy(["router", "recorder", "sim", "planner", "skills"])
+    result = compose.tools("run", "--blocks", "4", "--episodes", "2", "--seed", "1")
+    assert result.returncode == 0, result.stderr[-3000:]
+    summary = json.loads(result.stdout.strip().splitlines()[-1])
+    assert summary["success_rate"] == 1.0
+    time.sleep(1.0)  # the recorder flushes every 100 ms
+    ends = {e.episode_id: e for e in ended_episodes(compose.logs, started)}
+    ran = {r["episode_id"] for r in summary["results"]}
+    assert ran <= ends.keys() and all(ends[e].success for e in ran)
+
+
+def test_a_killed_planner_is_reported_missing_and_recovers(compose: Compose) -> None:
+    compose.wait_healthy(["router", "sim", "planner", "skills"])
+    compose("kill", "planner")
+    time.sleep(2.0)
+    doctor = compose.tools("doctor", "--json")
+    assert doctor.returncode == 1
+    assert "planner" in json.loads(doctor.stdout.strip().splitlines()[-1])["missing"]
+    compose("start", "planner")
+    compose.wait_healthy(["planner"])
+    result = compose.tools("run", "--blocks", "3", "--episodes", "1", "--seed", "9")
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert json.loads(result.stdout.strip().splitlines()[-1])["success_rate"] == 1.0
