@@ -1,5 +1,7 @@
 """The container path users take: build, `docker compose up`, an episode, a killed service.
 
+Works with `docker compose` (v2) and the older `docker-compose` (v1, what Debian 12 ships).
+
 Runs whenever a Docker engine answers; otherwise it is reported as skipped, with the reason.
 Every run uses its own compose project name and router port, and always ends with
 `docker compose down`.
@@ -26,20 +28,31 @@ pytestmark = [pytest.mark.docker, pytest.mark.integration]
 REPO = Path(__file__).resolve().parents[2]
 
 
+def compose_command() -> list[str] | None:
+    """`docker compose` (v2) where installed, else the `docker-compose` (v1) tool."""
+    v2 = subprocess.run(
+        ["docker", "compose", "version"], capture_output=True, text=True, check=False
+    )
+    if v2.returncode == 0 and "compose" in v2.stdout.lower():  # old CLIs exit 0 here too
+        return ["docker", "compose"]
+    if shutil.which("docker-compose") is not None:
+        return ["docker-compose"]
+    return None
+
+
 def docker_available() -> str | None:
     if shutil.which("docker") is None:
         return "no docker command on this machine"
     if subprocess.run(["docker", "info"], capture_output=True, check=False).returncode != 0:
         return "the Docker engine does not answer"
-    if subprocess.run(
-        ["docker", "compose", "version"], capture_output=True, check=False
-    ).returncode:
-        return "docker compose is not installed"
+    if compose_command() is None:
+        return "neither `docker compose` nor `docker-compose` is installed"
     return None
 
 
 class Compose:
     def __init__(self, project: str, logs: Path, port: int) -> None:
+        self.command = compose_command() or ["docker", "compose"]
         self.project = project
         self.logs = logs
         self.env = {
@@ -53,7 +66,7 @@ class Compose:
         self, *args: str, timeout: float = 300, check: bool = True
     ) -> subprocess.CompletedProcess[str]:
         result = subprocess.run(
-            ["docker", "compose", *args],
+            [*self.command, *args],
             cwd=REPO,
             env=self.env,
             capture_output=True,
@@ -63,7 +76,7 @@ class Compose:
         )
         if check and result.returncode != 0:
             raise AssertionError(
-                f"docker compose {' '.join(args)}:\n{result.stdout}\n{result.stderr}"
+                f"{' '.join([*self.command, *args])}:\n{result.stdout}\n{result.stderr}"
             )
         return result
 
@@ -72,17 +85,24 @@ class Compose:
             "run", "--rm", "--no-deps", "tools", "manigraph", *args, timeout=timeout, check=False
         )
 
+    def health(self, service: str) -> str:
+        container = self("ps", "-q", service, check=False).stdout.strip()
+        if not container:
+            return "absent"
+        inspect = subprocess.run(
+            ["docker", "inspect", "--format", "{{.State.Health.Status}}", container],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        return inspect.stdout.strip() or "unknown"
+
     def wait_healthy(self, services: list[str], timeout: float = 180) -> None:
         deadline = time.monotonic() + timeout
         states: dict[str, str] = {}
         while time.monotonic() < deadline:
-            result = self("ps", "--format", "json", check=False)
-            states = {}
-            for line in result.stdout.splitlines():
-                if line.strip():
-                    row = json.loads(line)
-                    states[row["Service"]] = row.get("Health") or row.get("State", "")
-            if all(states.get(name) == "healthy" for name in services):
+            states = {name: self.health(name) for name in services}
+            if all(state == "healthy" for state in states.values()):
                 return
             time.sleep(2)
         raise AssertionError(

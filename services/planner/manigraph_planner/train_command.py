@@ -42,6 +42,7 @@ def _run(args: argparse.Namespace) -> int:
     demos = load_demonstrations(args.demos)
     net, metrics = train(demos, config)
     output = args.output or default_output(args.arch, args.seed)
+    output.parent.mkdir(parents=True, exist_ok=True)
     save_checkpoint(
         output,
         net,
