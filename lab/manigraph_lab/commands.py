@@ -69,3 +69,30 @@ eval_command = Command(
     configure=_eval_configure,
     run=_eval_run,
 )
+
+
+def _suite_configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("-o", "--out", type=Path, default=Path("results"))
+    parser.add_argument("--archs", nargs="+", default=["gcn", "sage", "gated", "gat"])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument("--episodes", type=int, default=100, help="episodes per table cell")
+    parser.add_argument("--curve-episodes", type=int, default=50, help="episodes per K in the plot")
+    parser.add_argument("--epochs", type=int, default=150)
+
+
+def _suite_run(args: argparse.Namespace) -> int:
+    import torch
+
+    from manigraph_lab.suite import run_suite
+
+    torch.set_num_threads(2)
+    run_suite(args.out, args.archs, args.seeds, args.episodes, args.curve_episodes, args.epochs)
+    print((args.out / "generalization.md").read_text())
+    return 0
+
+
+suite_command = Command(
+    help="reproduce the paper's generalization table and success-vs-K plot (all archs, seeds)",
+    configure=_suite_configure,
+    run=_suite_run,
+)
