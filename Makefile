@@ -32,6 +32,9 @@ format: install
 bench: install  ## speed figures (not tests): medians and ratios
 	$(RUN) python bench/bench_roundtrip.py
 	$(RUN) python bench/bench_recorder.py
+	$(RUN) python bench/bench_policy_inference.py
+	$(RUN) python bench/bench_training.py
+	$(RUN) python bench/bench_eval.py
 
 clean:
 	rm -rf .venv logs .pytest_cache .ruff_cache .mypy_cache

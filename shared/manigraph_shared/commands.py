@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
 import threading
 import time
@@ -246,7 +247,15 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--log-dir", type=Path, help="also write <service>.log files here")
 
 
+def _interrupt(signum: int, _frame: object) -> None:
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
 def _up_run(args: argparse.Namespace) -> int:
+    # Explicit handlers: a process started with SIGINT ignored (a background job of a script,
+    # some CI runners) would otherwise never see Ctrl-C, and SIGTERM should stop it the same way.
+    signal.signal(signal.SIGINT, _interrupt)
+    signal.signal(signal.SIGTERM, _interrupt)
     endpoint = f"tcp/127.0.0.1:{args.port}"
     bus_env = {
         "MANIGRAPH_ZENOH_MODE": "client",

@@ -22,12 +22,19 @@ def children_of(pid: int) -> list[int]:
     return [int(p) for p in result.stdout.split()]
 
 
-def test_ctrl_c_stops_every_service_cleanly() -> None:
+def ignore_sigint() -> None:
+    """Start as a background job of a script does: with SIGINT ignored."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM])
+def test_ctrl_c_stops_every_service_cleanly(stop_signal: int) -> None:
     up = subprocess.Popen(
         [sys.executable, "-m", "manigraph_shared.cli", "up", "--port", str(free_port())],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
+        preexec_fn=ignore_sigint,
     )
     assert up.stdout is not None
     lines = []
@@ -39,7 +46,7 @@ def test_ctrl_c_stops_every_service_cleanly() -> None:
     assert any("stack is up: router, sim, planner, skills" in line for line in lines), lines
     children = children_of(up.pid)
     assert len(children) == 4
-    up.send_signal(signal.SIGINT)
+    up.send_signal(stop_signal)
     rest, _ = up.communicate(timeout=30)
     assert up.returncode == 0
     for name in ("sim", "planner", "skills", "router"):
