@@ -123,3 +123,13 @@ def test_no_decisions_after_the_episode_ended_and_fresh_ids_for_the_next() -> No
     nxt = Scene(episode_id="f", stamp=6.0, sequence=9, objects=world[0], goals=world[1])
     action = maker.on_scene(nxt)
     assert action is not None and action.decision_id == "f:0"
+
+
+def test_a_scene_of_an_ended_episode_is_never_decided_on() -> None:
+    maker = DecisionMaker(ExpertPolicy())
+    world = ([obj("a", 0.5, 0)], [slot("g0", 0.3, 0)])
+    ended = Scene(
+        episode_id="e", stamp=1.0, sequence=1, objects=world[0], goals=world[1], episode_ended=True
+    )
+    assert maker.on_scene(ended) is None
+    assert maker.on_scene(scene(*world, stamp=2.0, seq=2)) is None  # the episode stays over

@@ -32,6 +32,7 @@ def test_an_inverted_stack_ends_the_episode_with_success() -> None:
     assert sim.end_event(3.0) is None  # reported once
     final = sim.scene(4.0)
     assert final is not None and all(g.filled for g in final.goals)
+    assert final.episode_ended
     assert all(o.filled for o in final.objects)
 
 

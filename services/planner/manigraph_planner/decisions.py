@@ -51,6 +51,8 @@ class DecisionMaker:
         return self._decide_on_held()
 
     def on_scene(self, scene: Scene) -> Action | None:
+        if scene.episode_ended:  # said by the world itself: no race with the end event
+            _remember(self._ended, scene.episode_id, None)
         if scene.episode_id in self._ended:
             return None
         if scene.episode_id != self.episode_id:

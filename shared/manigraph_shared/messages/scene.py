@@ -76,6 +76,9 @@ class Scene(Message):
     sequence: int = Field(ge=0, description="increases by one per published scene")
     objects: list[SceneObject] = Field(max_length=MAX_ENTITIES)
     goals: list[SceneGoal] = Field(max_length=MAX_ENTITIES)
+    episode_ended: bool = Field(
+        False, description="the world ended this episode (sim only): planners stop deciding"
+    )
 
     @model_validator(mode="after")
     def _unique_ids(self) -> Self:

@@ -96,6 +96,7 @@ class GeometricBackend(SimBackend):
             sequence=self.sequence,
             objects=objects,
             goals=goals,
+            episode_ended=self.ended,
         )
 
     def execute(self, command: RobotCommand, stamp: float) -> RobotFeedback:
