@@ -118,3 +118,17 @@ def stack(log_dir: Path) -> Iterator[Stack]:
         yield running
     finally:
         running.stop_all()
+
+
+def run_up(*args: str, timeout: float = 180.0) -> subprocess.CompletedProcess[str]:
+    """``manigraph up ARGS`` on a free port, to completion; fails loudly if it fails."""
+    result = subprocess.run(
+        [sys.executable, "-m", "manigraph_shared.cli", "up", *args, "--port", str(free_port())],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        check=False,
+    )
+    if result.returncode != 0:
+        raise AssertionError(f"manigraph up {' '.join(args)} failed:\n{result.stderr[-3000:]}")
+    return result

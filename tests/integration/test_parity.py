@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -17,7 +15,7 @@ from manigraph_planner.training.dataset import load_demonstrations
 from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodeRequest
-from manigraph_shared.testing import free_port
+from manigraph_shared.testing import run_up
 
 pytestmark = pytest.mark.integration
 
@@ -46,33 +44,21 @@ def test_same_seed_same_actions_in_process_and_over_zenoh(
 ) -> None:
     spec = str(rough_policy) if policy == "rough" else "expert"
     log = tmp_path / "stack.mcap"
-    result = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "manigraph_shared.cli",
-            "up",
-            "--policy",
-            spec,
-            "--task",
-            "stack",
-            "--blocks",
-            "4",
-            "--episodes",
-            "3",
-            "--seed",
-            "11",
-            "--record",
-            str(log),
-            "--port",
-            str(free_port()),
-        ],
-        capture_output=True,
-        text=True,
+    run_up(
+        "--policy",
+        spec,
+        "--task",
+        "stack",
+        "--blocks",
+        "4",
+        "--episodes",
+        "3",
+        "--seed",
+        "11",
+        "--record",
+        str(log),
         timeout=180,
-        check=False,
     )
-    assert result.returncode == 0, result.stderr[-3000:]
 
     over_zenoh: dict[int, list[tuple[str, str]]] = {}
     seeds: dict[str, int] = {}

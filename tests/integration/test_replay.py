@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from manigraph_shared.mcap_log import McapLogWriter, read_log
 from manigraph_shared.messages import Action, Scene
-from manigraph_shared.testing import Stack, free_port
+from manigraph_shared.testing import Stack, run_up
 
 pytestmark = pytest.mark.integration
 
@@ -19,29 +18,7 @@ pytestmark = pytest.mark.integration
 @pytest.fixture(scope="module")
 def recorded_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     log = tmp_path_factory.mktemp("recorded") / "run.mcap"
-    result = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "manigraph_shared.cli",
-            "up",
-            "--blocks",
-            "5",
-            "--episodes",
-            "2",
-            "--seed",
-            "3",
-            "--record",
-            str(log),
-            "--port",
-            str(free_port()),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
-    assert result.returncode == 0, result.stderr[-3000:]
+    run_up("--blocks", "5", "--episodes", "2", "--seed", "3", "--record", str(log), timeout=120)
     return log
 
 

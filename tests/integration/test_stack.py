@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
@@ -14,7 +12,7 @@ from mcap.reader import make_reader
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, Scene, ServiceStatus
-from manigraph_shared.testing import Stack, free_port
+from manigraph_shared.testing import Stack, free_port, run_up
 
 pytestmark = pytest.mark.integration
 
@@ -25,31 +23,19 @@ def last_json(output: str) -> dict[str, object]:
 
 def test_up_runs_episodes_to_success_and_records_them(tmp_path: Path) -> None:
     log = tmp_path / "run.mcap"
-    result = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "manigraph_shared.cli",
-            "up",
-            "--task",
-            "stack",
-            "--blocks",
-            "6",
-            "--episodes",
-            "3",
-            "--seed",
-            "0",
-            "--record",
-            str(log),
-            "--port",
-            str(free_port()),
-        ],
-        capture_output=True,
-        text=True,
+    result = run_up(
+        "--task",
+        "stack",
+        "--blocks",
+        "6",
+        "--episodes",
+        "3",
+        "--seed",
+        "0",
+        "--record",
+        str(log),
         timeout=120,
-        check=False,
     )
-    assert result.returncode == 0, result.stderr[-3000:]
     summary = last_json(result.stdout)
     assert summary["episodes"] == 3
     assert summary["success_rate"] == 1.0
