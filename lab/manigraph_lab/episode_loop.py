@@ -94,17 +94,7 @@ def run_episode(
         decision = policy.decide(observed)
         if decision is None:
             return EpisodeRecord(request, start, _stuck(backend, request, clock), record_steps)
-        action = Action(
-            decision_id=f"{request.episode_id}:{step}",
-            episode_id=request.episode_id,
-            scene_sequence=truth.sequence,
-            object_id=decision.object_id,
-            goal_id=decision.goal_id,
-            orientation_index=decision.orientation_index,
-            tray_action=decision.tray_action,
-            policy=policy.name,
-            stamp=clock,
-        )
+        action = decision.to_action(truth, step, policy.name, clock)
         step += 1
         ok, reason = _pick_and_place(backend, truth, action, clock)
         record_steps.append(Step(observed, action, ok, reason))

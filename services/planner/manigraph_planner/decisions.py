@@ -76,17 +76,7 @@ class DecisionMaker:
         decision = self.policy.decide(scene)
         if decision is None:
             return None
-        action = Action(
-            decision_id=f"{scene.episode_id}:{self.step}",
-            episode_id=scene.episode_id,
-            scene_sequence=scene.sequence,
-            object_id=decision.object_id,
-            goal_id=decision.goal_id,
-            orientation_index=decision.orientation_index,
-            tray_action=decision.tray_action,
-            policy=self.policy.name,
-            stamp=time.time(),
-        )
+        action = decision.to_action(scene, self.step, self.policy.name, time.time())
         self.step += 1
         self.pending = action.decision_id
         if action.decision_id in self._finished:  # its result overtook the decision (replay)

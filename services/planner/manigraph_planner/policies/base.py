@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from manigraph_shared.errors import PolicyError
-from manigraph_shared.messages import Scene, TrayAction
+from manigraph_shared.messages import Action, Scene, TrayAction
 
 
 @dataclass(frozen=True)
@@ -17,6 +17,21 @@ class Decision:
     goal_id: str
     orientation_index: int | None = None
     tray_action: TrayAction = TrayAction.NONE
+
+    def to_action(self, scene: Scene, step: int, policy: str, stamp: float) -> Action:
+        """The contract message for this decision, step ``step`` of the scene's episode; the id
+        ``<episode>:<step>`` is what lets a recorded log drive a fresh planner to the same ids."""
+        return Action(
+            decision_id=f"{scene.episode_id}:{step}",
+            episode_id=scene.episode_id,
+            scene_sequence=scene.sequence,
+            object_id=self.object_id,
+            goal_id=self.goal_id,
+            orientation_index=self.orientation_index,
+            tray_action=self.tray_action,
+            policy=policy,
+            stamp=stamp,
+        )
 
 
 class Policy(ABC):
