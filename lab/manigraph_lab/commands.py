@@ -37,6 +37,7 @@ demos_command = Command(
 def _eval_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--policy", default="expert", help="policy name or checkpoint file")
     parser.add_argument("--task", default="stack")
+    parser.add_argument("--task-file", type=Path, help="a TOML layout of your own (see README)")
     parser.add_argument("--blocks", type=int, default=4)
     parser.add_argument("--stacks", type=int, default=1)
     parser.add_argument("--episodes", type=int, default=100)
@@ -54,7 +55,26 @@ def _eval_run(args: argparse.Namespace) -> int:
         raise ConfigError("noise", "must be >= 0 metres")
     if args.episodes < 1:
         raise ConfigError("episodes", "must be >= 1")
-    spec = EvalSpec(args.task, args.blocks, args.stacks, args.episodes, args.seed, args.noise)
+    task_file = None
+    if args.task_file is not None:
+        from manigraph_sim.tasks.task_file import parse_task_file
+
+        try:
+            task_file = args.task_file.read_text()
+        except OSError as exc:
+            raise ConfigError(
+                "task-file", f"cannot read {args.task_file}: {exc.strerror}"
+            ) from None
+        parse_task_file(task_file)  # a bad file stops here, naming the line or field
+    spec = EvalSpec(
+        "file" if task_file else args.task,
+        args.blocks,
+        args.stacks,
+        args.episodes,
+        args.seed,
+        args.noise,
+        task_file,
+    )
     summary = evaluate(load_policy(args.policy), spec)
     if args.json:
         print(json.dumps(summary))

@@ -21,15 +21,17 @@ class EvalSpec:
     episodes: int = 100
     seed: int = 0
     noise: float = 0.0
+    task_file: str | None = None  # TOML text of a user layout
 
     def requests(self) -> list[EpisodeRequest]:
         return [
             EpisodeRequest(
                 episode_id=f"eval-{self.task}-{self.blocks}-{self.seed + i}",
-                task=self.task,
+                task="file" if self.task_file is not None else self.task,
                 blocks=self.blocks,
                 stacks=self.stacks,
                 seed=self.seed + i,
+                task_file=self.task_file,
             )
             for i in range(self.episodes)
         ]

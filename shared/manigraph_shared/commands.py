@@ -15,6 +15,7 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
 from manigraph_shared.episodes import EpisodePlan, run_episodes
+from manigraph_shared.errors import ConfigError
 from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
 from manigraph_shared.recorder import Recorder
@@ -199,6 +200,7 @@ keys_command = Command(
 def _episode_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("episodes")
     group.add_argument("--task", default="stack", help="task name (default: stack)")
+    group.add_argument("--task-file", type=Path, help="a TOML layout of your own (see README)")
     group.add_argument("--blocks", type=int, default=4, help="blocks per stack K (default 4)")
     group.add_argument("--stacks", type=int, default=1, help="number of stacks s (default 1)")
     group.add_argument("--episodes", type=int, default=None, help="run N episodes, then exit")
@@ -207,8 +209,17 @@ def _episode_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _plan(args: argparse.Namespace, episodes: int) -> EpisodePlan:
+    task_file = None
+    if args.task_file is not None:
+        try:
+            task_file = args.task_file.read_text()
+        except OSError as exc:
+            raise ConfigError(
+                "task-file", f"cannot read {args.task_file}: {exc.strerror}"
+            ) from None
     return EpisodePlan(
-        task=args.task,
+        task="file" if task_file is not None else args.task,
+        task_file=task_file,
         blocks=args.blocks,
         stacks=args.stacks,
         episodes=episodes,

@@ -40,15 +40,17 @@ class EpisodePlan:
     seed: int
     timeout: float = 120.0
     run_id: str = "run"
+    task_file: str | None = None  # TOML text of a user layout
 
     def request(self, index: int) -> EpisodeRequest:
         seed = self.seed + index
         return EpisodeRequest(
             episode_id=f"{self.run_id}-{index:04d}",
-            task=self.task,
+            task="file" if self.task_file is not None else self.task,
             blocks=self.blocks,
             stacks=self.stacks,
             seed=seed,
+            task_file=self.task_file,
         )
 
 

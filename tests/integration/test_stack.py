@@ -170,3 +170,18 @@ def test_doctor_without_a_router_reports_everything_missing(tmp_path: Path) -> N
     result = stack.run("doctor", "--json", "--timeout", "1")
     assert result.returncode == 1
     assert set(json.loads(result.stdout)["missing"]) == {"router", "sim", "planner", "skills"}
+
+
+def test_a_bad_task_file_is_refused_by_the_sim_with_the_field_named(
+    running_stack: Stack, tmp_path: Path
+) -> None:
+    running_stack.start("router")
+    for name in ("sim", "planner", "skills"):
+        running_stack.start(name, name)
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[objects]]\nid = "a"\ncategory = "ball"\nposition = [0.5, 0, 0.02]\n')
+    result = running_stack.run("run", "--task-file", str(bad), "--episodes", "1")
+    assert result.returncode == 2
+    assert "objects.0.category" in result.stderr and "goals" in result.stderr
+    with running_stack.client() as bus:
+        assert {"sim", "planner", "skills"} <= bus.alive_services()  # nothing crashed

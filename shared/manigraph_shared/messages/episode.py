@@ -23,6 +23,9 @@ class EpisodeRequest(Message):
     stacks: int = Field(1, ge=1, le=16, description="number of stacks (s)")
     seed: int = Field(0, ge=0, le=2**32 - 1)
     max_steps: int | None = Field(None, ge=1, le=10_000, description="default: 2 x goals + 4")
+    task_file: str | None = Field(
+        None, max_length=65_536, description="TOML text of a user layout (with task 'file')"
+    )
 
 
 class EpisodePhase(StrEnum):
