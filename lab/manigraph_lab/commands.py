@@ -49,22 +49,17 @@ def _eval_configure(parser: argparse.ArgumentParser) -> None:
 def _eval_run(args: argparse.Namespace) -> int:
     from manigraph_lab.evaluate import EvalSpec, evaluate
     from manigraph_planner.policies import load_policy
+    from manigraph_shared.episodes import read_task_file
     from manigraph_shared.errors import ConfigError
 
     if args.noise < 0:
         raise ConfigError("noise", "must be >= 0 metres")
     if args.episodes < 1:
         raise ConfigError("episodes", "must be >= 1")
-    task_file = None
-    if args.task_file is not None:
+    task_file = read_task_file(args.task_file)
+    if task_file is not None:
         from manigraph_sim.tasks.task_file import parse_task_file
 
-        try:
-            task_file = args.task_file.read_text()
-        except OSError as exc:
-            raise ConfigError(
-                "task-file", f"cannot read {args.task_file}: {exc.strerror}"
-            ) from None
         parse_task_file(task_file)  # a bad file stops here, naming the line or field
     spec = EvalSpec(
         "file" if task_file else args.task,

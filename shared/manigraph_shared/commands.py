@@ -14,8 +14,7 @@ from manigraph_shared import contract_doc, doctor
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
-from manigraph_shared.episodes import EpisodePlan, run_episodes
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.episodes import EpisodePlan, read_task_file, run_episodes
 from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
 from manigraph_shared.recorder import Recorder
@@ -209,14 +208,7 @@ def _episode_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _plan(args: argparse.Namespace, episodes: int) -> EpisodePlan:
-    task_file = None
-    if args.task_file is not None:
-        try:
-            task_file = args.task_file.read_text()
-        except OSError as exc:
-            raise ConfigError(
-                "task-file", f"cannot read {args.task_file}: {exc.strerror}"
-            ) from None
+    task_file = read_task_file(args.task_file)
     return EpisodePlan(
         task="file" if task_file is not None else args.task,
         task_file=task_file,

@@ -12,10 +12,11 @@ import statistics
 import sys
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import TextIO
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.errors import BusError
+from manigraph_shared.errors import BusError, ConfigError
 from manigraph_shared.messages import EpisodeEvent, EpisodePhase, EpisodeRequest
 
 
@@ -52,6 +53,16 @@ class EpisodePlan:
             seed=seed,
             task_file=self.task_file,
         )
+
+
+def read_task_file(path: Path | None) -> str | None:
+    """The text of a ``--task-file`` (validated later, by the sim), or None without one."""
+    if path is None:
+        return None
+    try:
+        return path.read_text()
+    except OSError as exc:
+        raise ConfigError("task-file", f"cannot read {path}: {exc.strerror}") from None
 
 
 def run_episodes(bus: Bus, plan: EpisodePlan, progress: TextIO = sys.stderr) -> dict[str, object]:
