@@ -1,23 +1,48 @@
 """Augmentation: ~20 expert trajectories become ~900 training graphs (the paper's number).
 
-What we chose, and why each keeps the expert's label correct:
+Each demonstrated decision is kept and ``copies`` randomized copies of it are added. A copy
+goes through these steps, none of which changes what the expert would decide:
 
-* **Rigid translation** of the whole scene in x, y and z (uniform, ``translate`` metres):
-  which block is highest or which goal is lowest does not change when everything moves
-  together. The z shift also shows the network absolute heights far above the training
-  stacks, which is what generalising from K = 4 to K = 40 needs.
-* **Position noise** on every node (Gaussian, ``noise`` metres, well below a block's size):
-  robustness to perception noise without reordering stacked blocks.
-* **Node order** is not augmented: every architecture is permutation-equivariant (tested).
+1. **Tower extension** (probability ``tower_probability``): taller source towers, goal stacks
+   with filled goals below and free goals above, up to ``max_levels`` each
+   (:func:`~manigraph_planner.training.structure.extend_towers`). The demonstrations never
+   show more than four blocks; the tests go to forty.
+2. **Idle covers dropped** (probability ``drop_covers_probability``) where the expert moves a
+   block and no cover lies over a box
+   (:func:`~manigraph_planner.training.structure.drop_idle_covers`): the demonstrations always
+   show a box; the stacking tasks never do. Then **distractors** (probability
+   ``distractor_probability``; none where the covers were dropped): a closed box and/or a
+   free storage place elsewhere on the table
+   (:func:`~manigraph_planner.training.structure.add_distractors`). The demonstrations show
+   one box; box rearrangement has two.
+3. **Rigid translation** of the whole scene, uniform within ±``translate_xy`` in x and y and
+   ``[0, translate_z]`` up: which block is highest or which goal lowest does not change when
+   everything moves together.
+4. **Position noise** on every node, Gaussian: ``noise_xy`` metres in x and y, ``noise`` in z.
+   Both stay well below a block's size, so no stacked block changes place in the order and
+   footprints still overlap; x/y noise teaches that goals need not stand in exact columns
+   (a pyramid's do not).
+
+Node order is not augmented: every architecture is permutation-equivariant (tested).
+Why each step keeps the label is argued in :mod:`~manigraph_planner.training.structure` and
+checked against the expert in ``tests/planner/training/test_structure.py``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import torch
 
 from manigraph_planner.training.dataset import Sample
+from manigraph_planner.training.structure import (
+    BLOCK,
+    Graph,
+    SceneGeometry,
+    add_distractors,
+    drop_idle_covers,
+    extend_towers,
+)
 
 
 @dataclass(frozen=True)
@@ -26,21 +51,56 @@ class Augmentation:
     translate_xy: float = 0.15
     translate_z: float = 0.6
     noise: float = 0.004
+    noise_xy: float = 0.01
+    tower_probability: float = 0.5
+    max_levels: int = 24
+    max_free_levels: int = 24
+    distractor_probability: float = 0.5
+    drop_covers_probability: float = 0.5
+    geometry: SceneGeometry = field(default_factory=SceneGeometry)
 
     def __post_init__(self) -> None:
         if self.copies < 0:
             raise ValueError("copies: must be >= 0")
-        for name in ("translate_xy", "translate_z", "noise"):
+        for name in ("translate_xy", "translate_z", "noise", "noise_xy"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name}: must be >= 0 metres")
+        for name in ("tower_probability", "distractor_probability", "drop_covers_probability"):
+            if not 0 <= getattr(self, name) <= 1:
+                raise ValueError(f"{name}: must be in [0, 1]")
+        for name in ("max_levels", "max_free_levels"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name}: must be >= 0")
 
     def apply(self, samples: list[Sample], generator: torch.Generator) -> list[Sample]:
         """The originals followed by ``copies`` randomized copies of each."""
         out = list(samples)
         for _ in range(self.copies):
             for sample in samples:
-                out.append(sample.with_x(self._jitter(sample.x, generator)))
+                out.append(self.randomize(sample, generator))
         return out
+
+    def randomize(self, sample: Sample, generator: torch.Generator) -> Sample:
+        graph = Graph(sample.x, sample.object_index, sample.goal_index)
+        if self._chance(self.tower_probability, generator):
+            source, below = (self._levels(generator, self.max_levels) for _ in range(2))
+            above = self._levels(generator, self.max_free_levels)
+            graph = extend_towers(graph, source, below, above, self.geometry)
+        if self._chance(self.drop_covers_probability, generator):
+            graph = drop_idle_covers(graph, self.geometry)
+        if self._chance(self.distractor_probability, generator):
+            box, storage = (self._chance(0.5, generator) for _ in range(2))
+            graph = add_distractors(graph, box, storage or not box, generator, self.geometry)
+        x = self._jitter(graph.x, generator)
+        return Sample(x, x[:, 0] <= BLOCK, graph.object_index, graph.goal_index)
+
+    @staticmethod
+    def _levels(generator: torch.Generator, most: int) -> int:
+        return int(torch.randint(0, most + 1, (1,), generator=generator))
+
+    @staticmethod
+    def _chance(probability: float, generator: torch.Generator) -> bool:
+        return probability > 0 and float(torch.rand(1, generator=generator)) < probability
 
     def _jitter(self, x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
         x = x.clone()
@@ -48,5 +108,6 @@ class Augmentation:
         shift[:2] = (torch.rand(2, generator=generator) * 2 - 1) * self.translate_xy
         shift[2] = torch.rand(1, generator=generator).item() * self.translate_z
         x[:, 1:4] += shift
-        x[:, 1:4] += torch.randn(x.shape[0], 3, generator=generator) * self.noise
+        sigma = torch.tensor([self.noise_xy, self.noise_xy, self.noise])
+        x[:, 1:4] += torch.randn(x.shape[0], 3, generator=generator) * sigma
         return x

@@ -29,6 +29,8 @@ class TrainConfig:
     weight_decay: float = 0.0
     hidden_channels: int = 64
     num_layers: int = 3
+    #: Fixed input multipliers (category, x, y, z, filled); see ModelConfig.feature_scale.
+    feature_scale: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0, 1.0)
     augmentation: Augmentation = field(default_factory=Augmentation)
 
     def __post_init__(self) -> None:
@@ -93,6 +95,7 @@ def train(
             architecture=config.architecture,
             hidden_channels=config.hidden_channels,
             num_layers=config.num_layers,
+            feature_scale=config.feature_scale,
         )
     )
     optimiser = torch.optim.Adam(

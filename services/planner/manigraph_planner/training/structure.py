@@ -1,0 +1,237 @@
+r"""Label-preserving structural augmentation: taller towers and distractor boxes.
+
+Twenty box packing/unpacking demonstrations with K = 3, 4 show towers of at most four blocks,
+one box and one storage place. Two edits of a demonstrated graph show the network scenes
+like the ones it is tested on, and **never change the expert's choice** (each argued below
+from the expert's three rules in :mod:`manigraph_planner.policies.expert`, and checked by
+``tests/planner/training/test_structure.py`` against the expert itself):
+
+* **Tower extension.** Every free-standing source tower (a column of blocks in no goal, away
+  from any box) gets the same number :math:`m` of extra blocks slid in at its bottom, and
+  every free-standing goal stack gets :math:`m'` filled goals (each holding a block) slid in
+  at its bottom and :math:`f` free goals added on top. Everything above moves up by whole
+  block sizes. The highest movable block is still the same block (all source towers rise
+  together, so their order is kept), and the lowest free goal is still the same goal (all
+  goal stacks rise together; the new goals below are filled, the new goals on top are
+  higher). Boxes are left alone: a box holds one layer.
+* **Distractors.** A closed box elsewhere on the table (a cover resting on its lid goal,
+  both filled; its contents unobserved, as a closed box's are; not while the expert opens a
+  box, see :func:`add_distractors`), and a free storage place for covers on the table. The
+  expert never moves a cover that is in nothing's way while blocks can be moved or
+  uncovered; when closing, it moves the *lowest* cover in a cover goal (a stored cover is
+  lower than any cover on a box) to the *highest* free cover goal (a box's lid is higher
+  than any storage place). A new storage place ties with the demonstrated one only where
+  both are equally right.
+* **Idle covers dropped.** When the expert moves a block and every cover rests in a storage
+  place on the table (none lies over a box), the covers and all cover goals are removed:
+  rule 1 (blocks) never looks at them, and the stacking tasks have none at all.
+
+Nodes are rows ``[category, x, y, z, filled]`` (see :mod:`manigraph_planner.gnn.features`);
+objects stay before goals, and the expert's object and goal node indices are carried along.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import Tensor
+
+from manigraph_planner.gnn.features import FEATURE_SPEC
+
+COVER = FEATURE_SPEC.code("cover")
+BLOCK = FEATURE_SPEC.code("block")
+BLOCK_GOAL = FEATURE_SPEC.code("block-goal")
+COVER_GOAL = FEATURE_SPEC.code("cover-goal")
+
+#: Nodes closer than this in x and y stand in one column.
+COLUMN_TOLERANCE = 0.01
+
+
+@dataclass(frozen=True)
+class Graph:
+    """A demonstrated decision as node rows plus the expert's object and goal node."""
+
+    x: Tensor  # (N, 5), objects first
+    object_index: int
+    goal_index: int
+
+    @property
+    def num_objects(self) -> int:
+        return int((self.x[:, 0] <= BLOCK).sum())
+
+
+@dataclass(frozen=True)
+class SceneGeometry:
+    """Sizes of the world the demonstrations come from, metres.
+
+    Args:
+        block_size: edge of a block; towers grow in steps of it.
+        box_half_width: half the outer width of a box (cover); no tower is extended this close
+            to a box site.
+        site_distance: a distractor keeps at least this far (x and y) from every other node.
+        workspace_x, workspace_y: where distractors may stand, before the scene is translated.
+    """
+
+    block_size: float = 0.04
+    box_half_width: float = 0.09
+    site_distance: float = 0.2
+    workspace_x: tuple[float, float] = (0.3, 0.7)
+    workspace_y: tuple[float, float] = (-0.35, 0.35)
+
+
+def _box_sites(x: Tensor, geometry: SceneGeometry) -> Tensor:
+    """(x, y) of every cover or cover goal above the table: a box stands there."""
+    lids = ((x[:, 0] == COVER) | (x[:, 0] == COVER_GOAL)) & (x[:, 3] > geometry.block_size)
+    return x[lids, 1:3]
+
+
+def _columns(x: Tensor, rows: Tensor) -> list[Tensor]:
+    """Group the node indices ``rows`` by (x, y): one index tensor per column."""
+    columns: list[Tensor] = []
+    left = rows.tolist()
+    while left:
+        seed = left[0]
+        near = [i for i in left if bool((x[i, 1:3] - x[seed, 1:3]).abs().max() <= COLUMN_TOLERANCE)]
+        columns.append(torch.tensor(near))
+        left = [i for i in left if i not in near]
+    return columns
+
+
+def _away_from_boxes(x: Tensor, column: Tensor, boxes: Tensor, geometry: SceneGeometry) -> bool:
+    if boxes.numel() == 0:
+        return True
+    gap = (boxes - x[column[0], 1:3]).abs().max(dim=1).values
+    return bool((gap > geometry.box_half_width).all())
+
+
+def _rebuild(
+    graph: Graph, rows: Tensor, new_objects: list[list[float]], new_goals: list[list[float]]
+) -> Graph:
+    """``rows`` (edited old nodes) plus new nodes, objects first; indices follow their nodes."""
+    k = graph.num_objects
+    objects = [rows[:k], torch.tensor(new_objects, dtype=rows.dtype).reshape(-1, 5)]
+    goals = [rows[k:], torch.tensor(new_goals, dtype=rows.dtype).reshape(-1, 5)]
+    x = torch.cat(objects + goals)
+    goal_index = graph.goal_index + len(new_objects)
+    return Graph(x, graph.object_index, goal_index)
+
+
+def extend_towers(
+    graph: Graph, source_levels: int, stack_levels: int, free_levels: int, geometry: SceneGeometry
+) -> Graph:
+    """Slide ``source_levels`` blocks under every source tower, and ``stack_levels`` filled
+    goals (each holding a block) under and ``free_levels`` free goals on top of every goal
+    stack.
+
+    Source towers are extended only if every block still to move stands in a free-standing
+    column (none in a box), and goal stacks only if every block goal does: otherwise the new
+    heights could reorder a tower against a box and change the expert's choice. Returns
+    ``graph`` itself where nothing qualifies.
+    """
+    x = graph.x.clone()
+    boxes = _box_sites(x, geometry)
+    pitch = geometry.block_size
+    rows = torch.nonzero((x[:, 0] == BLOCK) | (x[:, 0] == BLOCK_GOAL)).flatten()
+    stacks: list[Tensor] = []
+    sources: list[Tensor] = []
+    in_box = {"stack": False, "source": False}
+    for column in _columns(x, rows):
+        codes, filled = x[column, 0], x[column, 4]
+        kind = "stack" if bool((codes == BLOCK_GOAL).any()) else "source"
+        if kind == "source" and not bool((filled == 0).all()):
+            continue  # blocks in goals without their goal visible: leave alone
+        if not _away_from_boxes(x, column, boxes, geometry):
+            in_box[kind] = True
+        else:
+            (stacks if kind == "stack" else sources).append(column)
+    if in_box["stack"]:
+        stacks = []
+    if in_box["source"]:
+        sources = []
+    new_objects: list[list[float]] = []
+    new_goals: list[list[float]] = []
+    for column in sources:
+        xy = x[column[0], 1:3].tolist()
+        bottom = float(x[column, 3].min())
+        new_objects += [[BLOCK, *xy, bottom + i * pitch, 0.0] for i in range(source_levels)]
+        x[column, 3] += source_levels * pitch
+    for column in stacks:
+        xy = x[column[0], 1:3].tolist()
+        bottom = float(x[column, 3].min())
+        top = float(x[column][x[column, 0] == BLOCK_GOAL, 3].max()) + stack_levels * pitch
+        for i in range(stack_levels):
+            new_goals.append([BLOCK_GOAL, *xy, bottom + i * pitch, 1.0])
+            new_objects.append([BLOCK, *xy, bottom + i * pitch, 1.0])
+        new_goals += [[BLOCK_GOAL, *xy, top + i * pitch, 0.0] for i in range(1, free_levels + 1)]
+        x[column, 3] += stack_levels * pitch
+    if not new_objects and not new_goals:
+        return graph
+    return _rebuild(graph, x, new_objects, new_goals)
+
+
+def add_distractors(
+    graph: Graph,
+    closed_box: bool,
+    storage: bool,
+    generator: torch.Generator,
+    geometry: SceneGeometry,
+) -> Graph:
+    """Add a closed box (cover on its lid goal) and/or a free storage place, each at a free
+    table site. Needs a demonstrated box to copy heights from; else returns ``graph``."""
+    x = graph.x
+    covers = x[x[:, 0] == COVER_GOAL, 3]
+    if covers.numel() < 2:
+        return graph
+    lid_z, storage_z = float(covers.max()), float(covers.min())
+    if lid_z - storage_z < geometry.block_size:
+        return graph
+    chosen = x[graph.object_index]
+    if int(chosen[0]) == COVER and float(chosen[3]) > geometry.block_size:
+        # The expert is opening a box. A second closed box would show two covers that differ
+        # only in where they stand, which architectures that aggregate over the whole graph
+        # (sum or mean) cannot tell apart; no test scene asks for that choice.
+        closed_box = False
+    new_objects: list[list[float]] = []
+    new_goals: list[list[float]] = []
+    taken = x[:, 1:3]
+    for wanted, node in ((closed_box, "box"), (storage, "storage")):
+        if not wanted:
+            continue
+        site = _free_site(taken, generator, geometry)
+        if site is None:
+            continue
+        taken = torch.cat([taken, site.unsqueeze(0)])
+        sx, sy = site.tolist()
+        if node == "box":
+            new_objects.append([COVER, sx, sy, lid_z, 1.0])
+            new_goals.append([COVER_GOAL, sx, sy, lid_z, 1.0])
+        else:
+            new_goals.append([COVER_GOAL, sx, sy, storage_z, 0.0])
+    if not new_goals:
+        return graph
+    return _rebuild(graph, x.clone(), new_objects, new_goals)
+
+
+def _free_site(taken: Tensor, generator: torch.Generator, geometry: SceneGeometry) -> Tensor | None:
+    low = torch.tensor([geometry.workspace_x[0], geometry.workspace_y[0]])
+    high = torch.tensor([geometry.workspace_x[1], geometry.workspace_y[1]])
+    for _ in range(50):
+        site = low + torch.rand(2, generator=generator) * (high - low)
+        if bool(((taken - site).abs().max(dim=1).values >= geometry.site_distance).all()):
+            return site
+    return None
+
+
+def drop_idle_covers(graph: Graph, geometry: SceneGeometry) -> Graph:
+    """Remove every cover and cover goal when the expert's object is a block and every cover
+    lies on the table (none on a box). Returns ``graph`` itself otherwise."""
+    x = graph.x
+    if int(x[graph.object_index, 0]) != BLOCK:
+        return graph
+    covers = x[:, 0] == COVER
+    if not bool(covers.any()) or bool((x[covers, 3] > geometry.block_size).any()):
+        return graph
+    keep = ~(covers | (x[:, 0] == COVER_GOAL))
+    index = torch.cumsum(keep.long(), 0) - 1
+    return Graph(x[keep].clone(), int(index[graph.object_index]), int(index[graph.goal_index]))

@@ -1,0 +1,147 @@
+"""Structural augmentation never changes what the expert would decide (checked by the expert)."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+
+from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_planner.policies import load_policy
+from manigraph_planner.policies.expert import ExpertPolicy
+from manigraph_planner.training.augment import Augmentation
+from manigraph_planner.training.dataset import Sample, load_demonstrations
+from manigraph_planner.training.structure import (
+    BLOCK,
+    COVER,
+    Graph,
+    SceneGeometry,
+    add_distractors,
+    drop_idle_covers,
+    extend_towers,
+)
+from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
+
+GEOMETRY = SceneGeometry()
+SIZES = {COVER: (0.16, 0.16, 0.01), BLOCK: (0.04, 0.04, 0.04)}
+
+
+@pytest.fixture(scope="module")
+def samples(tmp_path_factory: pytest.TempPathFactory) -> list[Sample]:
+    path = tmp_path_factory.mktemp("demos") / "demos.mcap"
+    record_demos(load_policy("expert"), DemoProtocol(trajectories=8), path, progress=None)  # type: ignore[arg-type]
+    return load_demonstrations([path]).samples
+
+
+def as_scene(x: torch.Tensor) -> Scene:
+    """Node rows back into a Scene the expert can read (ids are node indices)."""
+    objects, goals = [], []
+    for i, (code, px, py, pz, filled) in enumerate(x.tolist()):
+        position = Vector3(x=px, y=py, z=pz)
+        if int(code) in SIZES:
+            sx, sy, sz = SIZES[int(code)]
+            objects.append(
+                SceneObject(
+                    id=f"n{i}",
+                    category="cover" if int(code) == COVER else "block",
+                    position=position,
+                    size=Vector3(x=sx, y=sy, z=sz),
+                    filled=bool(filled),
+                )
+            )
+        else:
+            category = "block" if int(code) == 2 else "cover"
+            goals.append(
+                SceneGoal(id=f"n{i}", category=category, position=position, filled=bool(filled))
+            )
+    return Scene(episode_id="aug", stamp=1.0, sequence=0, objects=objects, goals=goals)
+
+
+def assert_expert_agrees(graph: Graph) -> None:
+    """The expert picks the labelled nodes, or nodes it cannot tell apart from them."""
+    decision = ExpertPolicy().decide(as_scene(graph.x))
+    assert decision is not None
+    chosen = (int(decision.object_id[1:]), int(decision.goal_id[1:]))
+    for picked, label in zip(chosen, (graph.object_index, graph.goal_index), strict=True):
+        same = graph.x[picked, [0, 3, 4]] - graph.x[label, [0, 3, 4]]
+        assert bool(same.abs().max() < 1e-5), (picked, label, graph.x)
+
+
+def as_graph(sample: Sample) -> Graph:
+    return Graph(sample.x, sample.object_index, sample.goal_index)
+
+
+def test_the_expert_agrees_with_its_own_demonstrations(samples: list[Sample]) -> None:
+    for sample in samples:
+        assert_expert_agrees(as_graph(sample))
+
+
+@pytest.mark.parametrize("levels", [(1, 0, 0), (0, 3, 0), (0, 0, 5), (7, 11, 13)])
+def test_taller_towers_keep_the_label(samples: list[Sample], levels: tuple[int, int, int]) -> None:
+    grown = 0
+    for sample in samples:
+        graph = extend_towers(as_graph(sample), *levels, GEOMETRY)
+        grown += graph.x.shape[0] > sample.x.shape[0]
+        assert_expert_agrees(graph)
+    assert grown >= len(samples) // 3  # pack towers and unpack goal stacks both grew
+
+
+def test_a_source_tower_grows_under_its_top_block(samples: list[Sample]) -> None:
+    pack = next(s for s in samples if int(s.x[s.object_index, 0]) == BLOCK and s.x.shape[0] > 8)
+    graph = extend_towers(as_graph(pack), 5, 0, 0, GEOMETRY)
+    top = graph.x[graph.object_index]
+    column = (graph.x[:, 1:3] - top[1:3]).abs().max(dim=1).values < 1e-6
+    assert int(column.sum()) >= 6
+    assert float(top[3]) == pytest.approx(float(graph.x[column, 3].max()))
+
+
+@pytest.mark.parametrize("box, storage", [(True, False), (False, True), (True, True)])
+def test_distractors_keep_the_label(samples: list[Sample], box: bool, storage: bool) -> None:
+    generator = torch.Generator().manual_seed(0)
+    added = 0
+    for sample in samples:
+        graph = add_distractors(as_graph(sample), box, storage, generator, GEOMETRY)
+        added += graph.x.shape[0] > sample.x.shape[0]
+        assert_expert_agrees(graph)
+    opening = sum(
+        int(s.x[s.object_index, 0]) == COVER and float(s.x[s.object_index, 3]) > 0.04
+        for s in samples
+    )
+    assert added == (len(samples) - opening if not storage else len(samples))
+
+
+def test_idle_covers_are_dropped_only_when_blocks_are_moved(samples: list[Sample]) -> None:
+    dropped = 0
+    for sample in samples:
+        graph = drop_idle_covers(as_graph(sample), GEOMETRY)
+        if graph.x.shape[0] < sample.x.shape[0]:
+            dropped += 1
+            assert int(sample.x[sample.object_index, 0]) == BLOCK
+            assert not bool((graph.x[:, 0] == COVER).any())
+            assert not bool((graph.x[:, 0] == 3).any())
+        assert_expert_agrees(graph)
+    assert dropped > 0
+
+
+def test_randomized_copies_keep_the_label_and_are_seeded(samples: list[Sample]) -> None:
+    augmentation = Augmentation(copies=3, noise=0.0, translate_xy=0.0, translate_z=0.0)
+    first = augmentation.apply(samples, torch.Generator().manual_seed(4))
+    again = augmentation.apply(samples, torch.Generator().manual_seed(4))
+    for a, b in zip(first, again, strict=True):
+        assert torch.equal(a.x, b.x)
+    for copy in first[len(samples) :]:
+        assert torch.equal(copy.is_object, copy.x[:, 0] <= BLOCK)
+        assert_expert_agrees(Graph(copy.x, copy.object_index, copy.goal_index))
+    assert max(c.x.shape[0] for c in first) > max(s.x.shape[0] for s in samples) + 10
+
+
+def test_unknown_probability_is_refused_by_name() -> None:
+    with pytest.raises(ValueError, match="distractor_probability"):
+        Augmentation(distractor_probability=1.5)
+    with pytest.raises(ValueError, match="max_levels"):
+        Augmentation(max_levels=-1)
+
+
+def test_nothing_to_extend_returns_the_graph_itself() -> None:
+    lone = Graph(torch.tensor([[1.0, 0.5, 0.0, 0.02, 0.0], [2.0, 0.5, 0.2, 0.02, 0.0]]), 0, 1)
+    assert add_distractors(lone, True, True, torch.Generator(), GEOMETRY) is lone
+    assert drop_idle_covers(lone, GEOMETRY) is lone
