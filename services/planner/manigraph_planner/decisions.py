@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 from collections import OrderedDict
 
@@ -10,6 +11,42 @@ from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene,
 
 _REMEMBERED = 1024
 _HELD = 256
+#: Decisions whose scenes are kept so they can be explained afterwards.
+KEPT_DECISIONS = 64
+
+
+class DecisionHistory:
+    """The last ``capacity`` decisions with the scene each was made on (for the explainer).
+
+    Written by the service thread, read by the explain queryable on a Zenoh thread: a lock
+    keeps the two consistent.
+    """
+
+    def __init__(self, capacity: int = KEPT_DECISIONS) -> None:
+        if capacity < 1:
+            raise ValueError(f"capacity: must be >= 1, got {capacity}")
+        self.capacity = capacity
+        self._items: OrderedDict[str, tuple[Scene, Action]] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def add(self, scene: Scene, action: Action) -> None:
+        with self._lock:
+            self._items[action.decision_id] = (scene, action)
+            self._items.move_to_end(action.decision_id)
+            while len(self._items) > self.capacity:
+                self._items.popitem(last=False)
+
+    def get(self, decision_id: str) -> tuple[Scene, Action] | None:
+        with self._lock:
+            return self._items.get(decision_id)
+
+    def latest(self) -> tuple[Scene, Action] | None:
+        with self._lock:
+            return next(reversed(self._items.values()), None)
+
+    def ids(self) -> list[str]:
+        with self._lock:
+            return list(self._items)
 
 
 class DecisionMaker:
@@ -33,6 +70,7 @@ class DecisionMaker:
         self._held: list[Scene] = []  # scenes that arrived while a skill ran
         self._finished: OrderedDict[str, float] = OrderedDict()
         self._ended: OrderedDict[str, None] = OrderedDict()
+        self.history = DecisionHistory()
 
     def on_episode(self, event: EpisodeEvent) -> None:
         if event.phase is EpisodePhase.END:
@@ -78,6 +116,7 @@ class DecisionMaker:
             return None
         action = decision.to_action(scene, self.step, self.policy.name, time.time())
         self.step += 1
+        self.history.add(scene, action)
         self.pending = action.decision_id
         if action.decision_id in self._finished:  # its result overtook the decision (replay)
             self.pending = None

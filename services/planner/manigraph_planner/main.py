@@ -12,6 +12,11 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--policy", default="expert", help="registered policy name or checkpoint path"
     )
+    parser.add_argument(
+        "--explain-decisions",
+        action="store_true",
+        help="publish an Explanation after every decision (GNN policies; lands in the log)",
+    )
     add_bus_arguments(parser)
 
 
@@ -21,7 +26,19 @@ def _run(args: argparse.Namespace) -> int:
     from manigraph_shared.service import run_service
 
     policy = load_policy(args.policy)
-    return run_service(lambda bus: PlannerService(bus, policy), bus_config_from_args(args))
+    if args.explain_decisions:
+        from manigraph_planner.policies.gnn import GNNPolicy
+        from manigraph_shared.errors import ConfigError
+
+        if not isinstance(policy, GNNPolicy):
+            raise ConfigError(
+                "explain-decisions",
+                f"only GNN policies can be explained, not '{policy.name}' (give a checkpoint)",
+            )
+    return run_service(
+        lambda bus: PlannerService(bus, policy, args.explain_decisions),
+        bus_config_from_args(args),
+    )
 
 
 command = Command(help="run the planner service (policy -> Action)", configure=_configure, run=_run)

@@ -1,0 +1,171 @@
+"""``manigraph explain``: ask the running planner why it decided (or explain a logged decision
+offline), print it, draw it; ``manigraph explain-study``: the paper's Table "gnn"."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
+from manigraph_shared.cli import Command
+from manigraph_shared.errors import ConfigError, LogError
+from manigraph_shared.messages import Action, ExplainRequest, Explanation, Scene
+
+
+def _configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--decision", help="decision id to explain (default: the latest)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the mask optimisation")
+    parser.add_argument("--json", action="store_true", help="last line: one JSON object")
+    parser.add_argument("--png", type=Path, help="also draw the explanation to this PNG file")
+    parser.add_argument("--timeout", type=float, default=4.0, help="seconds to wait (default 4)")
+    offline = parser.add_argument_group("offline (no running stack)")
+    offline.add_argument("--checkpoint", type=Path, help="GNN checkpoint to explain")
+    offline.add_argument(
+        "--scene-from", type=Path, help="MCAP log: explain its decision --decision (or the last)"
+    )
+    add_bus_arguments(parser)
+
+
+def _run(args: argparse.Namespace) -> int:
+    if args.seed < 0:
+        raise ConfigError("seed", "must be >= 0")
+    if (args.checkpoint is None) != (args.scene_from is None):
+        raise ConfigError("checkpoint", "--checkpoint and --scene-from go together (offline)")
+    if args.checkpoint is not None:
+        explanation, note = explain_offline(
+            args.checkpoint, args.scene_from, args.decision, args.seed
+        )
+        if note:
+            print(note, file=sys.stderr)
+    else:
+        explanation = explain_online(args, args.decision, args.seed, args.timeout)
+    if args.png is not None:
+        from manigraph_lab.explain_viz import render_explanation
+
+        render_explanation(explanation, args.png)
+        print(f"wrote {args.png}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(summary(explanation)), flush=True)
+    else:
+        print(explanation.sentence)
+        for edge in explanation.edges:
+            print(f"  edge {edge.src} -> {edge.dst}: {edge.weight:.3f}")
+        for name, value in explanation.features.items():
+            print(f"  feature {name}: {value:.3f}")
+    return 0
+
+
+def summary(explanation: Explanation) -> dict[str, object]:
+    """The CLI's JSON: decision_id, object, goal, edges, features, sentence (and a bit more)."""
+    data = explanation.model_dump(mode="json")
+    keys = ("decision_id", "object", "goal", "edges", "features", "sentence")
+    extra = ("episode_id", "scene_sequence", "policy", "fidelity", "seed")
+    return {key: data[key] for key in (*keys, *extra)}
+
+
+def explain_online(
+    args: argparse.Namespace, decision: str | None, seed: int, timeout: float
+) -> Explanation:
+    """One query to the planner's ``manigraph/planner/explain``; BusError on error replies."""
+    from manigraph_shared.bus import Bus
+
+    request = ExplainRequest(decision_id=decision, seed=seed)
+    with Bus.open(bus_config_from_args(args, wait_seconds=timeout)) as bus:
+        return bus.request(request, Explanation, timeout=timeout)
+
+
+def explain_offline(
+    checkpoint: Path, log: Path, decision: str | None, seed: int
+) -> tuple[Explanation, str]:
+    """Explain what ``checkpoint`` decides on the scene of a decision recorded in ``log``
+    (``decision``, or the last one; without recorded decisions, the log's last scene).
+
+    Returns the explanation and a note, non-empty when the log recorded another choice (e.g.
+    the expert's) than the checkpoint makes: the checkpoint's own choice is the one explained.
+    """
+    from manigraph_planner.explain import SceneExplainer
+    from manigraph_planner.policies.gnn import GNNPolicy
+    from manigraph_shared.mcap_log import read_log
+
+    if not log.is_file():
+        raise LogError(f"scene-from: no such file: {log}")
+    scenes: dict[tuple[str, int], Scene] = {}
+    actions: list[Action] = []
+    last_scene: Scene | None = None
+    for item in read_log(log, [Scene.key, Action.key]):
+        message = item.decode()
+        if isinstance(message, Scene):
+            scenes[(message.episode_id, message.sequence)] = last_scene = message
+        elif isinstance(message, Action):
+            actions.append(message)
+    explainer = SceneExplainer(GNNPolicy.from_checkpoint(checkpoint))
+    if decision is not None:
+        actions = [a for a in actions if a.decision_id == decision]
+        if not actions:
+            raise LogError(f"decision: '{decision}' is not a decision recorded in {log}")
+    if not actions:
+        if last_scene is None:
+            raise LogError(f"scene-from: {log} holds no scene")
+        return explainer.explain_scene(last_scene, seed), ""
+    action = actions[-1]
+    scene = scenes.get((action.episode_id, action.scene_sequence))
+    if scene is None:
+        raise LogError(f"decision: the scene of '{action.decision_id}' is not in {log}")
+    own = explainer.explain_scene(scene, seed).model_copy(
+        update={"decision_id": action.decision_id}
+    )
+    note = ""
+    if (own.object, own.goal) != (action.object_id, action.goal_id):
+        note = (
+            f"note: the log recorded {action.object_id} -> {action.goal_id} "
+            f"({action.policy}); {own.policy} chooses {own.object} -> {own.goal} on that "
+            "scene, which is what is explained"
+        )
+    return own, note
+
+
+explain_command = Command(
+    help="why did the planner choose that? explain its latest (or one) decision over Zenoh",
+    configure=_configure,
+    run=_run,
+)
+
+
+def _study_configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("-o", "--out", type=Path, default=Path("results/explain-study"))
+    parser.add_argument("--archs", nargs="+", default=["gat", "gated", "gcn", "sage"])
+    parser.add_argument(
+        "--trajectories", type=int, nargs="+", default=[5, 100], help="training set sizes"
+    )
+    parser.add_argument("--decisions", type=int, default=100, help="decisions explained per cell")
+    parser.add_argument("--epochs", type=int, default=150)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--demo-tasks", nargs="+", default=["box-pack", "box-unpack"])
+
+
+def _study_run(args: argparse.Namespace) -> int:
+    import torch
+
+    from manigraph_lab.explain_study import StudySpec, run_study
+
+    torch.set_num_threads(2)
+    spec = StudySpec(
+        archs=tuple(args.archs),
+        trajectories=tuple(args.trajectories),
+        decisions=args.decisions,
+        epochs=args.epochs,
+        seed=args.seed,
+        demo_tasks=tuple(args.demo_tasks),
+    )
+    table = run_study(spec, args.out)
+    print(table)
+    return 0
+
+
+study_command = Command(
+    help="reproduce the paper's Table 'gnn': top-2 features per architecture and data size",
+    configure=_study_configure,
+    run=_study_run,
+)

@@ -1,0 +1,78 @@
+"""Answers ``ExplainRequest`` queries from the planner's recent decisions (no bus in here)."""
+
+from __future__ import annotations
+
+from manigraph_planner.decisions import DecisionHistory
+from manigraph_planner.explain.config import ExplainerConfig
+from manigraph_planner.explain.scene_explainer import SceneExplainer
+from manigraph_planner.policies.base import Policy
+from manigraph_shared.errors import ManigraphError, PolicyError
+from manigraph_shared.messages import Action, ExplainRequest, Explanation
+
+__all__ = ["ExplainHandler"]
+
+
+class ExplainHandler:
+    """Explains the latest decision, one by id, or a scene sent in the request.
+
+    Every failure raises a :class:`~manigraph_shared.errors.ManigraphError` naming the field,
+    which the bus turns into an error reply: a bad query is answered, never left hanging.
+
+    Args:
+        policy: the served policy; anything but a GNN policy makes every request an error.
+        history: the planner's recent decisions and their scenes.
+        config: the mask optimisation's settings.
+    """
+
+    def __init__(
+        self, policy: Policy, history: DecisionHistory, config: ExplainerConfig | None = None
+    ) -> None:
+        self.history = history
+        self.explainer: SceneExplainer | None = None
+        self.problem = ""
+        try:
+            self.explainer = SceneExplainer(policy, config)
+        except PolicyError as exc:
+            self.problem = str(exc)
+
+    @property
+    def available(self) -> bool:
+        return self.explainer is not None
+
+    def __call__(self, request: ExplainRequest) -> Explanation:
+        explainer = self._explainer()
+        if request.scene is not None:
+            return explainer.explain_scene(request.scene, request.seed)
+        if request.wants_latest:
+            found = self.history.latest()
+            if found is None:
+                raise ManigraphError("decision_id: the planner has made no decision yet")
+        else:
+            assert request.decision_id is not None
+            found = self.history.get(request.decision_id)
+            if found is None:
+                kept = self.history.ids()
+                known = f"{kept[0]} .. {kept[-1]}" if kept else "none made yet"
+                raise ManigraphError(
+                    f"decision_id: '{request.decision_id}' is not one of the planner's last "
+                    f"{self.history.capacity} decisions ({known})"
+                )
+        scene, action = found
+        return explainer.explain(
+            scene, action.object_id, action.goal_id, action.decision_id, request.seed
+        )
+
+    def explain_action(self, action: Action) -> Explanation | None:
+        """The explanation of a decision just made (None if it is no longer kept)."""
+        found = self.history.get(action.decision_id)
+        if found is None:
+            return None
+        scene, _ = found
+        return self._explainer().explain(
+            scene, action.object_id, action.goal_id, action.decision_id
+        )
+
+    def _explainer(self) -> SceneExplainer:
+        if self.explainer is None:
+            raise PolicyError(self.problem)
+        return self.explainer

@@ -1,0 +1,150 @@
+"""From a scene and a GNN policy's choice to a readable ``Explanation`` message."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+from manigraph_planner.explain.config import ExplainerConfig
+from manigraph_planner.explain.masks import MaskExplainer, MaskExplanation
+from manigraph_planner.gnn.features import FEATURE_SPEC, GraphState, scene_to_graph
+from manigraph_planner.policies.base import Policy
+from manigraph_planner.policies.gnn import GNNPolicy
+from manigraph_shared.errors import PolicyError
+from manigraph_shared.messages import ExplainedEdge, ExplainedNode, Explanation, Scene
+
+__all__ = ["SceneExplainer", "sentence", "to_message"]
+
+
+class SceneExplainer:
+    """Explains a GNN policy's decisions on scenes; safe to call from several threads.
+
+    Args:
+        policy: the policy whose decisions are explained; only GNN policies can be.
+        config: the mask optimisation's settings.
+
+    Raises:
+        PolicyError: ``policy`` is not a GNN policy.
+    """
+
+    def __init__(self, policy: Policy, config: ExplainerConfig | None = None) -> None:
+        if not isinstance(policy, GNNPolicy):
+            raise PolicyError(
+                f"policy: '{policy.name}' is not a GNN policy; only GNN policies "
+                "can be explained (start the planner with --policy CHECKPOINT.pt)"
+            )
+        self.policy = policy
+        self.masks = MaskExplainer(policy.net, config)
+        self._lock = threading.Lock()
+
+    def explain_scene(self, scene: Scene, seed: int | None = None) -> Explanation:
+        """Decide on ``scene`` as the policy would, then explain that decision."""
+        decision = self.policy.decide(scene)
+        if decision is None:
+            raise PolicyError(
+                f"scene: the policy has nothing to decide on scene {scene.sequence} "
+                f"of episode '{scene.episode_id}' (no object fits a free goal)"
+            )
+        return self.explain(scene, decision.object_id, decision.goal_id, None, seed)
+
+    def explain(
+        self,
+        scene: Scene,
+        object_id: str,
+        goal_id: str,
+        decision_id: str | None = None,
+        seed: int | None = None,
+    ) -> Explanation:
+        """Explain choosing ``object_id`` for ``goal_id`` on ``scene``.
+
+        Raises:
+            PolicyError: the object or goal is not a visible node of the scene.
+        """
+        graph = scene_to_graph(scene)
+        if object_id not in graph.object_ids:
+            raise PolicyError(f"object: '{object_id}' is not a visible object of the scene")
+        if goal_id not in graph.goal_ids:
+            raise PolicyError(f"goal: '{goal_id}' is not a visible goal of the scene")
+        object_index = graph.object_ids.index(object_id)
+        goal_index = graph.num_objects + graph.goal_ids.index(goal_id)
+        seed = self.masks.config.seed if seed is None else seed
+        with self._lock:
+            result = self.masks.explain(
+                graph.x, graph.edge_index, graph.num_objects, object_index, goal_index, seed
+            )
+        return to_message(result, graph, scene, self.policy.name, decision_id, seed)
+
+
+def to_message(
+    result: MaskExplanation,
+    graph: GraphState,
+    scene: Scene,
+    policy: str,
+    decision_id: str | None,
+    seed: int,
+) -> Explanation:
+    """The contract message for ``result``: node indices become the scene's ids."""
+    ids = [*graph.object_ids, *graph.goal_ids]
+    edges = [
+        ExplainedEdge(
+            src=ids[int(result.edge_index[0, e])],
+            dst=ids[int(result.edge_index[1, e])],
+            weight=round(float(result.edge_mask[e]), 6),
+        )
+        for e in result.kept_edges.tolist()
+    ]
+    features = {
+        FEATURE_SPEC.names[j]: round(float(result.feature_mask[j]), 6)
+        for j in result.feature_order.tolist()
+    }
+    nodes = [
+        ExplainedNode(id=o.id, category=o.category.value, position=o.position)
+        for o in scene.objects
+        if o.visible
+    ] + [
+        ExplainedNode(id=g.id, category=f"{g.category.value}-goal", position=g.position)
+        for g in scene.goals
+        if g.visible
+    ]
+    chosen_object = ids[result.object_index]
+    chosen_goal = ids[result.goal_index]
+    top_features = [FEATURE_SPEC.names[j] for j in result.kept_features.tolist()]
+    return Explanation(
+        decision_id=decision_id,
+        episode_id=scene.episode_id,
+        scene_sequence=scene.sequence,
+        policy=policy,
+        object=chosen_object,
+        goal=chosen_goal,
+        edges=edges,
+        features=features,
+        nodes=nodes,
+        sentence=sentence(chosen_object, chosen_goal, edges, top_features),
+        fidelity=result.fidelity,
+        seed=seed,
+        stamp=time.time(),
+    )
+
+
+def sentence(
+    chosen_object: str, chosen_goal: str, edges: list[ExplainedEdge], top_features: list[str]
+) -> str:
+    """The paper's reading: "node i was chosen because of its relationship with nodes j, k;
+    the most important feature was z"."""
+    related: list[str] = []
+    for edge in edges:
+        for node in (edge.src, edge.dst):
+            if node != chosen_object and node not in related:
+                related.append(node)
+    because = f"because of its relation to {_join(related)}" if related else "on its own features"
+    words = list(top_features)
+    text = f"{chosen_object} was chosen (for goal {chosen_goal}) {because}"
+    if words:
+        text += f"; most important feature: {words[0]}"
+        if len(words) > 1:
+            text += f" (then {_join(words[1:])})"
+    return text[:1024]
+
+
+def _join(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
