@@ -15,6 +15,7 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
 from manigraph_shared.episodes import EpisodePlan, read_task_file, run_episodes
+from manigraph_shared.errors import ConfigError
 from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
 from manigraph_shared.recorder import Recorder
@@ -241,11 +242,32 @@ run_command = Command(
 )
 
 
+#: The robot driver the skills service needs for each sim backend: the geometric world takes
+#: Cartesian gripper commands, the physics Panda joint trajectories planned by the skills.
+SKILLS_DRIVER_FOR_SIM = {"geometric": "sim-gripper", "physics": "panda-sim"}
+
+
+def _video_args(args: argparse.Namespace) -> list[str]:
+    if args.video is None:
+        return []
+    if args.sim != "physics":
+        raise ConfigError("video", "needs --sim physics")
+    return ["--video", str(args.video.resolve())]
+
+
 def _up_configure(parser: argparse.ArgumentParser) -> None:
     _episode_arguments(parser)
     parser.add_argument("--record", type=Path, help="also record everything to this MCAP file")
     parser.add_argument("--policy", default="expert", help="planner policy or checkpoint")
-    parser.add_argument("--sim", default="geometric", help="sim backend (default: geometric)")
+    parser.add_argument(
+        "--sim",
+        default="geometric",
+        choices=sorted(SKILLS_DRIVER_FOR_SIM),
+        help="sim backend (default: geometric)",
+    )
+    parser.add_argument(
+        "--video", type=Path, help="physics: render episodes to this .gif/.mp4 (needs Vulkan)"
+    )
     parser.add_argument("--port", type=int, default=7447, help="router port on 127.0.0.1")
     parser.add_argument("--log-dir", type=Path, help="also write <service>.log files here")
 
@@ -269,9 +291,9 @@ def _up_run(args: argparse.Namespace) -> int:
     if args.record:
         specs.append(ProcessSpec("recorder", ["record", "--output", str(args.record)], bus_env))
     specs += [
-        ProcessSpec("sim", ["sim", "--backend", args.sim], bus_env),
+        ProcessSpec("sim", ["sim", "--backend", args.sim, *_video_args(args)], bus_env),
         ProcessSpec("planner", ["planner", "--policy", args.policy], bus_env),
-        ProcessSpec("skills", ["skills"], bus_env),
+        ProcessSpec("skills", ["skills", "--driver", SKILLS_DRIVER_FOR_SIM[args.sim]], bus_env),
     ]
     supervisor = Supervisor(args.log_dir)
     summary: dict[str, object] | None = None

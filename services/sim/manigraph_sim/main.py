@@ -14,7 +14,19 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--publish-hz", type=float, default=10.0, help="scene rate (default 10)")
     parser.add_argument(
-        "--goal-tolerance", type=float, default=0.01, help="metres from a goal that fill it"
+        "--goal-tolerance",
+        type=float,
+        default=None,
+        help="metres from a goal that fill it (default: geometric 0.01, physics 0.02)",
+    )
+    parser.add_argument(
+        "--realtime", action="store_true", help="physics: run in real time, not flat out"
+    )
+    parser.add_argument(
+        "--video",
+        default=None,
+        help="physics: render each episode to this .gif/.mp4 ({episode}, {seed} allowed; "
+        "needs Vulkan, see scripts/install-vulkan.sh)",
     )
     add_bus_arguments(parser)
 
@@ -22,13 +34,28 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 def _run(args: argparse.Namespace) -> int:
     from manigraph_shared.errors import ConfigError
     from manigraph_shared.service import run_service
-    from manigraph_sim import geometric  # noqa: F401  (registers the backend)
+    from manigraph_sim import geometric, physics  # noqa: F401  (register the backends)
     from manigraph_sim.backend import create_backend
     from manigraph_sim.service import SimService
 
     if args.publish_hz <= 0 or args.publish_hz > 1000:
         raise ConfigError("publish-hz", "must be in (0, 1000]")
-    backend = create_backend(args.backend, goal_tolerance=args.goal_tolerance)
+    options: dict[str, object] = {}
+    if args.goal_tolerance is not None:
+        if not 0 < args.goal_tolerance <= 0.1:
+            raise ConfigError("goal-tolerance", "must be in (0, 0.1] metres")
+        options["goal_tolerance"] = args.goal_tolerance
+    if args.realtime:
+        if args.backend != "physics":
+            raise ConfigError("realtime", "only the physics backend simulates time")
+        options["realtime"] = True
+    if args.video:
+        if args.backend != "physics":
+            raise ConfigError("video", "only the physics backend renders")
+        from manigraph_sim.physics.video import VideoConfig
+
+        options["video"] = VideoConfig(args.video)
+    backend = create_backend(args.backend, **options)
     return run_service(
         lambda bus: SimService(bus, backend, args.publish_hz), bus_config_from_args(args)
     )

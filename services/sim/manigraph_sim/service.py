@@ -8,6 +8,7 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.messages import (
     EpisodeEvent,
     EpisodeRequest,
+    JointTrajectoryCommand,
     RobotCommand,
     SkillStatus,
 )
@@ -31,6 +32,8 @@ class SimService(Service):
         self.bus.serve(EpisodeRequest, self._reset_from_query)
         self.on(RobotCommand, self._execute)
         self.on(SkillStatus, self._on_skill_status)
+        if hasattr(self.backend, "execute_trajectory"):  # a backend with a jointed arm
+            self.on(JointTrajectoryCommand, self._execute_trajectory)
 
     def _reset_from_query(self, request: EpisodeRequest) -> EpisodeEvent:
         import queue
@@ -69,6 +72,9 @@ class SimService(Service):
             self.log.info("%s %s failed: %s", command.op, command.object_id, feedback.reason)
         self._publish_scene()
         self.bus.publish(feedback)
+        self._publish_end()
+
+    def _publish_end(self) -> None:
         end = self.backend.end_event(time.time())
         if end is not None:
             self.log.info(
@@ -81,14 +87,29 @@ class SimService(Service):
             )
             self.bus.publish(end)
 
+    def _execute_trajectory(self, command: JointTrajectoryCommand) -> None:
+        result = self.backend.execute_trajectory(command, time.time())  # type: ignore[attr-defined]
+        if not result.ok:
+            self.log.info("trajectory %s failed: %s", command.command_id, result.reason)
+        self._publish_scene()
+        self.bus.publish(result)
+        self._publish_end()
+
     def _on_skill_status(self, status: SkillStatus) -> None:
+        skill_finished = getattr(self.backend, "skill_finished", None)
+        if skill_finished is not None:  # a backend that counts steps by finished skills
+            skill_finished(status)
         if status.state.terminal:
             self._publish_scene()  # a fresh observation for the next decision, now
+        self._publish_end()
 
     def _publish_scene(self) -> None:
         scene = self.backend.scene(time.time())
         if scene is not None:
             self.bus.publish(scene)
+        joint_state = getattr(self.backend, "joint_state", None)
+        if joint_state is not None and (state := joint_state(time.time())) is not None:
+            self.bus.publish(state)
 
     def tick(self) -> None:
         self._publish_scene()

@@ -47,3 +47,28 @@ __all__ = [
     "key_matches",
     "message_type_for_key",
 ]
+
+from manigraph_shared.messages.joints import (  # appended: the joint-level robot
+    GripperTarget,
+    JointState,
+    JointTrajectoryCommand,
+    JointTrajectoryPoint,
+    JointTrajectoryResult,
+)
+
+__all__ += [
+    "GripperTarget",
+    "JointState",
+    "JointTrajectoryCommand",
+    "JointTrajectoryPoint",
+    "JointTrajectoryResult",
+]
+
+from manigraph_shared.messages.explanation import (  # noqa: E402  (appended: the explainer)
+    ExplainedEdge,
+    ExplainedNode,
+    ExplainRequest,
+    Explanation,
+)
+
+__all__ += ["ExplainRequest", "ExplainedEdge", "ExplainedNode", "Explanation"]

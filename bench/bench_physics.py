@@ -1,0 +1,101 @@
+"""Physics speed on this CPU, in one process (sim backend + Panda motion driver, no bus):
+wall seconds per PickAndPlace (target <= 1 s) and per K-block stacking episode (the expert's
+moves), physics steps per second, IK and planning time. End-to-end figures through every
+service come from ``manigraph up --sim physics ... --episodes N`` (its mean_seconds)."""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from manigraph_shared.messages import Action, EpisodeRequest, SkillState
+from manigraph_sim.physics.backend import PhysicsBackend
+from manigraph_sim.physics.in_process import InProcessTransport
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver
+from manigraph_skills.motion.model import top_down
+from manigraph_skills.pick_and_place import PickAndPlace
+from manigraph_skills.workspace import Workspace
+
+
+def episode(backend: PhysicsBackend, skill: PickAndPlace, blocks: int, seed: int) -> dict:
+    backend.reset(
+        EpisodeRequest(episode_id=f"b{seed}", task="stack", blocks=blocks, seed=seed), time.time()
+    )
+    started = time.perf_counter()
+    moves, steps_before = [], backend.physics_steps
+    for i in range(blocks):
+        scene = backend.scene(time.time())
+        assert scene is not None
+        action = Action(
+            decision_id=f"b{seed}:{i}",
+            episode_id=scene.episode_id,
+            scene_sequence=scene.sequence,
+            object_id=f"block_{blocks - 1 - i}",
+            goal_id=f"goal_{i}",
+            policy="bench",
+            stamp=time.time(),
+        )
+        t = time.perf_counter()
+        status = skill.execute(action, scene, lambda _s: None)
+        backend.skill_finished(status)
+        moves.append((time.perf_counter() - t, status.state is SkillState.SUCCEEDED))
+    end = backend.end_event(time.time())
+    return {
+        "seconds": time.perf_counter() - started,
+        "moves": moves,
+        "steps": backend.physics_steps - steps_before,
+        "success": bool(end is not None and end.success),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--blocks", type=int, nargs="+", default=[3, 6])
+    parser.add_argument("--episodes", type=int, default=5)
+    args = parser.parse_args()
+    backend = PhysicsBackend()
+    driver = PandaMotionDriver(InProcessTransport(backend))
+    skill = PickAndPlace(driver, Workspace())
+    timestep = backend.config.timestep
+
+    ik, planner = IKSolver(driver.model), GraspPlanner(driver.model)
+    ik_times, plan_times = [], []
+    for _ in range(200):
+        t = time.perf_counter()
+        ik.solve(top_down([0.5, 0.1, 0.1]), HOME_Q)
+        ik_times.append(time.perf_counter() - t)
+    for _ in range(20):
+        t = time.perf_counter()
+        pick = planner.pick(HOME_Q, np.array([0.5, 0.2, 0.06]))
+        planner.release(planner.place(pick.final, np.array([0.4, -0.2, 0.02])).final)
+        plan_times.append(time.perf_counter() - t)
+    print(f"physics: timestep {timestep * 1000:.1f} ms, in process (no bus)")
+    print(
+        f"IK median {np.median(ik_times) * 1000:.3f} ms (vs 2 ms: {np.median(ik_times) / 2e-3:.3f})"
+    )
+    print(
+        f"planning one PickAndPlace (pick + place + release) {np.median(plan_times) * 1000:.1f} ms"
+    )
+    print(
+        f"{'K':>3} {'episodes':>8} {'success':>8} {'s/episode':>10} {'s/P&P':>7} "
+        f"{'P&P vs 1 s':>10} {'steps/s':>9} {'x realtime':>10}"
+    )
+    for blocks in args.blocks:
+        runs = [episode(backend, skill, blocks, seed) for seed in range(args.episodes)]
+        move_seconds = [s for run in runs for s, _ in run["moves"]]
+        wall = sum(run["seconds"] for run in runs)
+        steps = sum(run["steps"] for run in runs)
+        success = np.mean([run["success"] for run in runs])
+        per_move = float(np.median(move_seconds))
+        print(
+            f"{blocks:>3} {args.episodes:>8} {success:>8.2f} "
+            f"{np.median([r['seconds'] for r in runs]):>10.2f} {per_move:>7.3f} "
+            f"{per_move / 1.0:>10.3f} {steps / wall:>9.0f} {steps * timestep / wall:>10.1f}"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,278 @@
+"""The physics world as a sim backend: seeded task layouts, joint trajectories, a Panda.
+
+Layouts come from the same registered tasks as the geometric backend, so a seed gives the
+same blocks and goals in both worlds. Whether a goal is filled is decided geometrically with
+the geometric world's rule (:meth:`GeometricWorld.occupancy`) on the simulated poses: a block
+fills a goal when its centre is within ``goal_tolerance`` metres of the goal's centre and it is
+not held. The default tolerance, 2 cm (half a block), accepts a block that settled a few
+millimetres off but not one resting on the neighbouring place or tipped over.
+
+Steps are counted per finished skill of the episode (``SkillStatus``, failed ones too); the
+episode ends when every required goal is filled with the gripper open, or when the step
+budget is spent.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from manigraph_shared.errors import ConfigError, SkillError, TaskError
+from manigraph_shared.messages import (
+    EpisodeEvent,
+    EpisodePhase,
+    EpisodeRequest,
+    GoalCategory,
+    GripperTarget,
+    JointState,
+    JointTrajectoryCommand,
+    JointTrajectoryResult,
+    ObjectCategory,
+    Quaternion,
+    RobotCommand,
+    RobotFeedback,
+    Scene,
+    SceneGoal,
+    SceneObject,
+    SkillStatus,
+    Vector3,
+)
+from manigraph_sim.backend import SimBackend
+from manigraph_sim.geometric.world import Body, GeometricWorld
+from manigraph_sim.physics.video import EpisodeVideo, VideoConfig
+from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
+from manigraph_sim.tasks import Task, get_task
+from manigraph_sim.tasks.base import Layout, TaskParams
+from manigraph_sim.tasks.task_file import FileTask, parse_task_file
+
+#: A block whose centre is this close to the TCP while the gripper is closed is held.
+HELD_DISTANCE = 0.03
+#: A trajectory must start within this many radians (every joint) of where the arm is.
+START_TOLERANCE = 0.05
+
+
+def _vec(values: np.ndarray) -> Vector3:
+    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
+
+
+class PhysicsBackend(SimBackend):
+    """Runs as fast as it can, or in real time with ``realtime=True``."""
+
+    def __init__(
+        self,
+        goal_tolerance: float = 0.02,
+        realtime: bool = False,
+        config: PhysicsConfig | None = None,
+        video: VideoConfig | None = None,
+    ) -> None:
+        if not 0 < goal_tolerance <= 0.1:
+            raise ConfigError("goal_tolerance", f"{goal_tolerance} must be in (0, 0.1] metres")
+        self.goal_tolerance = goal_tolerance
+        self.realtime = realtime
+        self.video_config = video
+        self.video: EpisodeVideo | None = None
+        #: Files written by the video recorder, one per ended episode.
+        self.videos_written: list[Path] = []
+        self.config = config or PhysicsConfig()
+        self.world: PhysicsWorld | None = None
+        self.layout: Layout | None = None
+        self.request: EpisodeRequest | None = None
+        self.required: set[str] = set()
+        self.steps = 0
+        self.max_steps = 0
+        self.physics_steps = 0
+        self.sequence = 0
+        self.ended = True
+        self._end_reported = True
+
+    # --- episodes ---------------------------------------------------------------------------
+    def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
+        if request.task == "file" or request.task_file is not None:
+            if request.task_file is None:
+                raise TaskError("task_file: task 'file' needs the task file's text")
+            task: Task = FileTask(parse_task_file(request.task_file))
+        else:
+            task = get_task(request.task, TaskParams(blocks=request.blocks, stacks=request.stacks))
+        layout = task.layout(np.random.default_rng(request.seed))
+        layout.validate()
+        if layout.containers or any(body.category != "block" for body in layout.bodies):
+            raise TaskError(f"task: '{request.task}' needs boxes and covers, not in physics yet")
+        self.world = PhysicsWorld(layout.bodies, self.config, render=self.video_config is not None)
+        if self.video_config is not None:
+            self.video = EpisodeVideo(self.video_config, self.world.scene, self.config.timestep)
+            self.world.on_step.append(self.video.on_step)
+            self.video.capture()
+        self.layout = layout
+        self.request = request
+        self.required = layout.required_goals()
+        self.steps = 0
+        self.max_steps = request.max_steps or task.max_steps(len(layout.goals))
+        self.ended = False
+        self._end_reported = False
+        return self._event(EpisodePhase.START, stamp)
+
+    def _geometric_view(self) -> GeometricWorld:
+        """The simulated poses as a geometric world, to apply its goal rule."""
+        assert self.world is not None and self.layout is not None
+        world = self.world
+        bodies = [
+            Body(body.id, body.category, body.size, world.pose(body.id)[0])
+            for body in self.layout.bodies
+        ]
+        view = GeometricWorld(bodies, self.layout.goals, self.goal_tolerance)
+        view.held = self.held()
+        return view
+
+    def held(self) -> str | None:
+        """The block between the closed fingers, if any."""
+        if self.world is None or not self.world.gripper_closed:
+            return None
+        tcp = self.world.tcp_position()
+        for body_id in self.world.entities:
+            if np.linalg.norm(self.world.pose(body_id)[0] - tcp) < HELD_DISTANCE:
+                return body_id
+        return None
+
+    def scene(self, stamp: float) -> Scene | None:
+        if self.world is None or self.layout is None or self.request is None:
+            return None
+        occupancy = self._geometric_view().occupancy()
+        in_goal = set(occupancy.values())
+        objects = []
+        for body in self.layout.bodies:
+            position, (x, y, z, w) = self.world.pose(body.id)
+            objects.append(
+                SceneObject(
+                    id=body.id,
+                    category=ObjectCategory(body.category),
+                    position=_vec(position),
+                    orientation=Quaternion(x=x, y=y, z=z, w=w),
+                    size=_vec(body.size),
+                    filled=body.id in in_goal,
+                )
+            )
+        goals = [
+            SceneGoal(
+                id=goal.id,
+                category=GoalCategory(goal.category),
+                position=_vec(goal.position),
+                filled=goal.id in occupancy,
+            )
+            for goal in self.layout.goals
+        ]
+        self.sequence += 1
+        return Scene(
+            episode_id=self.request.episode_id,
+            stamp=stamp,
+            sequence=self.sequence,
+            objects=objects,
+            goals=goals,
+            episode_ended=self.ended,
+        )
+
+    def joint_state(self, stamp: float) -> JointState | None:
+        if self.world is None:
+            return None
+        return JointState(
+            joint_names=list(ARM_JOINTS),
+            positions=self.world.arm_q.tolist(),
+            gripper_width=self.world.gripper_width,
+            stamp=stamp,
+        )
+
+    # --- commands ---------------------------------------------------------------------------
+    def execute(self, command: RobotCommand, stamp: float) -> RobotFeedback:
+        """Cartesian gripper commands are the geometric world's; a physical arm is moved by
+        joint trajectories (the skills driver ``panda-sim`` plans them)."""
+        return RobotFeedback(
+            command_id=command.command_id,
+            ok=False,
+            reason="unsupported",
+            detail="the physics sim takes JointTrajectoryCommand: run skills --driver panda-sim",
+            stamp=stamp,
+        )
+
+    def execute_trajectory(
+        self, command: JointTrajectoryCommand, stamp: float
+    ) -> JointTrajectoryResult:
+        """Follow ``command`` with the PD drives."""
+        try:
+            if self.world is None or self.ended:
+                raise SkillError("no_episode", "no episode is running")
+            if tuple(command.joint_names) != ARM_JOINTS:
+                raise SkillError("bad_joints", f"expected joints {', '.join(ARM_JOINTS)}")
+            gap = np.max(np.abs(np.array(command.points[0].positions) - self.world.arm_q))
+            if gap > START_TOLERANCE:
+                # Planned from a stale joint state (e.g. before a reset): the answer carries
+                # the actual joints, so the driver can plan again from there.
+                raise SkillError("start_mismatch", f"first point is {gap:.3f} rad from the arm")
+            times = np.array([p.time_from_start for p in command.points])
+            positions = np.array([p.positions for p in command.points])
+            closed = [p.gripper is GripperTarget.CLOSED for p in command.points]
+            self.physics_steps += self.world.follow(times, positions, closed, self.realtime)
+        except SkillError as exc:
+            return self._result(command, stamp, exc.reason, exc.detail)
+        return self._result(command, stamp)
+
+    def _result(
+        self, command: JointTrajectoryCommand, stamp: float, reason: str | None = None, detail=""
+    ) -> JointTrajectoryResult:
+        world = self.world
+        return JointTrajectoryResult(
+            command_id=command.command_id,
+            ok=reason is None,
+            reason=reason,
+            detail=detail,
+            positions=world.arm_q.tolist() if world else [],
+            gripper_width=world.gripper_width if world else 0.0,
+            stamp=stamp,
+        )
+
+    def skill_finished(self, status: SkillStatus) -> None:
+        """Count every finished skill of this episode, failed ones too, against the step
+        budget: a skill that fails before moving (no IK solution) still ends the episode
+        once the budget is spent, instead of leaving it running forever."""
+        if self.request is None or self.ended or not status.state.terminal:
+            return
+        if status.decision_id.startswith(f"{self.request.episode_id}:"):
+            self.steps += 1
+            self._check_end()
+
+    def _check_end(self) -> None:
+        if self.world is None or self.ended:
+            return
+        done = not self.world.gripper_closed and self.required_filled() == len(self.required)
+        self.ended = done or self.steps >= self.max_steps
+
+    def required_filled(self) -> int:
+        return len(self.required & self._geometric_view().occupancy().keys())
+
+    def end_event(self, stamp: float) -> EpisodeEvent | None:
+        if not self.ended or self._end_reported or self.world is None:
+            return None
+        self._end_reported = True
+        if self.video is not None and self.request is not None:
+            self.videos_written.append(self.video.write(self.request.episode_id, self.request.seed))
+        return self._event(EpisodePhase.END, stamp)
+
+    def _event(self, phase: EpisodePhase, stamp: float) -> EpisodeEvent:
+        assert self.request is not None
+        filled, total = self.required_filled(), len(self.required)
+        success = None
+        reason = ""
+        if phase is EpisodePhase.END:
+            success = filled == total
+            reason = "all goals filled" if success else f"step budget {self.max_steps} spent"
+        return EpisodeEvent(
+            episode_id=self.request.episode_id,
+            phase=phase,
+            task=self.request.task,
+            seed=self.request.seed,
+            goals_total=total,
+            goals_filled=filled,
+            steps=self.steps,
+            success=success,
+            reason=reason,
+            stamp=stamp,
+        )

@@ -1,0 +1,156 @@
+"""The manigraph tasks as ManiSkill 3 environments, so ManiSkill users can ``gym.make`` them.
+
+    import gymnasium as gym
+    import manigraph_sim.physics.maniskill_env  # registers the environments
+    env = gym.make("Manigraph-Stack-v0", blocks=3, obs_mode="state")
+
+Layouts come from the same registered tasks and seeds as the sim service (``reset(seed=s)``
+lays out what ``--seed s`` does), with ManiSkill's own Panda agent at the origin of a table at
+z = 0. ManiSkill needs a Vulkan device even for state observations (see
+``scripts/install-vulkan.sh`` on CPU-only machines).
+
+**Success Conditions**: every required goal holds a block: its centre within
+``goal_tolerance`` (2 cm) of the goal's, the geometric world's rule; the gripper has let go.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import sapien
+import torch
+from mani_skill.agents.robots import Panda
+from mani_skill.envs.sapien_env import BaseEnv
+from mani_skill.sensors.camera import CameraConfig
+from mani_skill.utils import sapien_utils
+from mani_skill.utils.building import actors
+from mani_skill.utils.building.ground import build_ground
+from mani_skill.utils.registration import register_env
+from mani_skill.utils.structs.pose import Pose
+
+from manigraph_shared.errors import TaskError
+from manigraph_sim.physics.world import BLOCK_COLOURS, FINGER_OPEN, HOME_Q
+from manigraph_sim.tasks import get_task
+from manigraph_sim.tasks.base import Layout, TaskParams
+
+
+class ManigraphEnv(BaseEnv):
+    """A manigraph task with the Panda; subclasses name the task (CPU simulation, one env)."""
+
+    SUPPORTED_ROBOTS = ["panda"]
+    agent: Panda
+    task_name: str = "stack"
+
+    def __init__(
+        self,
+        *args: Any,
+        blocks: int = 3,
+        stacks: int = 1,
+        goal_tolerance: float = 0.02,
+        robot_uids: str = "panda",
+        **kwargs: Any,
+    ) -> None:
+        self.task = get_task(self.task_name, TaskParams(blocks=blocks, stacks=stacks))
+        self.goal_tolerance = goal_tolerance
+        probe = self.task.layout(np.random.default_rng(0))
+        if probe.containers or any(body.category != "block" for body in probe.bodies):
+            raise TaskError(f"task: '{self.task_name}' needs boxes and covers, not in physics yet")
+        self.body_ids = [body.id for body in probe.bodies]
+        self.layout: Layout = probe
+        super().__init__(*args, robot_uids=robot_uids, **kwargs)
+
+    @property
+    def _default_sensor_configs(self) -> list[CameraConfig]:
+        pose = sapien_utils.look_at(eye=[1.0, 0.6, 0.6], target=[0.45, 0.0, 0.1])
+        return [CameraConfig("base_camera", pose, 128, 128, np.pi / 3, 0.01, 10)]
+
+    @property
+    def _default_human_render_camera_configs(self) -> CameraConfig:
+        pose = sapien_utils.look_at(eye=[1.05, 0.6, 0.55], target=[0.42, 0.0, 0.12])
+        return CameraConfig("render_camera", pose, 480, 360, 0.9, 0.01, 10)
+
+    def _load_agent(self, options: dict) -> None:
+        super()._load_agent(options, sapien.Pose(p=[0.0, 0.0, 0.0]))
+
+    def _load_scene(self, options: dict) -> None:
+        self.ground = build_ground(self.scene, altitude=0.0)
+        self.blocks = {
+            body_id: actors.build_cube(
+                self.scene,
+                half_size=0.02,
+                color=BLOCK_COLOURS[i % len(BLOCK_COLOURS)],
+                name=body_id,
+                initial_pose=sapien.Pose(p=[1.0 + 0.1 * i, 1.0, 0.02]),
+            )
+            for i, body_id in enumerate(self.body_ids)
+        }
+
+    def _initialize_episode(self, env_idx: torch.Tensor, options: dict) -> None:
+        seed = int(self._episode_seed[0])
+        self.layout = self.task.layout(np.random.default_rng(seed))
+        for body in self.layout.bodies:
+            self.blocks[body.id].set_pose(
+                Pose.create_from_pq(p=torch.tensor(body.position, dtype=torch.float32)[None])
+            )
+        qpos = np.concatenate([HOME_Q, [FINGER_OPEN, FINGER_OPEN]])
+        self.agent.reset(torch.tensor(qpos, dtype=torch.float32)[None])
+        self.goal_positions = torch.tensor(
+            np.array([goal.position for goal in self.layout.goals]), dtype=torch.float32
+        )
+        self.required = torch.tensor(
+            [goal.id in self.layout.required_goals() for goal in self.layout.goals]
+        )
+
+    def _block_positions(self) -> torch.Tensor:
+        return torch.stack([self.blocks[i].pose.p[0] for i in self.body_ids])
+
+    def evaluate(self) -> dict[str, torch.Tensor]:
+        distance = torch.cdist(self.goal_positions, self._block_positions())
+        filled = distance.min(dim=1).values <= self.goal_tolerance
+        grasping = torch.stack(
+            [self.agent.is_grasping(self.blocks[i])[0] for i in self.body_ids]
+        ).any()
+        done = bool(filled[self.required].all()) and not bool(grasping)
+        return {
+            "goals_filled": filled.sum()[None],
+            "success": torch.tensor([done]),
+        }
+
+    def _get_obs_extra(self, info: dict) -> dict[str, torch.Tensor]:
+        obs = {"tcp_pose": self.agent.tcp.pose.raw_pose}
+        if "state" in self.obs_mode:
+            poses = torch.stack([self.blocks[i].pose.raw_pose[0] for i in self.body_ids])
+            obs["block_poses"] = poses.reshape(1, -1)  # K x (x, y, z, qw, qx, qy, qz)
+            obs["goal_positions"] = self.goal_positions.reshape(1, -1)  # G x (x, y, z)
+        return obs
+
+    def compute_dense_reward(self, obs: Any, action: torch.Tensor, info: dict) -> torch.Tensor:
+        """Sparse in effect: the fraction of goals filled."""
+        return info["goals_filled"].float() / len(self.layout.goals)
+
+    def compute_normalized_dense_reward(
+        self, obs: Any, action: torch.Tensor, info: dict
+    ) -> torch.Tensor:
+        return self.compute_dense_reward(obs, action, info)
+
+
+@register_env("Manigraph-Stack-v0", max_episode_steps=2000)
+class ManigraphStackEnv(ManigraphEnv):
+    """K-block stacking (manigraph's ``stack`` task): build the inverted stack elsewhere."""
+
+    task_name = "stack"
+
+
+@register_env("Manigraph-Pyramid-v0", max_episode_steps=4000)
+class ManigraphPyramidEnv(ManigraphEnv):
+    """K-pyramid (manigraph's ``pyramid`` task) from one stack of K blocks."""
+
+    task_name = "pyramid"
+
+
+@register_env("Manigraph-MultiStack-v0", max_episode_steps=4000)
+class ManigraphMultiStackEnv(ManigraphEnv):
+    """K-block s-stack (manigraph's ``multistack`` task)."""
+
+    task_name = "multistack"

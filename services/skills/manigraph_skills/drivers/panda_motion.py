@@ -1,0 +1,143 @@
+"""A Panda driver that plans its own motion: Pinocchio IK on the skill side, joint
+trajectories to the robot. The robot end (sim or hardware) is a ``JointTransport``.
+
+Checks, each reported as a ``SkillError`` reason:
+
+* ``no_ik_solution``: a waypoint cannot be reached (nothing is sent to the robot);
+* ``grasp_slipped``: after closing and lifting (or after the transfer) the fingers closed to
+  less than ``min_grasp_width``, so nothing is between them;
+* ``placement_missed``: after release the object's centre is more than
+  ``placement_tolerance`` from the target (when the transport can observe objects).
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Callable
+from typing import Protocol
+
+import numpy as np
+
+from manigraph_shared.errors import ConfigError, SkillError
+from manigraph_shared.messages import (
+    GripperTarget,
+    JointTrajectoryCommand,
+    JointTrajectoryPoint,
+    JointTrajectoryResult,
+    Quaternion,
+    Vector3,
+)
+from manigraph_skills.drivers.base import RobotDriver
+from manigraph_skills.motion import GraspPlanner, JointTrajectory, PandaModel, PlanConfig
+from manigraph_skills.motion.plan import grasp_yaw
+
+
+class JointTransport(Protocol):
+    """Where joint trajectories go: the sim over the bus, a real arm, or a backend in-process."""
+
+    def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
+        """Run ``command`` to the end and answer it."""
+        ...
+
+    def joint_positions(self) -> np.ndarray:
+        """The arm's current joint positions, radians."""
+        ...
+
+    def object_position(self, object_id: str, after: float) -> np.ndarray | None:
+        """Where ``object_id`` is, observed after time ``after``; None if unknown."""
+        ...
+
+
+class PandaMotionDriver(RobotDriver):
+    name = "panda-motion"
+
+    def __init__(
+        self,
+        transport: JointTransport,
+        config: PlanConfig | None = None,
+        min_grasp_width: float = 0.005,
+        placement_tolerance: float = 0.02,
+    ) -> None:
+        if not 0 <= min_grasp_width < 0.08:
+            raise ConfigError("driver.min_grasp_width", "must be in [0, 0.08) metres")
+        if placement_tolerance <= 0:
+            raise ConfigError("driver.placement_tolerance", "must be > 0 metres")
+        self.transport = transport
+        self.model = PandaModel()
+        self.planner = GraspPlanner(self.model, config)
+        self.min_grasp_width = min_grasp_width
+        self.placement_tolerance = placement_tolerance
+        self._ids = itertools.count()
+
+    def pick(
+        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+    ) -> None:
+        target = np.array(position.as_tuple())
+        yaw = self.planner.config.hand_yaw + grasp_yaw(
+            (orientation.x, orientation.y, orientation.z, orientation.w)
+        )
+        result = self._run(decision_id, lambda q: self.planner.pick(q, target, yaw))
+        if result.gripper_width < self.min_grasp_width:
+            self._open(decision_id)
+            raise SkillError(
+                "grasp_slipped",
+                f"fingers closed to {result.gripper_width * 1000:.1f} mm: {object_id} not held",
+            )
+
+    def place(
+        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+    ) -> None:
+        target = np.array(position.as_tuple())
+        # The block turned with the hand at the grasp; turn back so it lands square.
+        yaw = self.planner.config.hand_yaw
+        carry = self._run(decision_id, lambda q: self.planner.place(q, target, yaw))
+        if carry.gripper_width < self.min_grasp_width:
+            self._open(decision_id)
+            raise SkillError("grasp_slipped", f"{object_id} was lost during the transfer")
+        released = self._run(decision_id, self.planner.release)
+        seen = self.transport.object_position(object_id, after=released.stamp)
+        if seen is not None:
+            miss = float(np.linalg.norm(seen - target))
+            if miss > self.placement_tolerance:
+                raise SkillError(
+                    "placement_missed", f"{object_id} rests {miss * 1000:.0f} mm from its goal"
+                )
+
+    # --- pieces -----------------------------------------------------------------------------
+    def _open(self, decision_id: str) -> None:
+        """After a lost grasp: open and back off, so the next attempt starts clean."""
+        self._run(decision_id, self.planner.release)
+
+    def _run(
+        self, decision_id: str, plan: Callable[[np.ndarray], JointTrajectory]
+    ) -> JointTrajectoryResult:
+        """Plan from the arm's joints and execute; plan once more if the arm was elsewhere."""
+        q = self.transport.joint_positions()
+        for _attempt in range(2):
+            trajectory = plan(q)  # raises SkillError('no_ik_solution') before any motion
+            result = self.transport.execute(self._command(decision_id, trajectory))
+            if result.ok:
+                return result
+            if result.reason != "start_mismatch":
+                raise SkillError(result.reason or "driver_error", result.detail)
+            q = np.array(result.positions)
+        raise SkillError("start_mismatch", "the arm keeps moving away from the planned start")
+
+    def _command(self, decision_id: str, trajectory: JointTrajectory) -> JointTrajectoryCommand:
+        return JointTrajectoryCommand(
+            command_id=f"{decision_id}.{next(self._ids)}",
+            decision_id=decision_id,
+            joint_names=list(self.model.joint_names),
+            points=[
+                JointTrajectoryPoint(
+                    positions=q.tolist(),
+                    gripper=GripperTarget.CLOSED if closed else GripperTarget.OPEN,
+                    time_from_start=t,
+                )
+                for t, q, closed in zip(
+                    trajectory.times, trajectory.positions, trajectory.closed, strict=True
+                )
+            ],
+            stamp=time.time(),
+        )

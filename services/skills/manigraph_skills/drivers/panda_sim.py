@@ -1,0 +1,103 @@
+"""``panda-sim``: the Panda motion driver talking to the physics sim over the bus.
+
+Joint trajectories go out on ``manigraph/robot/joint_trajectory``; the sim answers each with a
+``JointTrajectoryResult``. Joint state and scenes are cached as they stream in. A hardware
+Franka driver reuses :class:`PandaMotionDriver` with a transport to the real arm.
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from manigraph_shared.bus import Bus
+from manigraph_shared.errors import SkillError
+from manigraph_shared.messages import (
+    JointState,
+    JointTrajectoryCommand,
+    JointTrajectoryResult,
+    Scene,
+)
+from manigraph_skills.drivers.base import register_driver
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+
+
+class BusJointTransport:
+    """Publishes trajectories and waits for their results; caches joint state and scenes."""
+
+    def __init__(self, bus: Bus, timeout: float = 60.0) -> None:
+        self.bus = bus
+        self.timeout = timeout
+        self._lock = threading.Condition()
+        self._results: dict[str, JointTrajectoryResult] = {}
+        self._waiting: set[str] = set()
+        self._positions: np.ndarray | None = None
+        #: Stamp of the newest joint knowledge; a sample older than it is stale.
+        self._known_at = -1.0
+        self._scene: Scene | None = None
+        bus.subscribe(JointTrajectoryResult, self._on_result)
+        bus.subscribe(JointState, self._on_state)
+        bus.subscribe(Scene, self._on_scene)
+
+    def _on_result(self, result: JointTrajectoryResult) -> None:
+        with self._lock:
+            if result.command_id in self._waiting:
+                self._results[result.command_id] = result
+                self._lock.notify_all()
+            if result.positions and result.stamp >= self._known_at:
+                # An answer carries the joints the motion ended in; a JointState stamped
+                # before the motion started (overtaken on the way) must not replace them.
+                self._positions, self._known_at = np.array(result.positions), result.stamp
+
+    def _on_state(self, state: JointState) -> None:
+        with self._lock:
+            if state.stamp >= self._known_at:
+                self._positions, self._known_at = np.array(state.positions), state.stamp
+                self._lock.notify_all()
+
+    def _on_scene(self, scene: Scene) -> None:
+        with self._lock:
+            self._scene = scene
+            self._lock.notify_all()
+
+    def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
+        with self._lock:
+            self._waiting.add(command.command_id)
+        try:
+            self.bus.publish(command)
+            with self._lock:
+                if not self._lock.wait_for(
+                    lambda: command.command_id in self._results, self.timeout
+                ):
+                    raise SkillError("driver_timeout", f"no result within {self.timeout} s")
+                return self._results.pop(command.command_id)
+        finally:
+            with self._lock:
+                self._waiting.discard(command.command_id)
+
+    def joint_positions(self) -> np.ndarray:
+        with self._lock:
+            if not self._lock.wait_for(lambda: self._positions is not None, self.timeout):
+                raise SkillError("driver_timeout", "no JointState from the robot yet")
+            assert self._positions is not None
+            return self._positions.copy()
+
+    def object_position(self, object_id: str, after: float) -> np.ndarray | None:
+        with self._lock:
+            self._lock.wait_for(
+                lambda: self._scene is not None and self._scene.stamp >= after, timeout=1.0
+            )
+            scene = self._scene
+        if scene is None or scene.stamp < after:
+            return None
+        try:
+            return np.array(scene.object(object_id).position.as_tuple())
+        except KeyError:
+            return None
+
+
+@register_driver("panda-sim")
+class PandaSimDriver(PandaMotionDriver):
+    def __init__(self, bus: Bus, timeout: float = 60.0) -> None:
+        super().__init__(BusJointTransport(bus, timeout))

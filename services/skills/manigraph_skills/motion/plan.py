@@ -1,0 +1,156 @@
+"""A top-down PickAndPlace as Cartesian waypoints, turned into joint trajectories by IK.
+
+Pick: from where the hand is, up to a safe height, across, down to the *pregrasp* above the
+object, straight down to the *grasp* (TCP at the object's centre), *close*, *lift*.
+Place: up to the carry height, *transfer* across, down to *place* (object centre at the goal,
+a few millimetres high so it is set down rather than pushed in). Release: open, *retreat* up.
+Pick, place and release are separate motions so a driver can check the grasp between them.
+Every straight segment is sampled every ``sample_spacing`` metres and solved by IK seeded with
+the previous sample, so the hand really moves along the line and no joint flips between them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from manigraph_shared.errors import ConfigError
+from manigraph_skills.motion.ik import IKSolver
+from manigraph_skills.motion.model import PandaModel, top_down
+from manigraph_skills.motion.trajectory import JointTrajectory
+
+UP = np.array([0.0, 0.0, 1.0])
+
+
+@dataclass(frozen=True)
+class PlanConfig:
+    approach: float = 0.06  # pregrasp height above grasp and place, metres
+    retreat: float = 0.12  # rise after release, metres: lifts the forearm clear of the stack
+    lift: float = 0.08  # lift above the grasp before transfer, metres
+    min_carry_z: float = 0.12  # lowest TCP height for moves across the table, metres
+    #: Highest: a hand above this (the rest pose) comes down to it before moving across, as
+    #: far reaches high up have no top-down solution. Clears a 6-block stack with a block held.
+    max_carry_z: float = 0.30
+    release_clearance: float = 0.003  # release this high above the goal, metres
+    speed: float = 0.5  # peak Cartesian speed across the table, m/s
+    slow_speed: float = 0.2  # peak speed of approach, grasp, place and lift, m/s
+    joint_speed_fraction: float = 0.5  # of each joint's URDF velocity limit
+    grip_time: float = 0.25  # seconds the arm holds still while the gripper moves
+    sample_spacing: float = 0.01  # metres between IK samples along a line
+    #: Hand yaw for a square object: at pi/2 the fingers close along the base x axis, so
+    #: they never reach into a neighbour of a row along y (pyramid rows, box grids).
+    hand_yaw: float = np.pi / 2
+
+    def __post_init__(self) -> None:
+        for name in (
+            "approach",
+            "retreat",
+            "lift",
+            "speed",
+            "slow_speed",
+            "grip_time",
+            "sample_spacing",
+        ):
+            if getattr(self, name) <= 0:
+                raise ConfigError(f"plan.{name}", "must be > 0")
+        if not 0 < self.joint_speed_fraction <= 1:
+            raise ConfigError("plan.joint_speed_fraction", "must be in (0, 1]")
+
+
+def grasp_yaw(quaternion_xyzw: tuple[float, float, float, float]) -> float:
+    """The object's yaw folded into [-45, 45] degrees: a cube looks the same every 90."""
+    x, y, z, w = quaternion_xyzw
+    yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return float((yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4)
+
+
+class GraspPlanner:
+    """Plans pick and place trajectories for the Panda from its current joint state."""
+
+    def __init__(self, model: PandaModel, config: PlanConfig | None = None) -> None:
+        self.model = model
+        self.ik = IKSolver(model)
+        self.config = config or PlanConfig()
+        self.joint_speed = model.velocity_limit * self.config.joint_speed_fraction
+
+    def pick(self, q: np.ndarray, position: np.ndarray, yaw: float = 0.0) -> JointTrajectory:
+        """From ``q``: pregrasp, grasp at ``position``, close, lift."""
+        c = self.config
+        position = np.asarray(position, dtype=float)
+        trajectory = JointTrajectory()
+        trajectory.add(0.0, q, closed=False)
+        pregrasp = position + c.approach * UP
+        self._transit(trajectory, pregrasp, yaw, closed=False, what="pregrasp")
+        self.line(trajectory, position, yaw, False, c.slow_speed, "grasp")
+        trajectory.hold(c.grip_time, closed=True)
+        self.line(trajectory, position + c.lift * UP, yaw, True, c.slow_speed, "lift")
+        return trajectory
+
+    def place(self, q: np.ndarray, position: np.ndarray, yaw: float = 0.0) -> JointTrajectory:
+        """From ``q`` (holding): transfer above ``position``, lower the object onto it."""
+        c = self.config
+        position = np.asarray(position, dtype=float) + c.release_clearance * UP
+        trajectory = JointTrajectory()
+        trajectory.add(0.0, q, closed=True)
+        self._transit(trajectory, position + c.approach * UP, yaw, closed=True, what="transfer")
+        self.line(trajectory, position, yaw, True, c.slow_speed, "place")
+        return trajectory
+
+    def release(self, q: np.ndarray) -> JointTrajectory:
+        """Open the gripper where the hand is, then retreat straight up."""
+        c = self.config
+        trajectory = JointTrajectory()
+        trajectory.add(0.0, q, closed=True)
+        trajectory.hold(c.grip_time, closed=False)
+        hand = self.model.tcp_pose(q).translation
+        # Up by ``retreat``, but not above the carry ceiling (out of reach far out), and
+        # never less than ``approach``.
+        top = max(hand[2] + c.approach, min(hand[2] + c.retreat, c.max_carry_z))
+        above = np.array([hand[0], hand[1], top])
+        self.line(trajectory, above, self.yaw_of(q), False, c.slow_speed, "retreat")
+        return trajectory
+
+    # --- segments -------------------------------------------------------------------------
+    def _transit(
+        self, trajectory: JointTrajectory, target: np.ndarray, yaw: float, closed: bool, what: str
+    ) -> None:
+        """To a height clear of both ends, across, then down to ``target``."""
+        start = self.model.tcp_pose(trajectory.final).translation
+        start_yaw = self.yaw_of(trajectory.final)
+        c = self.config
+        carry = max(c.min_carry_z, min(start[2], c.max_carry_z), target[2])
+        speed = self.config.speed
+        self.line(trajectory, [*start[:2], carry], start_yaw, closed, speed, f"{what} carry height")
+        self.line(trajectory, [*target[:2], carry], yaw, closed, speed, what, start_yaw)
+        self.line(trajectory, target, yaw, closed, speed, what)
+
+    def line(
+        self,
+        trajectory: JointTrajectory,
+        end: np.ndarray | list[float],
+        yaw: float,
+        closed: bool,
+        speed: float,
+        what: str,
+        start_yaw: float | None = None,
+    ) -> None:
+        """A straight TCP line from the trajectory's last point to ``end``; the yaw turns
+        from ``start_yaw`` (default: ``yaw``) to ``yaw`` along the way."""
+        q = trajectory.final
+        start = self.model.tcp_pose(q).translation
+        end = np.asarray(end, dtype=float)
+        length = float(np.linalg.norm(end - start))
+        first_yaw = yaw if start_yaw is None else start_yaw
+        if length < 1e-4 and abs(first_yaw - yaw) < 1e-4:
+            return
+        count = max(1, int(np.ceil(length / self.config.sample_spacing)))
+        path = [q]
+        for s in np.arange(1, count + 1) / count:
+            pose = top_down(start + s * (end - start), first_yaw + s * (yaw - first_yaw))
+            path.append(self.ik.solve_or_raise(pose, path[-1], what, restart=False))
+        trajectory.add_segment(np.array(path), closed, length, speed, self.joint_speed)
+
+    def yaw_of(self, q: np.ndarray) -> float:
+        rotation = self.model.tcp_pose(q).rotation
+        return float(np.arctan2(rotation[1, 0], rotation[0, 0]))

@@ -1,0 +1,121 @@
+"""The Panda motion driver's checks, against a scripted robot at the hardware boundary
+(the joint transport): what it sends, and how it reads the robot's answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from manigraph_shared.errors import ConfigError, SkillError
+from manigraph_shared.messages import (
+    GripperTarget,
+    JointTrajectoryCommand,
+    JointTrajectoryResult,
+    Quaternion,
+    Vector3,
+)
+from manigraph_skills.drivers import DRIVERS
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+from manigraph_skills.motion import HOME_Q
+
+BLOCK = Vector3(x=0.5, y=0.1, z=0.02)
+GOAL = Vector3(x=0.4, y=-0.2, z=0.02)
+
+
+class ScriptedArm:
+    """Executes every trajectory perfectly; reports the finger opening and where the object
+    rests as scripted (a real arm's sensors)."""
+
+    def __init__(self, widths: list[float], rests: np.ndarray | None = None) -> None:
+        self.q = HOME_Q.copy()
+        self.widths = widths
+        self.rests = rests
+        self.sent: list[JointTrajectoryCommand] = []
+        self.refuse_first = False
+
+    def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
+        self.sent.append(command)
+        if self.refuse_first:
+            self.refuse_first = False
+            return self._answer(command, 0.08, reason="start_mismatch")
+        self.q = np.array(command.points[-1].positions)
+        return self._answer(command, self.widths.pop(0))
+
+    def _answer(
+        self, command: JointTrajectoryCommand, width: float, reason: str | None = None
+    ) -> JointTrajectoryResult:
+        return JointTrajectoryResult(
+            command_id=command.command_id,
+            ok=reason is None,
+            reason=reason,
+            positions=self.q.tolist(),
+            gripper_width=width,
+            stamp=1.0,
+        )
+
+    def joint_positions(self) -> np.ndarray:
+        return self.q.copy()
+
+    def object_position(self, object_id: str, after: float) -> np.ndarray | None:
+        return self.rests
+
+
+def test_a_pick_and_place_sends_pick_carry_and_release_motions() -> None:
+    arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=np.array(GOAL.as_tuple()))
+    driver = PandaMotionDriver(arm)
+    driver.pick("e:0", "block_0", BLOCK, Quaternion())
+    driver.place("e:0", "block_0", GOAL, Quaternion())
+    pick, carry, release = arm.sent
+    assert pick.points[0].gripper is GripperTarget.OPEN
+    assert pick.points[-1].gripper is GripperTarget.CLOSED
+    assert all(p.gripper is GripperTarget.CLOSED for p in carry.points)
+    assert release.points[-1].gripper is GripperTarget.OPEN
+    assert {c.decision_id for c in arm.sent} == {"e:0"}
+    assert len({c.command_id for c in arm.sent}) == 3
+
+
+def test_fingers_closing_on_nothing_is_grasp_slipped_and_the_hand_opens() -> None:
+    arm = ScriptedArm(widths=[0.0, 0.08])
+    with pytest.raises(SkillError) as caught:
+        PandaMotionDriver(arm).pick("e:0", "block_0", BLOCK, Quaternion())
+    assert caught.value.reason == "grasp_slipped"
+    assert arm.sent[-1].points[-1].gripper is GripperTarget.OPEN
+
+
+def test_an_object_lost_during_the_transfer_is_grasp_slipped() -> None:
+    arm = ScriptedArm(widths=[0.04, 0.001, 0.08])
+    driver = PandaMotionDriver(arm)
+    driver.pick("e:0", "block_0", BLOCK, Quaternion())
+    with pytest.raises(SkillError, match="transfer") as caught:
+        driver.place("e:0", "block_0", GOAL, Quaternion())
+    assert caught.value.reason == "grasp_slipped"
+
+
+def test_an_object_resting_off_its_goal_is_placement_missed() -> None:
+    off = np.array(GOAL.as_tuple()) + np.array([0.05, 0.0, 0.0])
+    arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=off)
+    driver = PandaMotionDriver(arm)
+    driver.pick("e:0", "block_0", BLOCK, Quaternion())
+    with pytest.raises(SkillError) as caught:
+        driver.place("e:0", "block_0", GOAL, Quaternion())
+    assert caught.value.reason == "placement_missed" and "50 mm" in caught.value.detail
+
+
+def test_an_arm_that_is_elsewhere_gets_a_plan_from_where_it_is() -> None:
+    arm = ScriptedArm(widths=[0.04])
+    arm.refuse_first = True
+    PandaMotionDriver(arm).pick("e:0", "block_0", BLOCK, Quaternion())
+    assert len(arm.sent) == 2
+
+
+def test_an_unreachable_object_sends_nothing() -> None:
+    arm = ScriptedArm(widths=[])
+    with pytest.raises(SkillError) as caught:
+        PandaMotionDriver(arm).pick("e:0", "block_0", Vector3(x=1.5, y=0, z=0.02), Quaternion())
+    assert caught.value.reason == "no_ik_solution" and arm.sent == []
+
+
+def test_the_driver_is_registered_and_validates_its_settings() -> None:
+    assert "panda-sim" in DRIVERS
+    with pytest.raises(ConfigError, match="placement_tolerance"):
+        PandaMotionDriver(ScriptedArm(widths=[]), placement_tolerance=0.0)
