@@ -5,11 +5,14 @@ UV := $(PYTHON) -m uv
 RUN := $(UV) run --frozen --all-packages
 UV_VERSION := 0.13.9
 
-.PHONY: install up test test-fast lint format bench clean
+.PHONY: install vulkan up test test-fast lint format bench clean
 
 install:  ## install uv and every package of the workspace (uv.lock)
 	@$(PYTHON) -m uv --version >/dev/null 2>&1 || $(PYTHON) -m pip install --quiet "uv==$(UV_VERSION)"
 	@$(UV) sync --frozen --all-packages
+
+vulkan:  ## Debian 12 only, as root: Mesa 25 lavapipe for physics videos and ManiSkill rendering
+	bash scripts/install-vulkan.sh
 
 up: install  ## run a 4-block stacking episode through router, sim, planner and skills
 	$(RUN) manigraph up --task stack --blocks 4 --episodes 1 --seed 0 --record logs/make-up.mcap
@@ -35,6 +38,9 @@ bench: install  ## speed figures (not tests): medians and ratios
 	$(RUN) python bench/bench_policy_inference.py
 	$(RUN) python bench/bench_training.py
 	$(RUN) python bench/bench_eval.py
+	$(RUN) python bench/bench_explainer.py
+	$(RUN) python bench/bench_ik.py
+	$(RUN) python bench/bench_physics.py
 
 clean:
 	rm -rf .venv logs .pytest_cache .ruff_cache .mypy_cache

@@ -22,7 +22,7 @@ def _run(args: argparse.Namespace) -> int:
     import torch
 
     from manigraph_planner.gnn import ARCHITECTURES, save_checkpoint
-    from manigraph_planner.training.augment import Augmentation
+    from manigraph_planner.training.augment import augmentation_for
     from manigraph_planner.training.dataset import load_demonstrations
     from manigraph_planner.training.trainer import TrainConfig, default_output, train
     from manigraph_shared.errors import ConfigError
@@ -34,7 +34,7 @@ def _run(args: argparse.Namespace) -> int:
             architecture=args.arch,
             seed=args.seed,
             epochs=args.epochs,
-            augmentation=Augmentation(copies=args.copies),
+            augmentation=augmentation_for(args.arch, copies=args.copies),
         )
     except ValueError as exc:
         raise ConfigError(str(exc).split(":")[0], str(exc)) from None

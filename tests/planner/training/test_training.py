@@ -70,7 +70,7 @@ def test_a_trained_policy_imitates_the_expert_and_generalizes_to_stacking(
 ) -> None:
     demos = load_demonstrations([demo_log])
     config = TrainConfig(
-        architecture="sage", seed=0, epochs=80, augmentation=Augmentation(copies=3)
+        architecture="sage", seed=0, epochs=150, augmentation=Augmentation(copies=3)
     )
     net, metrics = train(demos, config, progress=None)
     assert metrics["demo_accuracy"] >= 0.8  # type: ignore[operator]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import random
 import sys
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TextIO
 
@@ -15,7 +15,7 @@ from torch_geometric.data import Batch
 from manigraph_planner.gnn.features import fully_connected_edge_index
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_planner.gnn.selection import select, selection_loss
-from manigraph_planner.training.augment import Augmentation
+from manigraph_planner.training.augment import Augmentation, augmentation_for
 from manigraph_planner.training.dataset import Demonstrations, Sample
 
 
@@ -31,7 +31,8 @@ class TrainConfig:
     num_layers: int = 3
     #: Fixed input multipliers (category, x, y, z, filled); see ModelConfig.feature_scale.
     feature_scale: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0, 1.0)
-    augmentation: Augmentation = field(default_factory=Augmentation)
+    #: None: the architecture's default (:func:`augmentation_for`).
+    augmentation: Augmentation | None = None
 
     def __post_init__(self) -> None:
         for name in ("epochs", "batch_size", "hidden_channels", "num_layers"):
@@ -39,6 +40,8 @@ class TrainConfig:
                 raise ValueError(f"{name}: must be >= 1")
         if self.learning_rate <= 0:
             raise ValueError("learning_rate: must be > 0")
+        if self.augmentation is None:
+            object.__setattr__(self, "augmentation", augmentation_for(self.architecture))
 
     def to_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -89,6 +92,7 @@ def train(
     torch.manual_seed(config.seed)
     random.seed(config.seed)
     generator = torch.Generator().manual_seed(config.seed)
+    assert config.augmentation is not None  # set in __post_init__
     samples = config.augmentation.apply(demos.samples, generator)
     net = PolicyNet(
         ModelConfig(
