@@ -28,32 +28,12 @@ import torch
 
 warnings.filterwarnings("ignore", category=FutureWarning)  # torch.jit.script, from PyG import
 
+from scenes import stack_scene  # noqa: E402  (bench/scenes.py)
+
 from manigraph_planner.gnn import ARCHITECTURES, ModelConfig, PolicyNet, scene_to_graph  # noqa: E402
 from manigraph_planner.policies.gnn import GNNPolicy  # noqa: E402
-from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3  # noqa: E402
 
-BLOCK = 0.04
 TARGET_MS = 2.0
-
-
-def stack_scene(k: int) -> Scene:
-    size = Vector3(x=BLOCK, y=BLOCK, z=BLOCK)
-    objects = [
-        SceneObject(
-            id=f"block-{i}",
-            category="block",
-            size=size,
-            position=Vector3(x=0.5, y=-0.2, z=(i + 0.5) * BLOCK),
-        )
-        for i in range(k)
-    ]
-    goals = [
-        SceneGoal(
-            id=f"goal-{i}", category="block", position=Vector3(x=0.5, y=0.2, z=(i + 0.5) * BLOCK)
-        )
-        for i in range(k)
-    ]
-    return Scene(episode_id="bench", stamp=1.0, sequence=0, objects=objects, goals=goals)
 
 
 def percentiles_ms(samples_ns: list[int]) -> tuple[float, float]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from manigraph_shared.errors import SkillError, TaskError
+from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
     EpisodeEvent,
     EpisodePhase,
@@ -21,9 +21,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_sim.backend import SimBackend, register_backend
 from manigraph_sim.geometric.world import GeometricWorld
-from manigraph_sim.tasks import Task, get_task
-from manigraph_sim.tasks.base import TaskParams
-from manigraph_sim.tasks.task_file import FileTask, parse_task_file
+from manigraph_sim.tasks.from_request import episode_layout
 
 
 def _vec(values: np.ndarray) -> Vector3:
@@ -44,14 +42,8 @@ class GeometricBackend(SimBackend):
         self._end_reported = True
 
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
-        if request.task == "file" or request.task_file is not None:
-            if request.task_file is None:
-                raise TaskError("task_file: task 'file' needs the task file's text")
-            task: Task = FileTask(parse_task_file(request.task_file))
-        else:
-            task = get_task(request.task, TaskParams(blocks=request.blocks, stacks=request.stacks))
-        layout = task.layout(np.random.default_rng(request.seed))
-        layout.validate()
+        episode = episode_layout(request)
+        layout = episode.layout
         self.world = GeometricWorld(
             layout.bodies,
             layout.goals,
@@ -62,7 +54,7 @@ class GeometricBackend(SimBackend):
         self.required = layout.required_goals()
         self.request = request
         self.steps = 0
-        self.max_steps = request.max_steps or task.max_steps(len(layout.goals))
+        self.max_steps = episode.max_steps
         self.ended = False
         self._end_reported = False
         return self._event(EpisodePhase.START, stamp)

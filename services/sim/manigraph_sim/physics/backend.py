@@ -42,9 +42,8 @@ from manigraph_sim.backend import SimBackend
 from manigraph_sim.geometric.world import Body, GeometricWorld
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig
 from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
-from manigraph_sim.tasks import Task, get_task
-from manigraph_sim.tasks.base import Layout, TaskParams
-from manigraph_sim.tasks.task_file import FileTask, parse_task_file
+from manigraph_sim.tasks.base import Layout
+from manigraph_sim.tasks.from_request import episode_layout
 
 #: A block whose centre is this close to the TCP while the gripper is closed is held.
 HELD_DISTANCE = 0.03
@@ -88,14 +87,8 @@ class PhysicsBackend(SimBackend):
 
     # --- episodes ---------------------------------------------------------------------------
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
-        if request.task == "file" or request.task_file is not None:
-            if request.task_file is None:
-                raise TaskError("task_file: task 'file' needs the task file's text")
-            task: Task = FileTask(parse_task_file(request.task_file))
-        else:
-            task = get_task(request.task, TaskParams(blocks=request.blocks, stacks=request.stacks))
-        layout = task.layout(np.random.default_rng(request.seed))
-        layout.validate()
+        episode = episode_layout(request)
+        layout = episode.layout
         if layout.containers or any(body.category != "block" for body in layout.bodies):
             raise TaskError(f"task: '{request.task}' needs boxes and covers, not in physics yet")
         self.world = PhysicsWorld(layout.bodies, self.config, render=self.video_config is not None)
@@ -107,7 +100,7 @@ class PhysicsBackend(SimBackend):
         self.request = request
         self.required = layout.required_goals()
         self.steps = 0
-        self.max_steps = request.max_steps or task.max_steps(len(layout.goals))
+        self.max_steps = episode.max_steps
         self.ended = False
         self._end_reported = False
         return self._event(EpisodePhase.START, stamp)
