@@ -9,25 +9,21 @@ The table top is the plane z = 0 in the robot base frame, where the task layouts
 
 from __future__ import annotations
 
-import importlib.util
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import sapien
 from sapien import physx
 
 from manigraph_shared.errors import ConfigError
+from manigraph_shared.panda import ARM_JOINTS, FINGER_OPEN, HOME_Q, panda_urdf_path
 from manigraph_sim.geometric.world import Body
 
-ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
 #: Where an episode starts: Franka's "ready" pose with the hand turned a quarter, TCP at
 #: (0.31, 0, 0.49) m, high and close to the base so it clears every stack of a layout.
 #: (The skills' motion model starts its plans from the same pose.)
-HOME_Q = np.array([0.0, -np.pi / 4, 0.0, -3 * np.pi / 4, 0.0, np.pi / 2, -np.pi / 4])
-FINGER_OPEN = 0.04  # metres per finger
 TABLE_COLOUR = [0.62, 0.5, 0.38, 1.0]
 #: Block colours when rendering (RGBA), cycled by block index.
 BLOCK_COLOURS = [
@@ -62,17 +58,6 @@ class PhysicsConfig:
         for name in ("finger_friction", "block_friction", "table_friction", "settle_time"):
             if getattr(self, name) < 0:
                 raise ConfigError(f"physics.{name}", "must be >= 0")
-
-
-def panda_urdf_path() -> Path:
-    """The Panda URDF inside the installed mani-skill package (not imported, only located)."""
-    spec = importlib.util.find_spec("mani_skill")
-    if spec is None or not spec.submodule_search_locations:
-        raise ConfigError("panda_urdf", "mani-skill is not installed; it ships the Panda URDF")
-    path = Path(next(iter(spec.submodule_search_locations))) / "assets/robots/panda/panda_v2.urdf"
-    if not path.is_file():
-        raise ConfigError("panda_urdf", f"{path} is missing from the mani-skill package")
-    return path
 
 
 class PhysicsWorld:

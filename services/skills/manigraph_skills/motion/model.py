@@ -7,38 +7,23 @@ and the gripper is commanded separately.
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from manigraph_shared.errors import ConfigError
+from manigraph_shared.panda import (  # noqa: F401  (re-exported for the motion package)
+    ARM_JOINTS,
+    FINGER_JOINTS,
+    FINGER_OPEN,
+    HOME_Q,
+    TCP_FRAME,
+    panda_urdf_path,
+)
+
 
 #: The arm's joints, in the order every joint vector in manigraph uses.
-ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
-FINGER_JOINTS = ("panda_finger_joint1", "panda_finger_joint2")
-#: The tool centre point between the fingertips; grasp poses are poses of this frame.
-TCP_FRAME = "panda_hand_tcp"
-#: Franka's "ready" pose, hand turned a quarter: TCP at (0.31, 0, 0.49) m, fingers pointing
-#: down and closing along x. High and close to the base, clear of any stack on the table.
-HOME_Q = np.array([0.0, -np.pi / 4, 0.0, -3 * np.pi / 4, 0.0, np.pi / 2, -np.pi / 4])
-#: Finger opening (each finger, metres) when open; closed is 0.
-FINGER_OPEN = 0.04
-
-
-def panda_urdf_path(name: str = "panda_v2.urdf") -> Path:
-    """Locate the Panda URDF inside the installed mani-skill package (no download, no import
-    of mani_skill itself: only its install location is looked up)."""
-    spec = importlib.util.find_spec("mani_skill")
-    if spec is None or not spec.submodule_search_locations:
-        raise ConfigError("panda_urdf", "mani-skill is not installed; it ships the Panda URDF")
-    path = Path(next(iter(spec.submodule_search_locations))) / "assets/robots/panda" / name
-    if not path.is_file():
-        raise ConfigError("panda_urdf", f"{path} does not exist in the mani-skill package")
-    return path
-
-
 class PandaModel:
     """Forward kinematics and Jacobians of the 7-joint arm at the TCP frame."""
 
