@@ -247,12 +247,17 @@ run_command = Command(
 SKILLS_DRIVER_FOR_SIM = {"geometric": "sim-gripper", "physics": "panda-sim"}
 
 
-def _video_args(args: argparse.Namespace) -> list[str]:
-    if args.video is None:
-        return []
-    if args.sim != "physics":
-        raise ConfigError("video", "needs --sim physics")
-    return ["--video", str(args.video.resolve())]
+def _sim_args(args: argparse.Namespace) -> list[str]:
+    extra: list[str] = []
+    if args.video is not None:
+        if args.sim != "physics":
+            raise ConfigError("video", "needs --sim physics")
+        extra += ["--video", str(args.video.resolve())]
+    if args.realtime:
+        if args.sim != "physics":
+            raise ConfigError("realtime", "needs --sim physics")
+        extra.append("--realtime")
+    return extra
 
 
 def _up_configure(parser: argparse.ArgumentParser) -> None:
@@ -267,6 +272,14 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--video", type=Path, help="physics: render episodes to this .gif/.mp4 (needs Vulkan)"
+    )
+    parser.add_argument(
+        "--realtime", action="store_true", help="physics: simulate in real time, not flat out"
+    )
+    parser.add_argument(
+        "--explain-decisions",
+        action="store_true",
+        help="GNN policies: publish an Explanation beside every decision (lands in --record)",
     )
     parser.add_argument("--port", type=int, default=7447, help="router port on 127.0.0.1")
     parser.add_argument("--log-dir", type=Path, help="also write <service>.log files here")
@@ -291,8 +304,13 @@ def _up_run(args: argparse.Namespace) -> int:
     if args.record:
         specs.append(ProcessSpec("recorder", ["record", "--output", str(args.record)], bus_env))
     specs += [
-        ProcessSpec("sim", ["sim", "--backend", args.sim, *_video_args(args)], bus_env),
-        ProcessSpec("planner", ["planner", "--policy", args.policy], bus_env),
+        ProcessSpec("sim", ["sim", "--backend", args.sim, *_sim_args(args)], bus_env),
+        ProcessSpec(
+            "planner",
+            ["planner", "--policy", args.policy]
+            + (["--explain-decisions"] if args.explain_decisions else []),
+            bus_env,
+        ),
         ProcessSpec("skills", ["skills", "--driver", SKILLS_DRIVER_FOR_SIM[args.sim]], bus_env),
     ]
     supervisor = Supervisor(args.log_dir)

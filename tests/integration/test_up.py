@@ -7,10 +7,15 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
-from manigraph_shared.testing import free_port
+from manigraph_shared.mcap_log import read_log
+from manigraph_shared.messages import Action, Explanation
+from manigraph_shared.testing import free_port, run_up
+
+CHECKPOINTS = Path(__file__).resolve().parents[2] / "checkpoints"
 
 pytestmark = pytest.mark.integration
 
@@ -54,3 +59,36 @@ def test_ctrl_c_stops_every_service_cleanly(stop_signal: int) -> None:
     for pid in children:
         with pytest.raises(ProcessLookupError):
             os.kill(pid, 0)
+
+
+def test_explained_decisions_land_in_the_log_beside_the_decisions(tmp_path: Path) -> None:
+    log = tmp_path / "explained.mcap"
+    run_up(
+        "--policy",
+        str(CHECKPOINTS / "sage.pt"),
+        "--blocks",
+        "3",
+        "--episodes",
+        "1",
+        "--explain-decisions",
+        "--record",
+        str(log),
+    )
+    decisions = [i for i in read_log(log) if i.topic == Action.key]
+    explanations = [Explanation.decode(i.data) for i in read_log(log, [Explanation.key])]
+    assert len(decisions) == 3
+    assert sorted(e.decision_id for e in explanations) == sorted(
+        Action.decode(i.data).decision_id for i in decisions
+    )
+
+
+@pytest.mark.parametrize("flag", [["--realtime"], ["--video", "clip.gif"]])
+def test_physics_only_flags_are_refused_for_the_geometric_world(flag: list[str]) -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "manigraph_shared.cli", "up", *flag, "--port", str(free_port())],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode != 0
+    assert f"{flag[0].lstrip('-')}: needs --sim physics" in result.stderr
