@@ -23,7 +23,9 @@ from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import EpisodeEvent
 from manigraph_shared.testing import free_port
 
-pytestmark = [pytest.mark.docker, pytest.mark.integration]
+# The first test also builds every image: cold, on a fresh engine, that takes 6-15 minutes
+# (the torch wheels), far past the suite's 300 s per-test limit.
+pytestmark = [pytest.mark.docker, pytest.mark.integration, pytest.mark.timeout(2700)]
 
 REPO = Path(__file__).resolve().parents[2]
 
