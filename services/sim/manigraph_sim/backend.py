@@ -8,6 +8,7 @@ from collections.abc import Callable
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import (
     EpisodeEvent,
+    EpisodePhase,
     EpisodeRequest,
     RobotCommand,
     RobotFeedback,
@@ -36,6 +37,37 @@ class SimBackend(ABC):
     @abstractmethod
     def end_event(self, stamp: float) -> EpisodeEvent | None:
         """The end event, once, when the episode has just ended; else None."""
+
+
+def episode_event(
+    request: EpisodeRequest,
+    phase: EpisodePhase,
+    stamp: float,
+    *,
+    filled: int,
+    total: int,
+    steps: int,
+    max_steps: int,
+) -> EpisodeEvent:
+    """The start or end event of ``request``'s episode: an episode ends in success exactly when
+    every required goal is filled, else because its step budget is spent."""
+    success = None
+    reason = ""
+    if phase is EpisodePhase.END:
+        success = filled == total
+        reason = "all goals filled" if success else f"step budget {max_steps} spent"
+    return EpisodeEvent(
+        episode_id=request.episode_id,
+        phase=phase,
+        task=request.task,
+        seed=request.seed,
+        goals_total=total,
+        goals_filled=filled,
+        steps=steps,
+        success=success,
+        reason=reason,
+        stamp=stamp,
+    )
 
 
 BACKENDS: dict[str, Callable[..., SimBackend]] = {}

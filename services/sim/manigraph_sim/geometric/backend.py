@@ -19,7 +19,7 @@ from manigraph_shared.messages import (
     SceneObject,
     Vector3,
 )
-from manigraph_sim.backend import SimBackend, register_backend
+from manigraph_sim.backend import SimBackend, episode_event, register_backend
 from manigraph_sim.geometric.world import GeometricWorld
 from manigraph_sim.tasks.from_request import episode_layout
 
@@ -136,22 +136,12 @@ class GeometricBackend(SimBackend):
 
     def _event(self, phase: EpisodePhase, stamp: float) -> EpisodeEvent:
         assert self.world is not None and self.request is not None
-        filled = self.required_filled()
-        total = len(self.required)
-        success = None
-        reason = ""
-        if phase is EpisodePhase.END:
-            success = filled == total
-            reason = "all goals filled" if success else f"step budget {self.max_steps} spent"
-        return EpisodeEvent(
-            episode_id=self.request.episode_id,
-            phase=phase,
-            task=self.request.task,
-            seed=self.request.seed,
-            goals_total=total,
-            goals_filled=filled,
+        return episode_event(
+            self.request,
+            phase,
+            stamp,
+            filled=self.required_filled(),
+            total=len(self.required),
             steps=self.steps,
-            success=success,
-            reason=reason,
-            stamp=stamp,
+            max_steps=self.max_steps,
         )

@@ -38,7 +38,7 @@ from manigraph_shared.messages import (
     SkillStatus,
     Vector3,
 )
-from manigraph_sim.backend import SimBackend
+from manigraph_sim.backend import SimBackend, episode_event
 from manigraph_sim.geometric.world import Body, GeometricWorld
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig
 from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
@@ -251,21 +251,12 @@ class PhysicsBackend(SimBackend):
 
     def _event(self, phase: EpisodePhase, stamp: float) -> EpisodeEvent:
         assert self.request is not None
-        filled, total = self.required_filled(), len(self.required)
-        success = None
-        reason = ""
-        if phase is EpisodePhase.END:
-            success = filled == total
-            reason = "all goals filled" if success else f"step budget {self.max_steps} spent"
-        return EpisodeEvent(
-            episode_id=self.request.episode_id,
-            phase=phase,
-            task=self.request.task,
-            seed=self.request.seed,
-            goals_total=total,
-            goals_filled=filled,
+        return episode_event(
+            self.request,
+            phase,
+            stamp,
+            filled=self.required_filled(),
+            total=len(self.required),
             steps=self.steps,
-            success=success,
-            reason=reason,
-            stamp=stamp,
+            max_steps=self.max_steps,
         )
