@@ -7,18 +7,11 @@ import numpy as np
 import pytest
 import sapien
 
+from manigraph_sim.physics.video import vulkan_available
 from manigraph_sim.tasks import get_task
 from manigraph_sim.tasks.base import TaskParams
 
 pytestmark = pytest.mark.slow
-
-
-def vulkan_available() -> bool:
-    try:
-        sapien.render.RenderSystem()
-    except RuntimeError:
-        return False
-    return True
 
 
 @pytest.mark.skipif(not vulkan_available(), reason="no Vulkan device (scripts/install-vulkan.sh)")

@@ -12,19 +12,9 @@ import numpy as np
 import pytest
 
 from manigraph_shared.errors import ConfigError
-from manigraph_sim.physics.video import VideoConfig
+from manigraph_sim.physics.video import VideoConfig, vulkan_available
 
 pytestmark = pytest.mark.slow
-
-
-def vulkan_available() -> bool:
-    import sapien
-
-    try:
-        sapien.render.RenderSystem()
-    except RuntimeError:
-        return False
-    return True
 
 
 @pytest.mark.skipif(not vulkan_available(), reason="no Vulkan device (scripts/install-vulkan.sh)")

@@ -21,6 +21,15 @@ CAMERA_EYE = np.array([1.05, 0.6, 0.55])
 CAMERA_TARGET = np.array([0.42, 0.0, 0.12])
 
 
+def vulkan_available() -> bool:
+    """Whether SAPIEN can open a render system here (a Vulkan device exists)."""
+    try:
+        sapien.render.RenderSystem()
+    except RuntimeError:
+        return False
+    return True
+
+
 def look_at(eye: np.ndarray, target: np.ndarray) -> sapien.Pose:
     """A SAPIEN camera pose (x forward, y left, z up) at ``eye`` looking at ``target``."""
     forward = (target - eye) / np.linalg.norm(target - eye)
