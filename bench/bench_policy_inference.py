@@ -6,10 +6,16 @@ weights (latency does not depend on training). Target: p50 <= 2 ms at K = 40 (80
 
     .venv/bin/python bench/bench_policy_inference.py [--iterations 300] [--rounds 3]
 
-glibc malloc note: at K = 40 the per-edge tensors are ~1.6 MB; with glibc's default dynamic
-mmap/trim thresholds they can be returned to the OS and page-faulted back on every call, which
-roughly doubles GAT latency depending on what ran before. Compare with
-``MALLOC_MMAP_THRESHOLD_=16777216 MALLOC_TRIM_THRESHOLD_=134217728`` in the environment.
+Timed: ``GNNPolicy.decide``, which runs the network's dense path for one complete graph
+(``PolicyNet.forward_complete``). For comparison, "mp best" times the same decision through
+PyG message passing over the edge index (``PolicyNet.forward``, what training and the
+explainer run, and what ``decide`` ran before the dense path); "speed-up" is their ratio.
+
+glibc malloc note: at K = 40 message passing's per-edge tensors are ~1.6 MB; with glibc's
+default dynamic mmap/trim thresholds they can be returned to the OS and page-faulted back on
+every call, which roughly doubles its latency depending on what ran before. Compare with
+``MALLOC_MMAP_THRESHOLD_=16777216 MALLOC_TRIM_THRESHOLD_=134217728`` in the environment. The
+dense path's largest tensor is the N x N attention matrix (25 kB at K = 40).
 
 p50/p99 are over all rounds; "best p50" is the lowest per-round median, the usual estimate of
 the cost on an unloaded machine (other processes only ever add time).
@@ -31,7 +37,9 @@ warnings.filterwarnings("ignore", category=FutureWarning)  # torch.jit.script, f
 from scenes import stack_scene  # noqa: E402  (bench/scenes.py)
 
 from manigraph_planner.gnn import ARCHITECTURES, ModelConfig, PolicyNet, scene_to_graph  # noqa: E402
-from manigraph_planner.policies.gnn import GNNPolicy  # noqa: E402
+from manigraph_planner.policies.base import Decision  # noqa: E402
+from manigraph_planner.policies.gnn import GNNPolicy, decision_from_logits  # noqa: E402
+from manigraph_shared.messages import Scene  # noqa: E402
 
 TARGET_MS = 2.0
 
@@ -53,6 +61,18 @@ def time_call(call: Callable[[], object], iterations: int) -> list[int]:
     return samples
 
 
+def decide_by_message_passing(policy: GNNPolicy, scene: Scene) -> Decision | None:
+    """``policy.decide(scene)`` with PyG message passing over the explicit edge index."""
+    graph = scene_to_graph(scene)
+    with torch.inference_mode():
+        logits = policy.net(graph.x, graph.edge_index)
+    return decision_from_logits(graph, logits)
+
+
+def best_p50_ms(call: Callable[[], object], iterations: int, rounds: int) -> float:
+    return min(percentiles_ms(time_call(call, iterations))[0] for _ in range(rounds))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--iterations", type=int, default=300, help="timed calls per round")
@@ -68,7 +88,7 @@ def main() -> None:
     )
     header = (
         f"{'arch':<6} {'K':>3} {'nodes':>5} {'build p50':>9} {'p50 ms':>7} {'p99 ms':>7}"
-        f" {'best p50':>8}  p50 / {TARGET_MS:g} ms"
+        f" {'best p50':>8} {'mp best':>7} {'speed-up':>8}  p50 / {TARGET_MS:g} ms"
     )
     print(header)
     print("-" * len(header))
@@ -82,10 +102,14 @@ def main() -> None:
             ]
             p50, p99 = percentiles_ms([t for samples in rounds for t in samples])
             best = min(percentiles_ms(samples)[0] for samples in rounds)
+            message_passing = best_p50_ms(
+                partial(decide_by_message_passing, policy, scene), args.iterations, args.rounds
+            )
             ratio = p50 / TARGET_MS
             print(
                 f"{arch:<6} {k:>3} {2 * k:>5} {build:>9.3f} {p50:>7.3f} {p99:>7.3f}"
-                f" {best:>8.3f}  {ratio:.2f}x"
+                f" {best:>8.3f} {message_passing:>7.3f} {message_passing / best:>7.1f}x"
+                f"  {ratio:.2f}x"
             )
 
 

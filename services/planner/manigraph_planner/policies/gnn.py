@@ -14,7 +14,7 @@ from manigraph_planner.gnn.models import PolicyNet
 from manigraph_planner.policies.base import POLICY_FILE_LOADERS, Decision, Policy
 from manigraph_shared.messages import Scene
 
-__all__ = ["GNNPolicy", "Probabilities"]
+__all__ = ["GNNPolicy", "Probabilities", "decision_from_logits"]
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,9 @@ class GNNPolicy(Policy):
     can never complete (e.g. box rearrangement before the second box is opened). Ties go to
     the node that comes first (scene order), so decisions are deterministic.
     Sets torch to one thread: a single small graph is latency-bound, and the planner shares
-    a 2-core machine with the simulator.
+    a 2-core machine with the simulator. For the same reason the network runs its dense path
+    for one complete graph (:meth:`PolicyNet.forward_complete`) rather than PyG message
+    passing over :math:`N (N - 1)` edges.
 
     Args:
         net: a trained :class:`PolicyNet`; switched to eval mode.
@@ -67,30 +69,45 @@ class GNNPolicy(Policy):
         net, info = load_checkpoint(path)
         return cls(net, info)
 
+    def node_logits(self, graph: GraphState) -> Tensor:
+        """The network's node logits for ``graph``, a complete graph like every graph state,
+        computed by the dense path (:meth:`PolicyNet.forward_complete`): same parameters and
+        maths as PyG message passing on ``graph.edge_index``, without per-edge tensors."""
+        with torch.inference_mode():
+            return self.net.forward_complete(graph.x)
+
     def probabilities(self, scene: Scene) -> Probabilities:
         graph = scene_to_graph(scene)
-        with torch.inference_mode():
-            logits = self.net(graph.x, graph.edge_index)
-            k = graph.num_objects
-            return Probabilities(graph, logits, logits[:k].softmax(0), logits[k:].softmax(0))
+        logits = self.node_logits(graph)
+        k = graph.num_objects
+        return Probabilities(graph, logits, logits[:k].softmax(0), logits[k:].softmax(0))
 
     def decide(self, scene: Scene) -> Decision | None:
         graph = scene_to_graph(scene)
         k = graph.num_objects
         if k == 0 or k == graph.num_nodes:
             return None
-        with torch.inference_mode():
-            logits = self.net(graph.x, graph.edge_index)
-        pair = best_compatible_pair(
-            logits[:k].log_softmax(0),
-            logits[k:].log_softmax(0),
-            graph.x[:k, 0],
-            graph.x[k:, 0],
-        )
-        if pair is None:
-            return None
-        object_index, goal_index = pair
-        return Decision(graph.object_ids[object_index], graph.goal_ids[goal_index])
+        return decision_from_logits(graph, self.node_logits(graph))
+
+
+def decision_from_logits(graph: GraphState, node_logits: Tensor) -> Decision | None:
+    """The most likely compatible (object, goal) pair of ``graph`` under ``node_logits``
+    (see :class:`GNNPolicy`); None when the graph has no compatible pair.
+
+    Shapes:
+        - **node_logits:** :math:`(N,)`, objects first, as in ``graph``
+    """
+    k = graph.num_objects
+    pair = best_compatible_pair(
+        node_logits[:k].log_softmax(0),
+        node_logits[k:].log_softmax(0),
+        graph.x[:k, 0],
+        graph.x[k:, 0],
+    )
+    if pair is None:
+        return None
+    object_index, goal_index = pair
+    return Decision(graph.object_ids[object_index], graph.goal_ids[goal_index])
 
 
 def best_compatible_pair(

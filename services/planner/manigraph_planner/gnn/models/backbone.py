@@ -7,6 +7,8 @@ from collections.abc import Callable
 
 from torch import Tensor, nn
 
+from manigraph_planner.gnn.features import fully_connected_edge_index
+
 __all__ = ["ARCHITECTURES", "Backbone", "ConvStack", "register_architecture"]
 
 
@@ -21,6 +23,10 @@ class Backbone(nn.Module, ABC):
     Shapes:
         - **input:** node features :math:`(N, F_{in})`, edge indices :math:`(2, E)`
         - **output:** hidden node states :math:`(N, F_{hidden})`
+
+    :meth:`forward` is PyG message passing: batches of disjoint graphs, any edges, edge masks
+    (training, the explainer). :meth:`forward_complete` is the same function of the same
+    parameters for one complete graph, which is what policy inference runs.
     """
 
     name: str
@@ -35,12 +41,23 @@ class Backbone(nn.Module, ABC):
     def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
         """Hidden node states."""
 
+    def forward_complete(self, x: Tensor) -> Tensor:
+        """Hidden node states of one complete graph without self loops, i.e. ``forward(x,
+        fully_connected_edge_index(N))`` up to float rounding.
+
+        This default runs :meth:`forward` on the explicit edge index; architectures override
+        it with dense algebra (:mod:`~manigraph_planner.gnn.models.complete_graph`), which
+        needs no per-edge tensors.
+        """
+        return self(x, fully_connected_edge_index(x.shape[0]))
+
 
 class ConvStack(Backbone):
     r"""``num_layers`` convolutions, each followed by ReLU:
     :math:`h^l = \mathrm{ReLU}(\mathrm{conv}_l(h^{l-1}, E))`, :math:`h^0 = \phi`.
 
-    Subclasses only say which convolution to stack, in :meth:`make_conv`.
+    Subclasses say which convolution to stack, in :meth:`make_conv`, and how one acts on a
+    complete graph, in :meth:`conv_complete`.
     """
 
     def __init__(self, in_channels: int, hidden_channels: int, num_layers: int) -> None:
@@ -54,9 +71,19 @@ class ConvStack(Backbone):
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
         """One message-passing layer, called as ``conv(x, edge_index)``."""
 
+    def conv_complete(self, conv: nn.Module, x: Tensor) -> Tensor:
+        """``conv(x, fully_connected_edge_index(N))`` for one layer made by :meth:`make_conv`;
+        this default builds the edge index, subclasses override it with dense algebra."""
+        return conv(x, fully_connected_edge_index(x.shape[0]))
+
     def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
         for conv in self.convs:
             x = conv(x, edge_index).relu()
+        return x
+
+    def forward_complete(self, x: Tensor) -> Tensor:
+        for conv in self.convs:
+            x = self.conv_complete(conv, x).relu()
         return x
 
 

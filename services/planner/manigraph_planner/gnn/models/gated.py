@@ -10,14 +10,18 @@ each step has its own :math:`\theta_1^l`, the GRU cell is shared across steps (a
 original GGNN). Input features are zero-padded to ``hidden_channels`` (``GatedGraphConv``
 needs ``in_channels <= hidden_channels``), so no learned input projection is added. One ReLU
 follows the last step, matching the other architectures' "ReLU hidden layers".
+PyG multiplies before aggregating (:math:`\theta_1^l h_j`, weight ``conv.weight[l]`` applied as
+``h @ weight[l]``) and calls the GRU cell as ``rnn(m, h)``; the dense path does the same.
 """
 
 from __future__ import annotations
 
+import torch.nn.functional as F
 from torch import Tensor
 from torch_geometric.nn import GatedGraphConv
 
 from manigraph_planner.gnn.models.backbone import Backbone, register_architecture
+from manigraph_planner.gnn.models.complete_graph import neighbour_sum
 from manigraph_shared.errors import ConfigError
 
 
@@ -37,3 +41,9 @@ class GatedBackbone(Backbone):
 
     def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
         return self.conv(x, edge_index).relu()
+
+    def forward_complete(self, x: Tensor) -> Tensor:
+        h = F.pad(x, (0, self.hidden_channels - x.shape[1]))  # [phi || 0], as PyG pads
+        for weight in self.conv.weight:
+            h = self.conv.rnn(neighbour_sum(h @ weight), h)
+        return h.relu()

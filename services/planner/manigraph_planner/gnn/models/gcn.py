@@ -7,15 +7,18 @@ r"""The paper's "GCN" policy layers (Morris et al., 2019, "Weisfeiler and Leman 
 This is exactly PyG's :class:`~torch_geometric.nn.conv.GraphConv` with ``aggr="add"``
 (``lin_root`` is :math:`\theta_1`, ``lin_rel`` is :math:`\theta_2`); not PyG's ``GCNConv``,
 which normalises by node degree and has no separate root weight. The graph state carries no
-edge weights, so :math:`e_{j,i} = 1`.
+edge weights, so :math:`e_{j,i} = 1`. On a complete graph the sum runs over every other node.
 """
 
 from __future__ import annotations
 
-from torch import nn
+from typing import cast
+
+from torch import Tensor, nn
 from torch_geometric.nn import GraphConv
 
 from manigraph_planner.gnn.models.backbone import ConvStack, register_architecture
+from manigraph_planner.gnn.models.complete_graph import neighbour_sum
 
 
 @register_architecture("gcn")
@@ -24,3 +27,7 @@ class GCNBackbone(ConvStack):
 
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
         return GraphConv(in_channels, out_channels, aggr="add")
+
+    def conv_complete(self, conv: nn.Module, x: Tensor) -> Tensor:
+        graph_conv = cast(GraphConv, conv)
+        return graph_conv.lin_rel(neighbour_sum(x)) + graph_conv.lin_root(x)

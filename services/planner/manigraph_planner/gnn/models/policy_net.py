@@ -52,3 +52,16 @@ class PolicyNet(nn.Module):
         del batch
         hidden = self.backbone(x * self.feature_scale, edge_index)
         return self.head(hidden).squeeze(-1)
+
+    def forward_complete(self, x: Tensor) -> Tensor:
+        """Node logits of one graph state, i.e. ``forward(x, fully_connected_edge_index(N))``
+        up to float rounding, by dense algebra without an edge index (see
+        :meth:`~manigraph_planner.gnn.models.Backbone.forward_complete`). What policy
+        inference runs; training batches and the explainer's edge masks need :meth:`forward`.
+
+        Shapes:
+            - **input:** node features :math:`(N, 5)`
+            - **output:** node logits :math:`(N,)`
+        """
+        hidden = self.backbone.forward_complete(x * self.feature_scale)
+        return self.head(hidden).squeeze(-1)

@@ -5,15 +5,19 @@ r"""The paper's "Sage" policy layers (Hamilton et al., 2017, GraphSAGE).
         + \frac{\theta_2}{|\mathcal{N}(i)|} \sum_{j \in \mathcal{N}(i)} h_j^{l-1}\Big)
 
 PyG's :class:`~torch_geometric.nn.conv.SAGEConv` with ``aggr="mean"`` and its root weight
-(``lin_r`` is :math:`\theta_1`, ``lin_l`` is :math:`\theta_2`).
+(``lin_r`` is :math:`\theta_1`, ``lin_l`` is :math:`\theta_2`). On a complete graph
+:math:`|\mathcal{N}(i)| = N - 1`.
 """
 
 from __future__ import annotations
 
-from torch import nn
+from typing import cast
+
+from torch import Tensor, nn
 from torch_geometric.nn import SAGEConv
 
 from manigraph_planner.gnn.models.backbone import ConvStack, register_architecture
+from manigraph_planner.gnn.models.complete_graph import neighbour_mean
 
 
 @register_architecture("sage")
@@ -22,3 +26,7 @@ class SAGEBackbone(ConvStack):
 
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
         return SAGEConv(in_channels, out_channels, aggr="mean", root_weight=True)
+
+    def conv_complete(self, conv: nn.Module, x: Tensor) -> Tensor:
+        sage_conv = cast(SAGEConv, conv)
+        return sage_conv.lin_l(neighbour_mean(x)) + sage_conv.lin_r(x)
