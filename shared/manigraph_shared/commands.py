@@ -257,6 +257,10 @@ def _sim_args(args: argparse.Namespace) -> list[str]:
         if args.sim != "physics":
             raise ConfigError("realtime", "needs --sim physics")
         extra.append("--realtime")
+    if args.box_geometry is not None:
+        if args.sim != "geometric":
+            raise ConfigError("box-geometry", "the physics world always has its own boxes")
+        extra += ["--box-geometry", args.box_geometry]
     return extra
 
 
@@ -275,6 +279,12 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--realtime", action="store_true", help="physics: simulate in real time, not flat out"
+    )
+    parser.add_argument(
+        "--box-geometry",
+        choices=["geometric", "physics"],
+        help="geometric sim: lay box tasks out with this geometry (physics: the physics "
+        "world's, to compare both worlds on the same layouts)",
     )
     parser.add_argument(
         "--explain-decisions",

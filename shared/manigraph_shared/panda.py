@@ -22,6 +22,14 @@ TCP_FRAME = "panda_hand_tcp"
 HOME_Q = np.array([0.0, -np.pi / 4, 0.0, -3 * np.pi / 4, 0.0, np.pi / 2, -np.pi / 4])
 #: Finger opening (each finger, metres) when open; closed is 0.
 FINGER_OPEN = 0.04
+#: The open fingers' collision shapes, measured in the TCP frame of the URDF: they reach
+#: this far out from the TCP along the closing axis (the pads' outer faces), ...
+FINGER_REACH = 0.066
+#: ... are this wide across it (half width) ...
+FINGER_HALF_WIDTH = 0.011
+#: ... and span from this far below the TCP to this far above it.
+FINGER_BELOW_TCP = 0.0095
+FINGER_ABOVE_TCP = 0.045
 
 
 def panda_urdf_path(name: str = "panda_v2.urdf") -> Path:

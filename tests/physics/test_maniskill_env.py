@@ -36,3 +36,30 @@ def test_gym_make_lays_out_the_seeded_task_and_judges_success() -> None:
         assert bool(info["success"][0]) and int(info["goals_filled"][0]) == 2
     finally:
         env.close()
+
+
+def test_box_packing_as_a_maniskill_env_without_a_render_device() -> None:
+    import gymnasium as gym
+
+    import manigraph_sim.physics.maniskill_env  # noqa: F401  (registers the environments)
+    from manigraph_sim.physics.box_layout import PHYSICS_BOXES
+
+    env = gym.make("Manigraph-BoxPack-v0", blocks=2, obs_mode="state", render_backend="none")
+    try:
+        _, info = env.reset(seed=3)
+        unwrapped = env.unwrapped
+        params = TaskParams(blocks=2, boxes=PHYSICS_BOXES)
+        layout = get_task("box-pack", params).layout(np.random.default_rng(3))
+        (box,) = layout.containers
+        assert np.allclose(unwrapped.boxes["box_0"].pose.p[0].numpy()[:2], box.centre, atol=1e-5)
+        for body in layout.bodies:
+            placed = unwrapped.blocks[body.id].pose.p[0].numpy()
+            assert np.allclose(placed, body.position, atol=1e-5)
+        # Only the cover is in a goal (its lid goal): not done until the blocks are in.
+        assert not bool(info["success"][0]) and int(info["goals_filled"][0]) == 1
+        for block, goal in zip(layout.bodies[:2], layout.goals[:2], strict=True):
+            unwrapped.blocks[block.id].set_pose(sapien.Pose(goal.position))
+        info = unwrapped.evaluate()
+        assert bool(info["success"][0]) and int(info["goals_filled"][0]) == 3
+    finally:
+        env.close()

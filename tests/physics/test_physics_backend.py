@@ -112,7 +112,7 @@ def test_goals_fill_by_the_documented_tolerance(offset: float, filled: bool) -> 
     assert scene.object("block_1").filled is filled
 
 
-def test_the_physics_sim_refuses_cartesian_gripper_commands_and_box_tasks() -> None:
+def test_the_physics_sim_refuses_cartesian_gripper_commands_and_unknown_tasks() -> None:
     backend = create_backend("physics")
     backend.reset(EpisodeRequest(episode_id="e", task="stack", blocks=2, seed=0), 1.0)
     command = RobotCommand(

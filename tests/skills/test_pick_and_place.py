@@ -13,7 +13,7 @@ from manigraph_shared.messages import (
     SkillStatus,
     Vector3,
 )
-from manigraph_skills.drivers.base import RobotDriver
+from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver
 from manigraph_skills.pick_and_place import PickAndPlace
 from manigraph_skills.workspace import Workspace
 
@@ -28,14 +28,24 @@ class RecordingArm(RobotDriver):
         self.fail_pick = fail_pick
 
     def pick(
-        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+        self,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+        grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         self.calls.append(("pick", object_id, position.as_tuple()))
         if self.fail_pick:
             raise SkillError(self.fail_pick, "as told")
 
     def place(
-        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+        self,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+        grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         self.calls.append(("place", object_id, position.as_tuple()))
 

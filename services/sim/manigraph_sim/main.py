@@ -28,6 +28,13 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         help="physics: render each episode to this .gif/.mp4 ({episode}, {seed} allowed; "
         "needs Vulkan, see scripts/install-vulkan.sh)",
     )
+    parser.add_argument(
+        "--box-geometry",
+        choices=["geometric", "physics"],
+        default=None,
+        help="geometric backend: lay box tasks out with this geometry (default geometric; "
+        "physics: the physics world's roomier boxes, for comparing the two worlds)",
+    )
     add_bus_arguments(parser)
 
 
@@ -55,6 +62,13 @@ def _run(args: argparse.Namespace) -> int:
         from manigraph_sim.physics.video import VideoConfig
 
         options["video"] = VideoConfig(args.video)
+    if args.box_geometry is not None:
+        if args.backend != "geometric":
+            raise ConfigError("box-geometry", "the physics backend always has its own boxes")
+        from manigraph_sim.physics.box_layout import PHYSICS_BOXES
+
+        if args.box_geometry == "physics":
+            options["boxes"] = PHYSICS_BOXES
     backend = create_backend(args.backend, **options)
     return run_service(
         lambda bus: SimService(bus, backend, args.publish_hz), bus_config_from_args(args)

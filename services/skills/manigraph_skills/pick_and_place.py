@@ -8,6 +8,7 @@ from collections.abc import Callable
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus, TrayAction
 from manigraph_skills.drivers.base import RobotDriver
+from manigraph_skills.grasp_choice import choose_grasps
 from manigraph_skills.workspace import Workspace
 
 SKILL = "pick_and_place"
@@ -53,8 +54,9 @@ class PickAndPlace:
                 if not self.workspace.contains(point):
                     raise SkillError("outside_workspace", f"{name} at {point.as_tuple()}")
             status(SkillState.RUNNING)
-            self.driver.pick(action.decision_id, item.id, item.position, item.orientation)
-            self.driver.place(action.decision_id, item.id, goal.position, goal.orientation)
+            pick, place = choose_grasps(scene, item, goal.position)
+            self.driver.pick(action.decision_id, item.id, item.position, item.orientation, pick)
+            self.driver.place(action.decision_id, item.id, goal.position, goal.orientation, place)
         except SkillError as exc:
             return status(SkillState.FAILED, exc.reason, exc.detail)
         return status(SkillState.SUCCEEDED)

@@ -9,29 +9,24 @@ from manigraph_shared.messages import (
     EpisodeEvent,
     EpisodePhase,
     EpisodeRequest,
-    GoalCategory,
     GripperOp,
-    ObjectCategory,
     RobotCommand,
     RobotFeedback,
     Scene,
-    SceneGoal,
-    SceneObject,
-    Vector3,
 )
 from manigraph_sim.backend import SimBackend, episode_event, register_backend
 from manigraph_sim.geometric.world import GeometricWorld
+from manigraph_sim.observation import observed_scene
+from manigraph_sim.tasks.box_geometry import BoxGeometry
 from manigraph_sim.tasks.from_request import episode_layout
-
-
-def _vec(values: np.ndarray) -> Vector3:
-    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
 
 
 @register_backend("geometric")
 class GeometricBackend(SimBackend):
-    def __init__(self, goal_tolerance: float = 0.01) -> None:
+    def __init__(self, goal_tolerance: float = 0.01, boxes: BoxGeometry | None = None) -> None:
         self.goal_tolerance = goal_tolerance
+        #: The box tasks' geometry (None: the default, the demonstrations').
+        self.boxes = boxes
         self.world: GeometricWorld | None = None
         self.required: set[str] = set()
         self.request: EpisodeRequest | None = None
@@ -42,7 +37,7 @@ class GeometricBackend(SimBackend):
         self._end_reported = True
 
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
-        episode = episode_layout(request)
+        episode = episode_layout(request, self.boxes)
         layout = episode.layout
         self.world = GeometricWorld(
             layout.bodies,
@@ -62,40 +57,8 @@ class GeometricBackend(SimBackend):
     def scene(self, stamp: float) -> Scene | None:
         if self.world is None or self.request is None:
             return None
-        world = self.world
-        world.observe()
-        occupancy = world.occupancy()
-        in_goal = set(occupancy.values())
-        objects = [
-            SceneObject(
-                id=body.id,
-                category=ObjectCategory(body.category),
-                position=_vec(body.position),
-                size=_vec(body.size),
-                filled=body.id in in_goal,
-                visible=not world.is_hidden(body.position),
-            )
-            for body in world.bodies.values()
-        ]
-        goals = [
-            SceneGoal(
-                id=goal.id,
-                category=GoalCategory(goal.category),
-                position=_vec(goal.position),
-                filled=goal.id in occupancy,
-                visible=not world.is_hidden(goal.position),
-            )
-            for goal in world.goals.values()
-        ]
         self.sequence += 1
-        return Scene(
-            episode_id=self.request.episode_id,
-            stamp=stamp,
-            sequence=self.sequence,
-            objects=objects,
-            goals=goals,
-            episode_ended=self.ended,
-        )
+        return observed_scene(self.world, self.request.episode_id, stamp, self.sequence, self.ended)
 
     def execute(self, command: RobotCommand, stamp: float) -> RobotFeedback:
         try:

@@ -7,6 +7,10 @@ fills a goal when its centre is within ``goal_tolerance`` metres of the goal's c
 not held. The default tolerance, 2 cm (half a block), accepts a block that settled a few
 millimetres off but not one resting on the neighbouring place or tipped over.
 
+Box tasks are laid out with the physical box geometry (``physics.box_layout``): static boxes,
+covers as dynamic bodies with a handle. What a closed box hides is decided by the geometric
+world's rule too (``GeometricWorld.is_hidden``), on the simulated poses.
+
 Steps are counted per finished skill of the episode (``SkillStatus``, failed ones too); the
 episode ends when every required goal is filled with the gripper open, or when the step
 budget is spent.
@@ -18,41 +22,36 @@ from pathlib import Path
 
 import numpy as np
 
-from manigraph_shared.errors import ConfigError, SkillError, TaskError
+from manigraph_shared.errors import ConfigError, SkillError
+from manigraph_shared.grasp_points import grasp_height
 from manigraph_shared.messages import (
     EpisodeEvent,
     EpisodePhase,
     EpisodeRequest,
-    GoalCategory,
     GripperTarget,
     JointState,
     JointTrajectoryCommand,
     JointTrajectoryResult,
-    ObjectCategory,
     Quaternion,
     RobotCommand,
     RobotFeedback,
     Scene,
-    SceneGoal,
-    SceneObject,
     SkillStatus,
-    Vector3,
 )
 from manigraph_sim.backend import SimBackend, episode_event
 from manigraph_sim.geometric.world import Body, GeometricWorld
+from manigraph_sim.observation import observed_scene
+from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig
 from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
 from manigraph_sim.tasks.base import Layout
 from manigraph_sim.tasks.from_request import episode_layout
 
-#: A block whose centre is this close to the TCP while the gripper is closed is held.
+#: A body whose grasp point (a block's centre, a cover's handle) is this close to the TCP
+#: while the gripper is closed is held.
 HELD_DISTANCE = 0.03
 #: A trajectory must start within this many radians (every joint) of where the arm is.
 START_TOLERANCE = 0.05
-
-
-def _vec(values: np.ndarray) -> Vector3:
-    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
 
 
 class PhysicsBackend(SimBackend):
@@ -78,6 +77,8 @@ class PhysicsBackend(SimBackend):
         self.layout: Layout | None = None
         self.request: EpisodeRequest | None = None
         self.required: set[str] = set()
+        #: Boxes seen open in this episode: their contents stay observed (partial observability).
+        self.revealed: set[str] = set()
         self.steps = 0
         self.max_steps = 0
         self.physics_steps = 0
@@ -87,11 +88,15 @@ class PhysicsBackend(SimBackend):
 
     # --- episodes ---------------------------------------------------------------------------
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
-        episode = episode_layout(request)
+        episode = episode_layout(request, boxes=PHYSICS_BOXES)
         layout = episode.layout
-        if layout.containers or any(body.category != "block" for body in layout.bodies):
-            raise TaskError(f"task: '{request.task}' needs boxes and covers, not in physics yet")
-        self.world = PhysicsWorld(layout.bodies, self.config, render=self.video_config is not None)
+        self.world = PhysicsWorld(
+            layout.bodies,
+            self.config,
+            render=self.video_config is not None,
+            containers=layout.containers,
+        )
+        self.revealed = set()
         if self.video_config is not None:
             self.video = EpisodeVideo(self.video_config, self.world.scene, self.config.timestep)
             self.world.on_step.append(self.video.on_step)
@@ -106,62 +111,52 @@ class PhysicsBackend(SimBackend):
         return self._event(EpisodePhase.START, stamp)
 
     def _geometric_view(self) -> GeometricWorld:
-        """The simulated poses as a geometric world, to apply its goal rule."""
+        """The simulated poses as a geometric world, to apply its goal and visibility rules."""
         assert self.world is not None and self.layout is not None
         world = self.world
+        layout = self.layout
         bodies = [
             Body(body.id, body.category, body.size, world.pose(body.id)[0])
-            for body in self.layout.bodies
+            for body in layout.bodies
         ]
-        view = GeometricWorld(bodies, self.layout.goals, self.goal_tolerance)
+        view = GeometricWorld(
+            bodies,
+            layout.goals,
+            self.goal_tolerance,
+            containers=layout.containers,
+            hide_inside_closed=layout.partially_observable,
+        )
+        view.revealed = self.revealed  # shared: what observing reveals stays revealed
         view.held = self.held()
         return view
 
     def held(self) -> str | None:
-        """The block between the closed fingers, if any."""
-        if self.world is None or not self.world.gripper_closed:
+        """The body whose grasp point is between the closed fingers, if any."""
+        if self.world is None or self.layout is None or not self.world.gripper_closed:
             return None
         tcp = self.world.tcp_position()
-        for body_id in self.world.entities:
-            if np.linalg.norm(self.world.pose(body_id)[0] - tcp) < HELD_DISTANCE:
-                return body_id
+        for body in self.layout.bodies:
+            position = self.world.pose(body.id)[0]
+            position[2] += grasp_height(body.category, body.size)
+            if np.linalg.norm(position - tcp) < HELD_DISTANCE:
+                return body.id
         return None
 
     def scene(self, stamp: float) -> Scene | None:
         if self.world is None or self.layout is None or self.request is None:
             return None
-        occupancy = self._geometric_view().occupancy()
-        in_goal = set(occupancy.values())
-        objects = []
+        orientations = {}
         for body in self.layout.bodies:
-            position, (x, y, z, w) = self.world.pose(body.id)
-            objects.append(
-                SceneObject(
-                    id=body.id,
-                    category=ObjectCategory(body.category),
-                    position=_vec(position),
-                    orientation=Quaternion(x=x, y=y, z=z, w=w),
-                    size=_vec(body.size),
-                    filled=body.id in in_goal,
-                )
-            )
-        goals = [
-            SceneGoal(
-                id=goal.id,
-                category=GoalCategory(goal.category),
-                position=_vec(goal.position),
-                filled=goal.id in occupancy,
-            )
-            for goal in self.layout.goals
-        ]
+            x, y, z, w = self.world.pose(body.id)[1]
+            orientations[body.id] = Quaternion(x=x, y=y, z=z, w=w)
         self.sequence += 1
-        return Scene(
-            episode_id=self.request.episode_id,
-            stamp=stamp,
-            sequence=self.sequence,
-            objects=objects,
-            goals=goals,
-            episode_ended=self.ended,
+        return observed_scene(
+            self._geometric_view(),
+            self.request.episode_id,
+            stamp,
+            self.sequence,
+            self.ended,
+            orientations,
         )
 
     def joint_state(self, stamp: float) -> JointState | None:

@@ -4,13 +4,17 @@
     import manigraph_sim.physics.maniskill_env  # registers the environments
     env = gym.make("Manigraph-Stack-v0", blocks=3, obs_mode="state")
 
-Layouts come from the same registered tasks and seeds as the sim service (``reset(seed=s)``
-lays out what ``--seed s`` does), with ManiSkill's own Panda agent at the origin of a table at
-z = 0. ManiSkill needs a Vulkan device even for state observations (see
-``scripts/install-vulkan.sh`` on CPU-only machines).
+Layouts come from the same registered tasks and seeds as the physics sim service
+(``reset(seed=s)`` lays out what ``--sim physics --seed s`` does, box tasks with the physical
+box geometry), with ManiSkill's own Panda agent at the origin of a table at z = 0. Boxes are
+kinematic actors moved to each episode's sites; covers are dynamic, with their handle. The
+state observation is complete: the box rearrangement's partial observability is the
+manigraph sim's (its ``Scene``), not modelled here. ManiSkill needs a Vulkan device even for
+state observations (see ``scripts/install-vulkan.sh`` on CPU-only machines).
 
-**Success Conditions**: every required goal holds a block: its centre within
-``goal_tolerance`` (2 cm) of the goal's, the geometric world's rule; the gripper has let go.
+**Success Conditions**: every required goal holds an object of its category: its centre
+within ``goal_tolerance`` (2 cm) of the goal's, the geometric world's rule; the gripper has
+let go.
 """
 
 from __future__ import annotations
@@ -24,13 +28,21 @@ from mani_skill.agents.robots import Panda
 from mani_skill.envs.sapien_env import BaseEnv
 from mani_skill.sensors.camera import CameraConfig
 from mani_skill.utils import sapien_utils
-from mani_skill.utils.building import actors
 from mani_skill.utils.building.ground import build_ground
 from mani_skill.utils.registration import register_env
 from mani_skill.utils.structs.pose import Pose
 
-from manigraph_shared.errors import TaskError
-from manigraph_sim.physics.world import BLOCK_COLOURS, FINGER_OPEN, HOME_Q
+from manigraph_sim.physics.box_layout import PHYSICS_BOXES
+from manigraph_sim.physics.world import (
+    BLOCK_COLOURS,
+    BOX_COLOUR,
+    COVER_COLOUR,
+    FINGER_OPEN,
+    HOME_Q,
+    PhysicsConfig,
+    body_parts,
+    box_walls,
+)
 from manigraph_sim.tasks import get_task
 from manigraph_sim.tasks.base import Layout, TaskParams
 
@@ -51,11 +63,10 @@ class ManigraphEnv(BaseEnv):
         robot_uids: str = "panda",
         **kwargs: Any,
     ) -> None:
-        self.task = get_task(self.task_name, TaskParams(blocks=blocks, stacks=stacks))
+        params = TaskParams(blocks=blocks, stacks=stacks, boxes=PHYSICS_BOXES)
+        self.task = get_task(self.task_name, params)
         self.goal_tolerance = goal_tolerance
         probe = self.task.layout(np.random.default_rng(0))
-        if probe.containers or any(body.category != "block" for body in probe.bodies):
-            raise TaskError(f"task: '{self.task_name}' needs boxes and covers, not in physics yet")
         self.body_ids = [body.id for body in probe.bodies]
         self.layout: Layout = probe
         super().__init__(*args, robot_uids=robot_uids, **kwargs)
@@ -74,21 +85,40 @@ class ManigraphEnv(BaseEnv):
         super()._load_agent(options, sapien.Pose(p=[0.0, 0.0, 0.0]))
 
     def _load_scene(self, options: dict) -> None:
+        """Every body and box of the task, parked off the table until an episode lays them
+        out (their number and sizes are the same for every seed)."""
         self.ground = build_ground(self.scene, altitude=0.0)
-        self.blocks = {
-            body_id: actors.build_cube(
-                self.scene,
-                half_size=0.02,
-                color=BLOCK_COLOURS[i % len(BLOCK_COLOURS)],
-                name=body_id,
-                initial_pose=sapien.Pose(p=[1.0 + 0.1 * i, 1.0, 0.02]),
-            )
-            for i, body_id in enumerate(self.body_ids)
-        }
+        config = PhysicsConfig()
+        visible = self.scene.can_render()  # no visual shapes with render_backend="none"
+        self.blocks = {}  # every body by id: blocks and covers
+        for i, body in enumerate(self.layout.bodies):
+            builder = self.scene.create_actor_builder()
+            cover = body.category == "cover"
+            colour = COVER_COLOUR if cover else BLOCK_COLOURS[i % len(BLOCK_COLOURS)]
+            density = config.density(body.category)
+            for pose, half in body_parts(body):
+                builder.add_box_collision(pose, half, density=density)
+                if visible:
+                    builder.add_box_visual(pose, half, material=colour)
+            builder.initial_pose = sapien.Pose(p=[1.0 + 0.3 * i, 1.0, 0.1])
+            self.blocks[body.id] = builder.build(name=body.id)
+        self.boxes = {}
+        for i, box in enumerate(self.layout.containers):
+            builder = self.scene.create_actor_builder()
+            for pose, half in box_walls(box):
+                builder.add_box_collision(pose, half)
+                if visible:
+                    builder.add_box_visual(pose, half, material=BOX_COLOUR)
+            builder.initial_pose = sapien.Pose(p=[1.0 + 0.3 * i, -1.0, 0.0])
+            self.boxes[box.id] = builder.build_kinematic(name=box.id)
 
     def _initialize_episode(self, env_idx: torch.Tensor, options: dict) -> None:
         seed = int(self._episode_seed[0])
         self.layout = self.task.layout(np.random.default_rng(seed))
+        for box in self.layout.containers:
+            self.boxes[box.id].set_pose(
+                Pose.create_from_pq(p=torch.tensor([*box.centre, 0.0], dtype=torch.float32)[None])
+            )
         for body in self.layout.bodies:
             self.blocks[body.id].set_pose(
                 Pose.create_from_pq(p=torch.tensor(body.position, dtype=torch.float32)[None])
@@ -101,12 +131,17 @@ class ManigraphEnv(BaseEnv):
         self.required = torch.tensor(
             [goal.id in self.layout.required_goals() for goal in self.layout.goals]
         )
+        #: goal x body: the body's category fills the goal.
+        self.fits = torch.tensor(
+            [[g.category == b.category for b in self.layout.bodies] for g in self.layout.goals]
+        )
 
     def _block_positions(self) -> torch.Tensor:
         return torch.stack([self.blocks[i].pose.p[0] for i in self.body_ids])
 
     def evaluate(self) -> dict[str, torch.Tensor]:
         distance = torch.cdist(self.goal_positions, self._block_positions())
+        distance[~self.fits] = torch.inf
         filled = distance.min(dim=1).values <= self.goal_tolerance
         grasping = torch.stack(
             [self.agent.is_grasping(self.blocks[i])[0] for i in self.body_ids]
@@ -121,7 +156,8 @@ class ManigraphEnv(BaseEnv):
         obs = {"tcp_pose": self.agent.tcp.pose.raw_pose}
         if "state" in self.obs_mode:
             poses = torch.stack([self.blocks[i].pose.raw_pose[0] for i in self.body_ids])
-            obs["block_poses"] = poses.reshape(1, -1)  # K x (x, y, z, qw, qx, qy, qz)
+            # bodies in layout order (blocks, then covers) x (x, y, z, qw, qx, qy, qz)
+            obs["block_poses"] = poses.reshape(1, -1)
             obs["goal_positions"] = self.goal_positions.reshape(1, -1)  # G x (x, y, z)
         return obs
 
@@ -154,3 +190,24 @@ class ManigraphMultiStackEnv(ManigraphEnv):
     """K-block s-stack (manigraph's ``multistack`` task)."""
 
     task_name = "multistack"
+
+
+@register_env("Manigraph-BoxPack-v0", max_episode_steps=4000)
+class ManigraphBoxPackEnv(ManigraphEnv):
+    """Box packing (manigraph's ``box-pack`` task): cover off, blocks in, cover back on."""
+
+    task_name = "box-pack"
+
+
+@register_env("Manigraph-BoxUnpack-v0", max_episode_steps=4000)
+class ManigraphBoxUnpackEnv(ManigraphEnv):
+    """Box unpacking (manigraph's ``box-unpack`` task): cover off, blocks out, cover back."""
+
+    task_name = "box-unpack"
+
+
+@register_env("Manigraph-BoxRearrangement-v0", max_episode_steps=6000)
+class ManigraphBoxRearrangementEnv(ManigraphEnv):
+    """Box rearrangement (``box-rearrangement``): blocks from one closed box to the other."""
+
+    task_name = "box-rearrangement"

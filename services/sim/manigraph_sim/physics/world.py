@@ -1,4 +1,5 @@
-"""A SAPIEN 3 tabletop: the Panda, the table and 4 cm blocks; physics only unless rendering.
+"""A SAPIEN 3 tabletop: the Panda, the table, 4 cm blocks, static open boxes and covers with
+a handle (``manigraph_shared.grasp_points``); physics only unless rendering.
 
 The robot is the Panda URDF shipped with mani-skill, loaded without its visual meshes, so the
 world runs on machines with no Vulkan device (only a video needs one). Its links ignore
@@ -18,13 +19,16 @@ import sapien
 from sapien import physx
 
 from manigraph_shared.errors import ConfigError
+from manigraph_shared.grasp_points import COVER_HANDLE_SIZE, handle_offset
 from manigraph_shared.panda import ARM_JOINTS, FINGER_OPEN, HOME_Q, panda_urdf_path
-from manigraph_sim.geometric.world import Body
+from manigraph_sim.geometric.world import Body, Container
 
 #: Where an episode starts: Franka's "ready" pose with the hand turned a quarter, TCP at
 #: (0.31, 0, 0.49) m, high and close to the base so it clears every stack of a layout.
 #: (The skills' motion model starts its plans from the same pose.)
 TABLE_COLOUR = [0.62, 0.5, 0.38, 1.0]
+BOX_COLOUR = [0.75, 0.72, 0.65, 1.0]
+COVER_COLOUR = [0.45, 0.42, 0.38, 1.0]
 #: Block colours when rendering (RGBA), cycled by block index.
 BLOCK_COLOURS = [
     [0.85, 0.25, 0.2, 1.0],
@@ -34,6 +38,30 @@ BLOCK_COLOURS = [
     [0.6, 0.35, 0.75, 1.0],
     [0.95, 0.5, 0.15, 1.0],
 ]
+
+
+def body_parts(body: Body) -> list[tuple[sapien.Pose, np.ndarray]]:
+    """A body's collision boxes (pose relative to the body's centre, half size): a block;
+    a cover's plate and the handle on top of it."""
+    parts = [(sapien.Pose(), body.size / 2)]
+    if body.category == "cover":
+        parts.append((sapien.Pose([0.0, 0.0, handle_offset(body.size)]), COVER_HANDLE_SIZE / 2))
+    return parts
+
+
+def box_walls(box: Container) -> list[tuple[sapien.Pose, np.ndarray]]:
+    """An open box's four walls around ``box.inner``, ``box.height`` tall (pose relative to
+    the box's centre on the table, half size)."""
+    walls = []
+    half_outer = box.inner / 2 + box.wall
+    for axis in (0, 1):
+        for side in (-1.0, 1.0):
+            centre = np.array([0.0, 0.0, box.height / 2])
+            centre[axis] = side * (box.inner[axis] + box.wall) / 2
+            half = np.array([half_outer[0], half_outer[1], box.height / 2])
+            half[axis] = box.wall / 2
+            walls.append((sapien.Pose(centre), half))
+    return walls
 
 
 @dataclass(frozen=True)
@@ -47,29 +75,38 @@ class PhysicsConfig:
     block_friction: float = 2.0
     table_friction: float = 1.0
     block_density: float = 1000.0  # kg / m^3: a 4 cm block weighs 64 g
+    cover_density: float = 400.0  # kg / m^3 (a plastic crate lid): a 27 cm cover ~0.3 kg
     settle_time: float = 0.2  # seconds simulated after a motion so things come to rest
 
     def __post_init__(self) -> None:
         if not 1e-4 <= self.timestep <= 0.05:
             raise ConfigError("physics.timestep", "must be in [1e-4, 0.05] seconds")
-        for name in ("drive_stiffness", "drive_damping", "block_density"):
+        for name in ("drive_stiffness", "drive_damping", "block_density", "cover_density"):
             if getattr(self, name) <= 0:
                 raise ConfigError(f"physics.{name}", "must be > 0")
         for name in ("finger_friction", "block_friction", "table_friction", "settle_time"):
             if getattr(self, name) < 0:
                 raise ConfigError(f"physics.{name}", "must be >= 0")
 
+    def density(self, category: str) -> float:
+        return self.cover_density if category == "cover" else self.block_density
+
 
 class PhysicsWorld:
     """One episode's SAPIEN scene. Build a new one per episode: a fresh scene stepped with
     the same commands gives the same result (seeded determinism).
 
-    With ``render=True`` the robot and blocks also get visual shapes (for a video camera);
+    Boxes (``containers``) are static: four walls standing on the table, open at the top.
+    With ``render=True`` the robot and bodies also get visual shapes (for a video camera);
     that needs a Vulkan device. ``on_step`` callbacks run after every physics step.
     """
 
     def __init__(
-        self, bodies: list[Body], config: PhysicsConfig | None = None, render: bool = False
+        self,
+        bodies: list[Body],
+        config: PhysicsConfig | None = None,
+        render: bool = False,
+        containers: list[Container] | None = None,
     ) -> None:
         self.config = config or PhysicsConfig()
         c = self.config
@@ -90,24 +127,39 @@ class PhysicsWorld:
         self.joints = self.robot.active_joints
         self.arm = [j for j in self.joints if j.name in ARM_JOINTS]
         self.fingers = [j for j in self.joints if j.name not in ARM_JOINTS]
-        block_material = physx.PhysxMaterial(c.block_friction, c.block_friction, 0.0)
-        self.blocks: dict[str, physx.PhysxRigidDynamicComponent] = {}
+        self.material = physx.PhysxMaterial(c.block_friction, c.block_friction, 0.0)
+        for box in containers or []:
+            self._add_box(box)
         self.entities: dict[str, sapien.Entity] = {}
         for index, body in enumerate(bodies):
-            builder = self.scene.create_actor_builder()
-            builder.add_box_collision(
-                half_size=body.size / 2, material=block_material, density=c.block_density
-            )
-            if render:
-                colour = BLOCK_COLOURS[index % len(BLOCK_COLOURS)]
-                builder.add_box_visual(half_size=body.size / 2, material=colour)
-            entity = builder.build(name=body.id)
-            entity.set_pose(sapien.Pose(body.position))
-            self.entities[body.id] = entity
+            self.entities[body.id] = self._add_body(body, BLOCK_COLOURS[index % len(BLOCK_COLOURS)])
         self.set_targets(HOME_Q, closed=False)
         self.robot.set_qpos(np.concatenate([HOME_Q, [FINGER_OPEN, FINGER_OPEN]]))
         self.gripper_closed = False
         self.step(round(c.settle_time / c.timestep))
+
+    def _add_body(self, body: Body, colour: list[float]) -> sapien.Entity:
+        """A dynamic block, or a cover (plate and handle one rigid body, its pose the
+        plate's centre)."""
+        builder = self.scene.create_actor_builder()
+        cover = body.category == "cover"
+        density = self.config.density(body.category)
+        for pose, half in body_parts(body):
+            builder.add_box_collision(pose, half, material=self.material, density=density)
+            if self.render:
+                builder.add_box_visual(pose, half, material=COVER_COLOUR if cover else colour)
+        entity = builder.build(name=body.id)
+        entity.set_pose(sapien.Pose(body.position))
+        return entity
+
+    def _add_box(self, box: Container) -> None:
+        builder = self.scene.create_actor_builder()
+        for pose, half in box_walls(box):
+            builder.add_box_collision(pose, half, material=self.material)
+            if self.render:
+                builder.add_box_visual(pose, half, material=BOX_COLOUR)
+        entity = builder.build_static(name=box.id)
+        entity.set_pose(sapien.Pose([box.centre[0], box.centre[1], 0.0]))
 
     def _load_panda(self) -> physx.PhysxArticulation:
         c = self.config
@@ -138,7 +190,8 @@ class PhysicsWorld:
         return float(np.clip(np.sum(self.robot.qpos[len(self.arm) :]), 0.0, 0.2))
 
     def pose(self, body_id: str) -> tuple[np.ndarray, np.ndarray]:
-        """Centre (x, y, z) and orientation quaternion (x, y, z, w) of a block."""
+        """Centre (x, y, z) and orientation quaternion (x, y, z, w) of a body (a cover's:
+        its plate's)."""
         pose = self.entities[body_id].pose
         w, x, y, z = (float(v) for v in pose.q)  # SAPIEN stores (w, x, y, z)
         return np.asarray(pose.p, dtype=float), np.array([x, y, z, w])

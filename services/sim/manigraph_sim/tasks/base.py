@@ -5,11 +5,15 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from manigraph_shared.errors import TaskError
 from manigraph_sim.geometric.world import Body, Container, Goal
+
+if TYPE_CHECKING:
+    from manigraph_sim.tasks.box_geometry import BoxGeometry
 
 BLOCK_SIZE = 0.04
 #: Where stacks and boxes may be placed, robot frame, metres: in front of a Panda.
@@ -41,6 +45,8 @@ class Layout:
 class TaskParams:
     blocks: int = 4
     stacks: int = 1
+    #: The box tasks' geometry; None: the geometric world's (``BoxGeometry()``).
+    boxes: BoxGeometry | None = None
 
 
 class Task(ABC):
@@ -105,12 +111,17 @@ def stack_goals(prefix: str, base: np.ndarray, count: int, first: int = 0) -> li
     ]
 
 
-def sample_sites(rng: np.random.Generator, count: int, min_distance: float) -> list[np.ndarray]:
-    """``count`` table positions at least ``min_distance`` apart, inside the workspace."""
+def sample_sites(
+    rng: np.random.Generator,
+    count: int,
+    min_distance: float,
+    area: tuple[tuple[float, float], tuple[float, float]] = (WORKSPACE_X, WORKSPACE_Y),
+) -> list[np.ndarray]:
+    """``count`` table positions at least ``min_distance`` apart, inside ``area`` (x and y
+    bounds; default the workspace)."""
+    x_range, y_range = area
     for _ in range(1000):
-        sites = [
-            np.array([rng.uniform(*WORKSPACE_X), rng.uniform(*WORKSPACE_Y)]) for _ in range(count)
-        ]
+        sites = [np.array([rng.uniform(*x_range), rng.uniform(*y_range)]) for _ in range(count)]
         if all(
             np.linalg.norm(a - b) >= min_distance
             for i, a in enumerate(sites)
@@ -118,3 +129,26 @@ def sample_sites(rng: np.random.Generator, count: int, min_distance: float) -> l
         ):
             return sites
     raise TaskError(f"cannot fit {count} sites {min_distance} m apart in the workspace")
+
+
+def sample_square_sites(
+    rng: np.random.Generator,
+    count: int,
+    side: float,
+    area: tuple[tuple[float, float], tuple[float, float]],
+    batch: int = 4096,
+    batches: int = 64,
+) -> list[np.ndarray]:
+    """``count`` positions inside ``area`` whose squares of ``side`` never overlap (every
+    pair at least ``side`` apart along x or y). Such layouts can be rare when the squares
+    are large, so candidates are drawn and checked a batch at a time."""
+    low = np.array([area[0][0], area[1][0]])
+    high = np.array([area[0][1], area[1][1]])
+    apart = ~np.eye(count, dtype=bool)
+    for _ in range(batches):
+        sites = rng.uniform(low, high, size=(batch, count, 2))
+        gaps = np.abs(sites[:, :, None] - sites[:, None, :]).max(axis=-1)
+        fits = np.all((gaps >= side) | ~apart, axis=(1, 2))
+        if fits.any():
+            return list(sites[int(np.argmax(fits))])
+    raise TaskError(f"cannot fit {count} squares of {side} m side in the area {area}")

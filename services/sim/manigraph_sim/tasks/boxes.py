@@ -12,56 +12,54 @@ from manigraph_sim.tasks.base import (
     Task,
     register_task,
     sample_sites,
+    sample_square_sites,
     stack_bodies,
     stack_goals,
 )
-
-BOX_INNER = 0.14  # room for a 3 x 3 grid of blocks
-BOX_WALL = 0.01
-BOX_HEIGHT = 0.06
-COVER_SIZE = np.array([BOX_INNER + 2 * BOX_WALL, BOX_INNER + 2 * BOX_WALL, 0.01])
-GRID_PITCH = 0.045
-MAX_BLOCKS = 9
-#: Sites (boxes, stacks, cover storage) keep this far apart so nothing overlaps.
-SITE_DISTANCE = 0.2
+from manigraph_sim.tasks.box_geometry import BoxGeometry
 
 
-def box_at(name: str, site: np.ndarray) -> Container:
-    return Container(name, site.copy(), np.full(2, BOX_INNER), BOX_WALL, BOX_HEIGHT)
+def box_at(name: str, site: np.ndarray, geometry: BoxGeometry) -> Container:
+    inner = np.full(2, geometry.inner)
+    return Container(name, site.copy(), inner, geometry.wall, geometry.height)
 
 
-def lid_height() -> float:
-    return BOX_HEIGHT + COVER_SIZE[2] / 2
+def cover_on(name: str, site: np.ndarray, geometry: BoxGeometry) -> Body:
+    position = np.array([site[0], site[1], geometry.lid_height])
+    return Body(name, "cover", geometry.cover_size, position)
 
 
-def cover_on(name: str, site: np.ndarray) -> Body:
-    return Body(name, "cover", COVER_SIZE.copy(), np.array([site[0], site[1], lid_height()]))
+def lid_goal(name: str, site: np.ndarray, geometry: BoxGeometry) -> Goal:
+    return Goal(name, "cover", np.array([site[0], site[1], geometry.lid_height]))
 
 
-def lid_goal(name: str, site: np.ndarray) -> Goal:
-    return Goal(name, "cover", np.array([site[0], site[1], lid_height()]))
-
-
-def storage_goal(name: str, site: np.ndarray) -> Goal:
-    return Goal(name, "cover", np.array([site[0], site[1], COVER_SIZE[2] / 2]))
-
-
-def grid(site: np.ndarray, count: int) -> list[np.ndarray]:
-    """``count`` block centres inside a box, row by row on its floor."""
-    cells = [(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)]
-    cells.sort(key=lambda c: (abs(c[0]) + abs(c[1]), c))  # centre first, then around it
-    return [
-        np.array([site[0] + i * GRID_PITCH, site[1] + j * GRID_PITCH, BLOCK_SIZE / 2])
-        for i, j in cells[:count]
-    ]
+def storage_goal(name: str, site: np.ndarray, geometry: BoxGeometry) -> Goal:
+    return Goal(name, "cover", np.array([site[0], site[1], geometry.cover_thickness / 2]))
 
 
 class BoxTask(Task):
+    """The box tasks share a geometry (``TaskParams.boxes``) and how they place sites."""
+
+    @property
+    def geometry(self) -> BoxGeometry:
+        return self.params.boxes or BoxGeometry()
+
     def validate(self) -> None:
         if self.params.stacks != 1:
             raise TaskError(f"stacks: {self.name} has one stack of blocks")
-        if not 1 <= self.params.blocks <= MAX_BLOCKS:
-            raise TaskError(f"blocks: must be in 1..{MAX_BLOCKS} (one box layer)")
+        most = self.geometry.max_blocks
+        if not 1 <= self.params.blocks <= most:
+            raise TaskError(f"blocks: must be in 1..{most} (one box layer)")
+
+    def sites(self, rng: np.random.Generator, count: int) -> list[np.ndarray]:
+        g = self.geometry
+        area = (g.site_x, g.site_y)
+        if g.square_sites:
+            return sample_square_sites(rng, count, g.site_distance, area)
+        return sample_sites(rng, count, g.site_distance, area)
+
+    def grid(self, site: np.ndarray) -> list[np.ndarray]:
+        return self.geometry.grid(site, self.params.blocks, BLOCK_SIZE)
 
     def max_steps(self, goals: int) -> int:
         return 2 * goals + 6
@@ -81,12 +79,13 @@ class BoxPackTask(BoxTask):
     """
 
     def layout(self, rng: np.random.Generator) -> Layout:
-        box_site, stack_site, store_site = sample_sites(rng, 3, SITE_DISTANCE)
+        g = self.geometry
+        box_site, stack_site, store_site = self.sites(rng, 3)
         k = self.params.blocks
-        goals = [Goal(f"goal_{i}", "block", centre) for i, centre in enumerate(grid(box_site, k))]
-        goals += [lid_goal("lid_goal_0", box_site), storage_goal("storage_0", store_site)]
-        bodies = [*stack_bodies("block", stack_site, k), cover_on("cover_0", box_site)]
-        return Layout(bodies, goals, [box_at("box_0", box_site)], {"storage_0"})
+        goals = [Goal(f"goal_{i}", "block", centre) for i, centre in enumerate(self.grid(box_site))]
+        goals += [lid_goal("lid_goal_0", box_site, g), storage_goal("storage_0", store_site, g)]
+        bodies = [*stack_bodies("block", stack_site, k), cover_on("cover_0", box_site, g)]
+        return Layout(bodies, goals, [box_at("box_0", box_site, g)], {"storage_0"})
 
 
 @register_task("box-unpack")
@@ -103,16 +102,16 @@ class BoxUnpackTask(BoxTask):
     """
 
     def layout(self, rng: np.random.Generator) -> Layout:
-        box_site, stack_site, store_site = sample_sites(rng, 3, SITE_DISTANCE)
-        k = self.params.blocks
+        g = self.geometry
+        box_site, stack_site, store_site = self.sites(rng, 3)
         bodies = [
             Body(f"block_{i}", "block", np.full(3, BLOCK_SIZE), c)
-            for i, c in enumerate(grid(box_site, k))
+            for i, c in enumerate(self.grid(box_site))
         ]
-        bodies.append(cover_on("cover_0", box_site))
-        goals = stack_goals("goal", stack_site, k)
-        goals += [lid_goal("lid_goal_0", box_site), storage_goal("storage_0", store_site)]
-        return Layout(bodies, goals, [box_at("box_0", box_site)], {"storage_0"})
+        bodies.append(cover_on("cover_0", box_site, g))
+        goals = stack_goals("goal", stack_site, self.params.blocks)
+        goals += [lid_goal("lid_goal_0", box_site, g), storage_goal("storage_0", store_site, g)]
+        return Layout(bodies, goals, [box_at("box_0", box_site, g)], {"storage_0"})
 
 
 @register_task("box-rearrangement")
@@ -131,24 +130,24 @@ class BoxRearrangementTask(BoxTask):
     """
 
     def layout(self, rng: np.random.Generator) -> Layout:
-        full_site, empty_site, store_a, store_b = sample_sites(rng, 4, SITE_DISTANCE)
-        k = self.params.blocks
+        g = self.geometry
+        full_site, empty_site, store_a, store_b = self.sites(rng, 4)
         bodies = [
             Body(f"block_{i}", "block", np.full(3, BLOCK_SIZE), c)
-            for i, c in enumerate(grid(full_site, k))
+            for i, c in enumerate(self.grid(full_site))
         ]
-        bodies += [cover_on("cover_0", full_site), cover_on("cover_1", empty_site)]
-        goals = [Goal(f"goal_{i}", "block", c) for i, c in enumerate(grid(empty_site, k))]
+        bodies += [cover_on("cover_0", full_site, g), cover_on("cover_1", empty_site, g)]
+        goals = [Goal(f"goal_{i}", "block", c) for i, c in enumerate(self.grid(empty_site))]
         goals += [
-            lid_goal("lid_goal_0", full_site),
-            lid_goal("lid_goal_1", empty_site),
-            storage_goal("storage_0", store_a),
-            storage_goal("storage_1", store_b),
+            lid_goal("lid_goal_0", full_site, g),
+            lid_goal("lid_goal_1", empty_site, g),
+            storage_goal("storage_0", store_a, g),
+            storage_goal("storage_1", store_b, g),
         ]
         return Layout(
             bodies,
             goals,
-            [box_at("box_0", full_site), box_at("box_1", empty_site)],
+            [box_at("box_0", full_site, g), box_at("box_1", empty_site, g)],
             {"storage_0", "storage_1"},
             partially_observable=True,
         )

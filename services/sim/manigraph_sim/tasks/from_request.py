@@ -9,6 +9,7 @@ import numpy as np
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_sim.tasks.base import Layout, Task, TaskParams, get_task
+from manigraph_sim.tasks.box_geometry import BoxGeometry
 from manigraph_sim.tasks.task_file import FileTask, parse_task_file
 
 
@@ -20,15 +21,17 @@ class EpisodeLayout:
     max_steps: int
 
 
-def episode_layout(request: EpisodeRequest) -> EpisodeLayout:
+def episode_layout(request: EpisodeRequest, boxes: BoxGeometry | None = None) -> EpisodeLayout:
     """The layout of ``request``: a registered task, or the user's task file (its text travels
-    in the request). Raises ``TaskError`` naming the field for a bad task or file."""
+    in the request); box tasks with ``boxes`` (default: the geometric world's geometry).
+    Raises ``TaskError`` naming the field for a bad task or file."""
     if request.task == "file" or request.task_file is not None:
         if request.task_file is None:
             raise TaskError("task_file: task 'file' needs the task file's text")
         task: Task = FileTask(parse_task_file(request.task_file))
     else:
-        task = get_task(request.task, TaskParams(blocks=request.blocks, stacks=request.stacks))
+        params = TaskParams(blocks=request.blocks, stacks=request.stacks, boxes=boxes)
+        task = get_task(request.task, params)
     layout = task.layout(np.random.default_rng(request.seed))
     layout.validate()
     return EpisodeLayout(layout, request.max_steps or task.max_steps(len(layout.goals)))

@@ -4,9 +4,24 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from dataclasses import dataclass
 
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import Quaternion, Vector3
+
+
+@dataclass(frozen=True)
+class Grasp:
+    """How to hold an object, chosen by the skill from the scene (``grasp_choice``); a
+    driver without fingers to place (the geometric world's magic gripper) ignores it."""
+
+    height: float = 0.0  # TCP above the object's centre, metres (a cover: at its handle)
+    turn: float = 0.0  # hand yaw added to the driver's default, radians
+    carry_z: float = 0.0  # lowest TCP height for carrying the object across, metres
+
+
+#: A block's grasp at its centre, the driver's default yaw and carry heights.
+CENTRE_GRASP = Grasp()
 
 
 class RobotDriver(ABC):
@@ -16,13 +31,23 @@ class RobotDriver(ABC):
 
     @abstractmethod
     def pick(
-        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+        self,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+        grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         """Grasp ``object_id`` whose centre is at ``position`` and lift it clear."""
 
     @abstractmethod
     def place(
-        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+        self,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+        grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         """Carry the held object so its centre is at ``position`` and release it."""
 

@@ -9,7 +9,7 @@ import time
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import GripperOp, Quaternion, RobotCommand, RobotFeedback, Vector3
-from manigraph_skills.drivers.base import RobotDriver, register_driver
+from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver, register_driver
 
 
 @register_driver("sim-gripper")
@@ -66,11 +66,21 @@ class BusGripperDriver(RobotDriver):
             raise SkillError(feedback.reason or "driver_error", feedback.detail)
 
     def pick(
-        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+        self,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+        grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         self._send(GripperOp.PICK, decision_id, object_id, position, orientation)
 
     def place(
-        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+        self,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+        grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         self._send(GripperOp.PLACE, decision_id, object_id, position, orientation)

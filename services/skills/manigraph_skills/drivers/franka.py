@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import Quaternion, Vector3
-from manigraph_skills.drivers.base import RobotDriver, register_driver
+from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver, register_driver
 
 
 @register_driver("franka")
@@ -21,11 +21,21 @@ class FrankaDriver(RobotDriver):
         )
 
     def pick(
-        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+        self,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+        grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         raise NotImplementedError
 
     def place(
-        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+        self,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+        grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         raise NotImplementedError

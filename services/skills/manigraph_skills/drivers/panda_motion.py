@@ -28,9 +28,9 @@ from manigraph_shared.messages import (
     Quaternion,
     Vector3,
 )
-from manigraph_skills.drivers.base import RobotDriver
+from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver
 from manigraph_skills.motion import GraspPlanner, JointTrajectory, PandaModel, PlanConfig
-from manigraph_skills.motion.plan import grasp_yaw
+from manigraph_skills.motion.plan import UP, grasp_yaw
 
 
 class JointTransport(Protocol):
@@ -71,11 +71,18 @@ class PandaMotionDriver(RobotDriver):
         self._ids = itertools.count()
 
     def pick(
-        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+        self,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+        grasp: Grasp = CENTRE_GRASP,
     ) -> None:
-        target = np.array(position.as_tuple())
-        yaw = self.planner.config.hand_yaw + grasp_yaw(
-            (orientation.x, orientation.y, orientation.z, orientation.w)
+        target = np.array(position.as_tuple()) + grasp.height * UP
+        yaw = (
+            self.planner.config.hand_yaw
+            + grasp.turn
+            + grasp_yaw((orientation.x, orientation.y, orientation.z, orientation.w))
         )
         result = self._run(decision_id, lambda q: self.planner.pick(q, target, yaw))
         if result.gripper_width < self.min_grasp_width:
@@ -86,12 +93,21 @@ class PandaMotionDriver(RobotDriver):
             )
 
     def place(
-        self, decision_id: str, object_id: str, position: Vector3, orientation: Quaternion
+        self,
+        decision_id: str,
+        object_id: str,
+        position: Vector3,
+        orientation: Quaternion,
+        grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         target = np.array(position.as_tuple())
-        # The block turned with the hand at the grasp; turn back so it lands square.
-        yaw = self.planner.config.hand_yaw
-        carry = self._run(decision_id, lambda q: self.planner.place(q, target, yaw))
+        hand = target + grasp.height * UP
+        # The object turned with the hand at the grasp; turn back so it lands square (a
+        # block or a square cover looks the same after a quarter turn).
+        yaw = self.planner.config.hand_yaw + grasp.turn
+        carry = self._run(
+            decision_id, lambda q: self.planner.place(q, hand, yaw, carry_z=grasp.carry_z)
+        )
         if carry.gripper_width < self.min_grasp_width:
             self._open(decision_id)
             raise SkillError("grasp_slipped", f"{object_id} was lost during the transfer")

@@ -87,13 +87,18 @@ class GraspPlanner:
         self.line(trajectory, position + c.lift * UP, yaw, True, c.slow_speed, "lift")
         return trajectory
 
-    def place(self, q: np.ndarray, position: np.ndarray, yaw: float = 0.0) -> JointTrajectory:
-        """From ``q`` (holding): transfer above ``position``, lower the object onto it."""
+    def place(
+        self, q: np.ndarray, position: np.ndarray, yaw: float = 0.0, carry_z: float = 0.0
+    ) -> JointTrajectory:
+        """From ``q`` (holding): transfer above ``position``, lower the object onto it. The
+        transfer carries the hand at least ``carry_z`` high (e.g. so a wide object clears
+        what it passes over)."""
         c = self.config
         position = np.asarray(position, dtype=float) + c.release_clearance * UP
         trajectory = JointTrajectory()
         trajectory.add(0.0, q, closed=True)
-        self._transit(trajectory, position + c.approach * UP, yaw, closed=True, what="transfer")
+        above = position + c.approach * UP
+        self._transit(trajectory, above, yaw, closed=True, what="transfer", carry_z=carry_z)
         self.line(trajectory, position, yaw, True, c.slow_speed, "place")
         return trajectory
 
@@ -113,13 +118,20 @@ class GraspPlanner:
 
     # --- segments -------------------------------------------------------------------------
     def _transit(
-        self, trajectory: JointTrajectory, target: np.ndarray, yaw: float, closed: bool, what: str
+        self,
+        trajectory: JointTrajectory,
+        target: np.ndarray,
+        yaw: float,
+        closed: bool,
+        what: str,
+        carry_z: float = 0.0,
     ) -> None:
-        """To a height clear of both ends, across, then down to ``target``."""
+        """To a height clear of both ends (and at least ``carry_z``), across, then down to
+        ``target``."""
         start = self.model.tcp_pose(trajectory.final).translation
         start_yaw = self.yaw_of(trajectory.final)
         c = self.config
-        carry = max(c.min_carry_z, min(start[2], c.max_carry_z), target[2])
+        carry = max(c.min_carry_z, min(start[2], c.max_carry_z), target[2], carry_z)
         speed = self.config.speed
         self.line(trajectory, [*start[:2], carry], start_yaw, closed, speed, f"{what} carry height")
         self.line(trajectory, [*target[:2], carry], yaw, closed, speed, what, start_yaw)
