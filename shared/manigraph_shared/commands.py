@@ -25,7 +25,17 @@ from manigraph_shared.service import run_service
 from manigraph_shared.supervisor import ProcessSpec, Supervisor
 
 
-def _emit_json(summary: dict[str, object]) -> None:
+def _emit_json(summary: dict[str, object], readable: bool = False) -> None:
+    """The summary as one JSON line on stdout; with ``readable``, first a line for people on
+    stderr."""
+    if readable and "success_rate" in summary:
+        print(
+            f"{summary.get('episodes')} episodes of {summary.get('task')}: "
+            f"success {summary['success_rate']:.3f}, "
+            f"goals filled {summary.get('goals_filled_rate', float('nan')):.3f}",
+            file=sys.stderr,
+            flush=True,
+        )
     print(json.dumps(summary), flush=True)
 
 
@@ -206,6 +216,9 @@ def _episode_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--episodes", type=int, default=None, help="run N episodes, then exit")
     group.add_argument("--seed", type=int, default=0, help="seed of the first episode")
     group.add_argument("--timeout", type=float, default=120.0, help="seconds per episode")
+    group.add_argument(
+        "--json", action="store_true", help="print only the JSON summary (stdout, one line)"
+    )
 
 
 def _plan(args: argparse.Namespace, episodes: int) -> EpisodePlan:
@@ -231,7 +244,7 @@ def _run_run(args: argparse.Namespace) -> int:
     with Bus.open(bus_config_from_args(args, wait_seconds=30.0)) as bus:
         _wait_services(bus, ["sim", "planner", "skills"])
         summary = run_episodes(bus, _plan(args, args.episodes or 1))
-    _emit_json(summary)
+    _emit_json(summary, readable=not args.json)
     return 0
 
 
@@ -347,7 +360,7 @@ def _up_run(args: argparse.Namespace) -> int:
     finally:
         supervisor.stop()
     if summary is not None:
-        _emit_json(summary)
+        _emit_json(summary, readable=not args.json)
     return 0
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -92,3 +93,14 @@ def test_physics_only_flags_are_refused_for_the_geometric_world(flag: list[str])
     )
     assert result.returncode != 0
     assert f"{flag[0].lstrip('-')}: needs --sim physics" in result.stderr
+
+
+@pytest.mark.parametrize("json_only", [False, True])
+def test_a_run_ends_with_one_json_line_and_says_it_in_words_unless_asked_not_to(
+    json_only: bool,
+) -> None:
+    result = run_up("--blocks", "3", "--episodes", "2", *(["--json"] if json_only else []))
+    summary = json.loads(result.stdout.strip().splitlines()[-1])
+    assert summary["episodes"] == 2 and summary["success_rate"] == 1.0
+    readable = "2 episodes of stack: success 1.000, goals filled 1.000"
+    assert (readable in result.stderr) is not json_only
