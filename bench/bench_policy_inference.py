@@ -8,8 +8,9 @@ weights (latency does not depend on training). Target: p50 <= 2 ms at K = 40 (80
 
 Timed: ``GNNPolicy.decide``, which runs the network's dense path for one complete graph
 (``PolicyNet.forward_complete``). For comparison, "mp best" times the same decision through
-PyG message passing over the edge index (``PolicyNet.forward``, what training and the
-explainer run, and what ``decide`` ran before the dense path); "speed-up" is their ratio.
+PyG message passing over the edge index (``PolicyNet.forward``, what the explainer and the
+trainer's reference "pyg" batch layout run, and what ``decide`` ran before the dense path);
+"speed-up" is their ratio.
 
 glibc malloc note: at K = 40 message passing's per-edge tensors are ~1.6 MB; with glibc's
 default dynamic mmap/trim thresholds they can be returned to the OS and page-faulted back on

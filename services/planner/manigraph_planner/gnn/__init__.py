@@ -15,7 +15,14 @@ from manigraph_planner.gnn.features import (
     scene_to_graph,
 )
 from manigraph_planner.gnn.models import ARCHITECTURES, ModelConfig, PolicyNet
-from manigraph_planner.gnn.selection import select, selection_loss, split_logits
+from manigraph_planner.gnn.selection import (
+    padded_select,
+    padded_selection_loss,
+    padded_split_logits,
+    select,
+    selection_loss,
+    split_logits,
+)
 
 __all__ = [
     "ARCHITECTURES",
@@ -29,6 +36,9 @@ __all__ = [
     "fully_connected_edge_index",
     "graph_from_arrays",
     "load_checkpoint",
+    "padded_select",
+    "padded_selection_loss",
+    "padded_split_logits",
     "save_checkpoint",
     "scene_to_graph",
     "select",

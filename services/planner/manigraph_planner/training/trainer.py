@@ -10,13 +10,12 @@ from pathlib import Path
 from typing import TextIO
 
 import torch
-from torch_geometric.data import Batch
 
-from manigraph_planner.gnn.features import fully_connected_edge_index
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
-from manigraph_planner.gnn.selection import select, selection_loss
 from manigraph_planner.training.augment import Augmentation, augmentation_for
+from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
 from manigraph_planner.training.dataset import Demonstrations, Sample
+from manigraph_planner.training.padded_batch import PaddedBatch
 
 
 @dataclass(frozen=True)
@@ -33,13 +32,24 @@ class TrainConfig:
     feature_scale: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0, 1.0)
     #: None: the architecture's default (:func:`augmentation_for`).
     augmentation: Augmentation | None = None
+    #: Draw fresh augmented copies every this many epochs (0: draw them once).
+    resample_every: int = 0
+    #: How a batch runs through the network (:data:`BATCH_LAYOUTS`): "padded", dense algebra
+    #: on complete graphs padded per group of similar sizes; "pyg", the slower reference, PyG
+    #: message passing over explicit edges. Same loss and gradients up to float rounding.
+    batch_layout: str = "padded"
 
     def __post_init__(self) -> None:
         for name in ("epochs", "batch_size", "hidden_channels", "num_layers"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name}: must be >= 1")
+        if self.resample_every < 0:
+            raise ValueError("resample_every: must be >= 0 epochs")
         if self.learning_rate <= 0:
             raise ValueError("learning_rate: must be > 0")
+        if self.batch_layout not in BATCH_LAYOUTS:
+            layouts = ", ".join(sorted(BATCH_LAYOUTS))
+            raise ValueError(f"batch_layout: '{self.batch_layout}' is not one of {layouts}")
         if self.augmentation is None:
             object.__setattr__(self, "augmentation", augmentation_for(self.architecture))
 
@@ -47,42 +57,33 @@ class TrainConfig:
         return asdict(self)
 
 
-def _batch(samples: list[Sample]) -> Batch:
-    from torch_geometric.data import Data
-
-    return Batch.from_data_list(
-        [
-            Data(
-                x=s.x,
-                edge_index=fully_connected_edge_index(s.x.shape[0]),
-                is_object=s.is_object,
-                object_index=torch.tensor([s.object_index]),
-                goal_index=torch.tensor([s.goal_index]),
-            )
-            for s in samples
-        ]
-    )
+#: Samples per forward pass in :func:`accuracy`; bounds memory, as a padded GAT batch holds
+#: :math:`B N_{max}^2` attention weights.
+_ACCURACY_CHUNK = 256
 
 
-def accuracy(net: PolicyNet, samples: list[Sample]) -> float:
+def accuracy(net: PolicyNet, samples: list[Sample], batch_layout: str = "padded") -> float:
     """Fraction of samples where the object and the goal both match the expert's, up to ties.
 
     The expert breaks ties (blocks at the same height in a box) by id, which no node feature
     shows; a choice with the same category, height and filled flag as the expert's counts.
     """
+    layout = BATCH_LAYOUTS[batch_layout]
     net.eval()
     with torch.inference_mode():
-        batch = _batch(samples)
-        logits = net(batch.x, batch.edge_index, batch.batch)
-        objects, goals = select(logits, batch.is_object, batch.batch, batch.num_graphs)
-        columns = [0, 3, 4]  # category, z, filled
-
-        def same(chosen: torch.Tensor, expert: torch.Tensor) -> torch.Tensor:
-            a, b = batch.x[chosen][:, columns], batch.x[expert][:, columns]
-            return torch.isclose(a, b, atol=1e-4).all(dim=1)
-
-        hits = same(objects, batch.object_index) & same(goals, batch.goal_index)
+        chunks = range(0, len(samples), _ACCURACY_CHUNK)
+        choices = [layout.choices(net, samples[i : i + _ACCURACY_CHUNK]) for i in chunks]
     net.train()
+    objects, goals = (torch.cat(per_chunk) for per_chunk in zip(*choices, strict=True))
+    batch = PaddedBatch.from_samples(samples)
+    graphs = torch.arange(batch.num_graphs)
+    columns = [0, 3, 4]  # category, z, filled
+
+    def same(chosen: torch.Tensor, expert: torch.Tensor) -> torch.Tensor:
+        a, b = batch.x[graphs, chosen][:, columns], batch.x[graphs, expert][:, columns]
+        return (chosen >= 0) & torch.isclose(a, b, atol=1e-4).all(dim=1)
+
+    hits = same(objects, batch.object_index) & same(goals, batch.goal_index)
     return float(hits.float().mean())
 
 
@@ -106,20 +107,19 @@ def train(
         net.parameters(), lr=config.learning_rate, weight_decay=config.weight_decay
     )
     schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, T_max=config.epochs)
+    layout = BATCH_LAYOUTS[config.batch_layout]
     batches_per_epoch = max(1, (len(samples) + config.batch_size - 1) // config.batch_size)
     started = time.perf_counter()
     order = list(range(len(samples)))
     loss_value = float("nan")
     for epoch in range(1, config.epochs + 1):
+        if config.resample_every and epoch > 1 and (epoch - 1) % config.resample_every == 0:
+            samples = config.augmentation.apply(demos.samples, generator)
         random.shuffle(order)
         total = 0.0
         for b in range(batches_per_epoch):
             chunk = [samples[i] for i in order[b * config.batch_size : (b + 1) * config.batch_size]]
-            batch = _batch(chunk)
-            logits = net(batch.x, batch.edge_index, batch.batch)
-            loss = selection_loss(
-                logits, batch.is_object, batch.batch, batch.object_index, batch.goal_index
-            )
+            loss = layout.loss(net, chunk)
             optimiser.zero_grad()
             loss.backward()
             optimiser.step()
@@ -133,9 +133,9 @@ def train(
                 file=progress,
                 flush=True,
             )
-    metrics = {
+    metrics: dict[str, object] = {
         "final_loss": round(loss_value, 6),
-        "demo_accuracy": round(accuracy(net, demos.samples), 4),
+        "demo_accuracy": round(accuracy(net, demos.samples, config.batch_layout), 4),
         "training_samples": len(samples),
         "demonstration_samples": len(demos.samples),
         "episodes": demos.episodes,

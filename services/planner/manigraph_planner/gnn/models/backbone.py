@@ -7,7 +7,7 @@ from collections.abc import Callable
 
 from torch import Tensor, nn
 
-from manigraph_planner.gnn.features import fully_connected_edge_index
+from manigraph_planner.gnn.models.complete_graph import message_passing_on_complete
 
 __all__ = ["ARCHITECTURES", "Backbone", "ConvStack", "register_architecture"]
 
@@ -25,8 +25,8 @@ class Backbone(nn.Module, ABC):
         - **output:** hidden node states :math:`(N, F_{hidden})`
 
     :meth:`forward` is PyG message passing: batches of disjoint graphs, any edges, edge masks
-    (training, the explainer). :meth:`forward_complete` is the same function of the same
-    parameters for one complete graph, which is what policy inference runs.
+    (the explainer). :meth:`forward_complete` is the same function of the same parameters for
+    one complete graph (policy inference) or a padded batch of them (training).
     """
 
     name: str
@@ -41,15 +41,22 @@ class Backbone(nn.Module, ABC):
     def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
         """Hidden node states."""
 
-    def forward_complete(self, x: Tensor) -> Tensor:
+    def forward_complete(self, x: Tensor, mask: Tensor | None = None) -> Tensor:
         """Hidden node states of one complete graph without self loops, i.e. ``forward(x,
-        fully_connected_edge_index(N))`` up to float rounding.
+        fully_connected_edge_index(N))`` up to float rounding; or of each graph of a padded
+        batch of them, as if run one by one.
 
         This default runs :meth:`forward` on the explicit edge index; architectures override
         it with dense algebra (:mod:`~manigraph_planner.gnn.models.complete_graph`), which
         needs no per-edge tensors.
+
+        Shapes:
+            - **x:** :math:`(N, F_{in})`, or :math:`(B, N_{max}, F_{in})` with **mask**
+              :math:`(B, N_{max})`, True for real nodes
+            - **output:** :math:`(N, F_{hidden})`, or :math:`(B, N_{max}, F_{hidden})`;
+              finite but unspecified at padded nodes
         """
-        return self(x, fully_connected_edge_index(x.shape[0]))
+        return message_passing_on_complete(self, x, mask)
 
 
 class ConvStack(Backbone):
@@ -71,19 +78,20 @@ class ConvStack(Backbone):
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
         """One message-passing layer, called as ``conv(x, edge_index)``."""
 
-    def conv_complete(self, conv: nn.Module, x: Tensor) -> Tensor:
-        """``conv(x, fully_connected_edge_index(N))`` for one layer made by :meth:`make_conv`;
-        this default builds the edge index, subclasses override it with dense algebra."""
-        return conv(x, fully_connected_edge_index(x.shape[0]))
+    def conv_complete(self, conv: nn.Module, x: Tensor, mask: Tensor | None = None) -> Tensor:
+        """``conv(x, fully_connected_edge_index(N))`` for one layer made by :meth:`make_conv`,
+        on one graph or a padded batch (shapes as in :meth:`forward_complete`); this default
+        builds the edge index, subclasses override it with dense algebra."""
+        return message_passing_on_complete(conv, x, mask)
 
     def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
         for conv in self.convs:
             x = conv(x, edge_index).relu()
         return x
 
-    def forward_complete(self, x: Tensor) -> Tensor:
+    def forward_complete(self, x: Tensor, mask: Tensor | None = None) -> Tensor:
         for conv in self.convs:
-            x = self.conv_complete(conv, x).relu()
+            x = self.conv_complete(conv, x, mask).relu()
         return x
 
 

@@ -1,4 +1,4 @@
-r"""Neighbourhood reductions on one complete graph without self loops, as dense algebra.
+r"""Neighbourhood reductions on complete graphs without self loops, as dense algebra.
 
 Every graph state in manigraph is complete: node :math:`i` receives from every
 :math:`j \neq i` (see :func:`~manigraph_planner.gnn.features.fully_connected_edge_index`).
@@ -11,48 +11,110 @@ so a layer needs neither an edge index nor the :math:`N (N - 1)` per-edge tensor
 message passing gathers and scatters. Backbones use these helpers in
 :meth:`~manigraph_planner.gnn.models.Backbone.forward_complete`; results equal PyG's up to
 float rounding (the summation order differs).
+
+Each helper takes one graph, :math:`(N, F)`, or a *padded batch*: :math:`B` graphs of
+different sizes stacked as :math:`(B, N_{max}, F)` with a node ``mask`` :math:`(B, N_{max})`,
+True for real nodes. A padded node is nobody's neighbour; what the helpers return at padded
+nodes is finite but unspecified, so callers ignore it (e.g. the loss masks those logits).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import torch
 from torch import Tensor
 
-__all__ = ["neighbour_mean", "neighbour_softmax", "neighbour_sum"]
+from manigraph_planner.gnn.features import fully_connected_edge_index
+
+__all__ = [
+    "complete_edge_index",
+    "message_passing_on_complete",
+    "neighbour_mean",
+    "neighbour_softmax",
+    "neighbour_sum",
+]
 
 
-def neighbour_sum(x: Tensor) -> Tensor:
-    r""":math:`\sum_{j \neq i} x_j` for every node :math:`i` (PyG ``aggr="add"``).
-
-    Shapes:
-        - **input:** :math:`(N, F)`
-        - **output:** :math:`(N, F)`; zeros when :math:`N = 1`
-    """
-    return x.sum(dim=0, keepdim=True) - x
-
-
-def neighbour_mean(x: Tensor) -> Tensor:
-    r""":math:`\frac{1}{N - 1} \sum_{j \neq i} x_j` (PyG ``aggr="mean"``; zeros, as in PyG,
-    for a lone node without neighbours).
+def neighbour_sum(x: Tensor, mask: Tensor | None = None) -> Tensor:
+    r""":math:`\sum_{j \neq i} x_j` over the real nodes :math:`j` of node :math:`i`'s graph
+    (PyG ``aggr="add"``).
 
     Shapes:
-        - **input:** :math:`(N, F)`
-        - **output:** :math:`(N, F)`
+        - **x:** :math:`(N, F)`, or :math:`(B, N_{max}, F)` with **mask** :math:`(B, N_{max})`
+        - **output:** like ``x``; zeros for a graph of one node
     """
-    return neighbour_sum(x) / max(x.shape[0] - 1, 1)
+    if mask is not None:
+        x = x.masked_fill(~mask.unsqueeze(-1), 0)  # not a product: keeps padding out of grads
+    return x.sum(dim=-2, keepdim=True) - x
 
 
-def neighbour_softmax(scores: Tensor) -> Tensor:
+def neighbour_mean(x: Tensor, mask: Tensor | None = None) -> Tensor:
+    r""":math:`\frac{1}{N - 1} \sum_{j \neq i} x_j`, :math:`N` the size of node :math:`i`'s
+    graph (PyG ``aggr="mean"``; zeros, as in PyG, for a lone node without neighbours).
+
+    Shapes:
+        - **x:** :math:`(N, F)`, or :math:`(B, N_{max}, F)` with **mask** :math:`(B, N_{max})`
+        - **output:** like ``x``
+    """
+    if mask is None:
+        return neighbour_sum(x) / max(x.shape[-2] - 1, 1)
+    neighbours = mask.sum(dim=-1, keepdim=True).unsqueeze(-1) - 1  # (B, 1, 1)
+    return neighbour_sum(x, mask) / neighbours.clamp(min=1)
+
+
+def neighbour_softmax(scores: Tensor, mask: Tensor | None = None) -> Tensor:
     r"""Row-wise softmax over the neighbours: entry :math:`(i, j)` is
-    :math:`\exp(s_{ij}) / \sum_{k \neq i} \exp(s_{ik})` for :math:`j \neq i`, 0 on the diagonal
+    :math:`\exp(s_{ij}) / \sum_{k \neq i} \exp(s_{ik})` for real nodes :math:`j \neq i`, else 0
     (PyG's :func:`~torch_geometric.utils.softmax` over the edges into :math:`i`).
 
     Shapes:
-        - **input:** :math:`(N, N)` scores, row :math:`i` the target, column :math:`j` the source
-        - **output:** :math:`(N, N)`; all zeros when :math:`N = 1` (no edges, no weights)
+        - **scores:** :math:`(N, N)`, or :math:`(B, N_{max}, N_{max})` with **mask**
+          :math:`(B, N_{max})`; row :math:`i` the target, column :math:`j` the source
+        - **output:** like ``scores``; all-zero rows where a node has no neighbours
     """
-    num_nodes = scores.shape[0]
-    if num_nodes < 2:  # a row of only -inf would give NaN
-        return torch.zeros_like(scores)
-    self_loops = torch.eye(num_nodes, dtype=torch.bool, device=scores.device)
-    return scores.masked_fill(self_loops, float("-inf")).softmax(dim=-1)
+    edges = _neighbours(scores.shape[-1], mask, scores.device)
+    # The smallest finite score, not -inf: a row without neighbours then stays finite (and is
+    # zeroed below) instead of becoming NaN, which would also poison the gradients.
+    lowest = torch.finfo(scores.dtype).min
+    return scores.masked_fill(~edges, lowest).softmax(dim=-1).masked_fill(~edges, 0)
+
+
+def complete_edge_index(mask: Tensor) -> Tensor:
+    r"""Edge indices of a padded batch of complete graphs, over its flattened node dimension
+    (node ``i`` of graph ``b`` is ``b * N_max + i``): every ordered pair of different real
+    nodes of the same graph, each graph's sorted by source then target as in
+    :func:`~manigraph_planner.gnn.features.fully_connected_edge_index`.
+
+    Shapes:
+        - **mask:** :math:`(B, N_{max})`
+        - **output:** :math:`(2, \sum_b N_b (N_b - 1))` int64
+    """
+    graph, source, target = _neighbours(mask.shape[-1], mask, mask.device).nonzero().unbind(1)
+    offset = graph * mask.shape[-1]
+    return torch.stack([offset + source, offset + target])
+
+
+def message_passing_on_complete(
+    layer: Callable[[Tensor, Tensor], Tensor], x: Tensor, mask: Tensor | None = None
+) -> Tensor:
+    """``layer(x, edge_index)`` on one complete graph, or on a padded batch of them: the
+    fallback for layers without dense algebra, which builds the per-edge tensors.
+
+    Shapes:
+        - **x:** :math:`(N, F)`, or :math:`(B, N_{max}, F)` with **mask** :math:`(B, N_{max})`
+        - **output:** :math:`(N, F_{out})`, or :math:`(B, N_{max}, F_{out})`
+    """
+    if mask is None:
+        return layer(x, fully_connected_edge_index(x.shape[0]))
+    out = layer(x.reshape(-1, x.shape[-1]), complete_edge_index(mask))
+    return out.view(*mask.shape, -1)
+
+
+def _neighbours(num_nodes: int, mask: Tensor | None, device: torch.device) -> Tensor:
+    """True at ``[..., i, j]`` where ``i != j`` are real nodes of one graph (symmetric).
+    Shapes: :math:`(N, N)`, or :math:`(B, N_{max}, N_{max})` with a mask."""
+    edges = ~torch.eye(num_nodes, dtype=torch.bool, device=device)
+    if mask is None:
+        return edges
+    return edges & mask.unsqueeze(-1) & mask.unsqueeze(-2)

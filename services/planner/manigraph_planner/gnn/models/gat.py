@@ -30,16 +30,17 @@ class GATBackbone(ConvStack):
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
         return GATConv(in_channels, out_channels, heads=1, add_self_loops=False, residual=True)
 
-    def conv_complete(self, conv: nn.Module, x: Tensor) -> Tensor:
-        r"""The layer as an :math:`N \times N` attention matrix. With one head, PyG's
-        ``att_src`` and ``att_dst`` (shape :math:`(1, 1, C)`) are the two halves of
-        :math:`\mathbf{a}`; the score of edge :math:`j \to i` is
+    def conv_complete(self, conv: nn.Module, x: Tensor, mask: Tensor | None = None) -> Tensor:
+        r"""The layer as an :math:`N \times N` attention matrix, one per graph of a padded
+        batch. With one head, PyG's ``att_src`` and ``att_dst`` (shape :math:`(1, 1, C)`) are
+        the two halves of :math:`\mathbf{a}`; the score of edge :math:`j \to i` is
         :math:`\mathbf{a}_{dst}^\top \theta_2 h_i + \mathbf{a}_{src}^\top \theta_2 h_j`, and
         ``res`` (:math:`\theta_1`) and ``bias`` are added after aggregation."""
         gat = cast(GATConv, conv)
         projected = gat.lin(x)  # lin: theta_2, shared by sources and targets (no bias)
         score_src = projected @ gat.att_src.view(-1)
         score_dst = projected @ gat.att_dst.view(-1)
-        scores = F.leaky_relu(score_dst.unsqueeze(1) + score_src.unsqueeze(0), gat.negative_slope)
-        out = neighbour_softmax(scores) @ projected + gat.res(x)
+        pairs = score_dst.unsqueeze(-1) + score_src.unsqueeze(-2)  # [..., i, j]: edge j -> i
+        scores = F.leaky_relu(pairs, gat.negative_slope)
+        out = neighbour_softmax(scores, mask) @ projected + gat.res(x)
         return out + gat.bias

@@ -42,8 +42,11 @@ class GatedBackbone(Backbone):
     def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
         return self.conv(x, edge_index).relu()
 
-    def forward_complete(self, x: Tensor) -> Tensor:
-        h = F.pad(x, (0, self.hidden_channels - x.shape[1]))  # [phi || 0], as PyG pads
+    def forward_complete(self, x: Tensor, mask: Tensor | None = None) -> Tensor:
+        h = F.pad(x, (0, self.hidden_channels - x.shape[-1]))  # [phi || 0], as PyG pads
         for weight in self.conv.weight:
-            h = self.conv.rnn(neighbour_sum(h @ weight), h)
+            message = neighbour_sum(h @ weight, mask)
+            # The GRU cell takes (nodes, channels); a padded batch's graphs are flattened.
+            flat = self.conv.rnn(message.reshape(-1, h.shape[-1]), h.reshape(-1, h.shape[-1]))
+            h = flat.view_as(h)
         return h.relu()

@@ -28,6 +28,6 @@ class GCNBackbone(ConvStack):
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
         return GraphConv(in_channels, out_channels, aggr="add")
 
-    def conv_complete(self, conv: nn.Module, x: Tensor) -> Tensor:
+    def conv_complete(self, conv: nn.Module, x: Tensor, mask: Tensor | None = None) -> Tensor:
         graph_conv = cast(GraphConv, conv)
-        return graph_conv.lin_rel(neighbour_sum(x)) + graph_conv.lin_root(x)
+        return graph_conv.lin_rel(neighbour_sum(x, mask)) + graph_conv.lin_root(x)

@@ -53,15 +53,18 @@ class PolicyNet(nn.Module):
         hidden = self.backbone(x * self.feature_scale, edge_index)
         return self.head(hidden).squeeze(-1)
 
-    def forward_complete(self, x: Tensor) -> Tensor:
+    def forward_complete(self, x: Tensor, mask: Tensor | None = None) -> Tensor:
         """Node logits of one graph state, i.e. ``forward(x, fully_connected_edge_index(N))``
         up to float rounding, by dense algebra without an edge index (see
-        :meth:`~manigraph_planner.gnn.models.Backbone.forward_complete`). What policy
-        inference runs; training batches and the explainer's edge masks need :meth:`forward`.
+        :meth:`~manigraph_planner.gnn.models.Backbone.forward_complete`); or of each graph
+        state of a padded batch, as if run one by one. What policy inference (one graph) and
+        training (padded batches) run; the explainer's edge masks need :meth:`forward`.
 
         Shapes:
-            - **input:** node features :math:`(N, 5)`
-            - **output:** node logits :math:`(N,)`
+            - **x:** node features :math:`(N, 5)`, or :math:`(B, N_{max}, 5)` with **mask**
+              :math:`(B, N_{max})`, True for real nodes
+            - **output:** node logits :math:`(N,)`, or :math:`(B, N_{max})`; finite but
+              unspecified at padded nodes
         """
-        hidden = self.backbone.forward_complete(x * self.feature_scale)
+        hidden = self.backbone.forward_complete(x * self.feature_scale, mask)
         return self.head(hidden).squeeze(-1)

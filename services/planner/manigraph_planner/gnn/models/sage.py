@@ -27,6 +27,6 @@ class SAGEBackbone(ConvStack):
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
         return SAGEConv(in_channels, out_channels, aggr="mean", root_weight=True)
 
-    def conv_complete(self, conv: nn.Module, x: Tensor) -> Tensor:
+    def conv_complete(self, conv: nn.Module, x: Tensor, mask: Tensor | None = None) -> Tensor:
         sage_conv = cast(SAGEConv, conv)
-        return sage_conv.lin_l(neighbour_mean(x)) + sage_conv.lin_r(x)
+        return sage_conv.lin_l(neighbour_mean(x, mask)) + sage_conv.lin_r(x)

@@ -1,0 +1,78 @@
+"""Training samples of different sizes as dense tensors, padded to the largest graph."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import torch
+from torch import Tensor
+from torch.nn.utils.rnn import pad_sequence
+
+from manigraph_planner.training.dataset import Sample, stack_targets
+
+__all__ = ["PaddedBatch", "size_groups"]
+
+
+@dataclass(frozen=True)
+class PaddedBatch:
+    """A batch of complete graphs for
+    :meth:`~manigraph_planner.gnn.models.PolicyNet.forward_complete` and
+    :func:`~manigraph_planner.gnn.selection.padded_selection_loss`.
+
+    Graph :math:`b` fills the first :math:`N_b` node slots of row :math:`b`; the rest is
+    padding (zero features, not an object, masked out).
+
+    Shapes:
+        - **x:** :math:`(B, N_{max}, 5)` node features
+        - **mask:** :math:`(B, N_{max})` bool, True for real nodes
+        - **is_object:** :math:`(B, N_{max})` bool, False at padding
+        - **object_index, goal_index:** :math:`(B,)` int64, the expert's choices as node
+          indices within each graph
+    """
+
+    x: Tensor
+    mask: Tensor
+    is_object: Tensor
+    object_index: Tensor
+    goal_index: Tensor
+
+    @classmethod
+    def from_samples(cls, samples: list[Sample]) -> PaddedBatch:
+        """Pads to the largest graph among ``samples`` (at least one)."""
+        sizes = torch.tensor([s.x.shape[0] for s in samples])
+        x = pad_sequence([s.x for s in samples], batch_first=True)
+        is_object = pad_sequence([s.is_object for s in samples], batch_first=True)
+        mask = torch.arange(x.shape[1]) < sizes.unsqueeze(1)
+        object_index, goal_index = stack_targets(samples)
+        return cls(x, mask, is_object, object_index, goal_index)
+
+    @property
+    def num_graphs(self) -> int:
+        return self.x.shape[0]
+
+
+def size_groups(sizes: Sequence[int], max_ratio: float = 2.0) -> list[list[int]]:
+    """Splits a batch into groups of similar graph sizes, to pad each to its own largest.
+
+    One padded batch holding graphs of 6 and 80 nodes computes as if every graph had 80,
+    with :math:`80^2` attention weights each. Sorted by size, a new group starts at the first
+    graph with more than ``max_ratio`` times the nodes of the group's smallest, so padding
+    at most multiplies a graph's nodes by ``max_ratio``. The batch itself is unchanged:
+    its loss is the graph-count-weighted mean of the groups' losses, the same number.
+
+    Args:
+        sizes: node count of each graph of the batch.
+        max_ratio: largest over smallest node count within a group, >= 1.
+
+    Returns:
+        Indices into ``sizes``, each group in ascending size; together each index once.
+    """
+    groups: list[list[int]] = []
+    smallest = 0
+    for index in sorted(range(len(sizes)), key=sizes.__getitem__):
+        if not groups or sizes[index] > max_ratio * smallest:
+            groups.append([])
+            smallest = sizes[index]
+        groups[-1].append(index)
+    return groups
