@@ -14,7 +14,14 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--arch", default="sage", help="gcn, sage, gated or gat")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--epochs", type=int, default=150)
-    parser.add_argument("--copies", type=int, default=8, help="augmented copies per sample")
+    parser.add_argument(
+        "--copies", type=int, help="augmented copies per sample (default: 16; gcn, gated: 8)"
+    )
+    parser.add_argument(
+        "--resample-every",
+        type=int,
+        help="draw fresh copies every N epochs (default: 10; gcn, gated: 0, never)",
+    )
     parser.add_argument("-o", "--output", type=Path, help="checkpoint (default checkpoints/)")
 
 
@@ -35,6 +42,7 @@ def _run(args: argparse.Namespace) -> int:
             seed=args.seed,
             epochs=args.epochs,
             augmentation=augmentation_for(args.arch, copies=args.copies),
+            resample_every=args.resample_every,
         )
     except ValueError as exc:
         raise ConfigError(str(exc).split(":")[0], str(exc)) from None

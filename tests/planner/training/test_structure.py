@@ -16,8 +16,12 @@ from manigraph_planner.training.structure import (
     Graph,
     SceneGeometry,
     add_distractors,
+    add_finished_tower,
+    add_open_box,
     drop_idle_covers,
     extend_towers,
+    hide_box_contents,
+    is_closing,
 )
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
 
@@ -75,7 +79,7 @@ def test_the_expert_agrees_with_its_own_demonstrations(samples: list[Sample]) ->
         assert_expert_agrees(as_graph(sample))
 
 
-@pytest.mark.parametrize("levels", [(1, 0, 0), (0, 3, 0), (0, 0, 5), (7, 11, 13)])
+@pytest.mark.parametrize("levels", [(1, 0, 0), (0, 3, 1), (0, 0, 5), (7, 11, 13)])
 def test_taller_towers_keep_the_label(samples: list[Sample], levels: tuple[int, int, int]) -> None:
     grown = 0
     for sample in samples:
@@ -83,6 +87,18 @@ def test_taller_towers_keep_the_label(samples: list[Sample], levels: tuple[int, 
         grown += graph.x.shape[0] > sample.x.shape[0]
         assert_expert_agrees(graph)
     assert grown >= len(samples) // 3  # pack towers and unpack goal stacks both grew
+
+
+def test_no_finished_goal_stack_grows_beside_blocks_on_a_box_floor(
+    samples: list[Sample],
+) -> None:
+    unpacking = [
+        s for s in samples if int(s.x[s.object_index, 0]) == BLOCK and s.x[s.object_index, 3] < 0.03
+    ]
+    assert unpacking
+    for sample in unpacking:
+        graph = extend_towers(as_graph(sample), 0, 5, 0, GEOMETRY)
+        assert int((graph.x[:, 4] == 1.0).sum()) == int((sample.x[:, 4] == 1.0).sum())
 
 
 def test_a_source_tower_grows_under_its_top_block(samples: list[Sample]) -> None:
@@ -109,6 +125,76 @@ def test_distractors_keep_the_label(samples: list[Sample], box: bool, storage: b
     assert added == (len(samples) - opening if not storage else len(samples))
 
 
+def test_an_open_box_elsewhere_keeps_the_label(samples: list[Sample]) -> None:
+    generator = torch.Generator().manual_seed(1)
+    added = 0
+    for sample in samples:
+        graph = add_open_box(as_graph(sample), generator, GEOMETRY)
+        if graph.x.shape[0] > sample.x.shape[0]:  # else no free site on the table
+            added += 1
+            assert graph.x.shape[0] == sample.x.shape[0] + 3  # a stored cover, its place, a lid
+        assert_expert_agrees(graph)
+    assert added >= len(samples) // 2
+
+
+def test_a_closing_expert_can_be_shown_a_second_closed_box(samples: list[Sample]) -> None:
+    generator = torch.Generator().manual_seed(2)
+    closing = [as_graph(s) for s in samples if is_closing(as_graph(s), GEOMETRY)]
+    assert closing
+    for graph in closing:
+        for packed in (0, 4):
+            shown = add_distractors(graph, True, False, generator, GEOMETRY, packed)
+            covers_on_boxes = (shown.x[:, 0] == COVER) & (shown.x[:, 3] > 0.04)
+            assert int(covers_on_boxes.sum()) == 1  # the distractor's; the expert's is stored
+            assert shown.x.shape[0] == graph.x.shape[0] + 2 + 2 * packed
+
+            def on_a_floor(x: torch.Tensor) -> int:
+                blocks = x[(x[:, 0] == BLOCK) & (x[:, 4] == 1.0)]
+                return int(((blocks[:, 3] - 0.02).abs() < 1e-6).sum())
+
+            assert on_a_floor(shown.x) == on_a_floor(graph.x) + packed
+            assert_expert_agrees(shown)
+
+
+def test_hiding_a_closed_box_removes_exactly_what_it_holds(samples: list[Sample]) -> None:
+    hidden = 0
+    for sample in samples:
+        graph = as_graph(sample)
+        shown = hide_box_contents(graph, GEOMETRY)
+        chosen = sample.x[sample.object_index]
+        opening = int(chosen[0]) == COVER and float(chosen[3]) > 0.04
+        if not opening:
+            assert shown is graph
+            continue
+        hidden += 1
+        inside = (sample.x[:, 1:3] - chosen[1:3]).abs().max(dim=1).values < 0.09
+        held = inside & (sample.x[:, 0] != COVER) & (sample.x[:, 0] != 3)
+        assert shown.x.shape[0] == sample.x.shape[0] - int(held.sum())
+        assert not bool(
+            ((shown.x[:, 1:3] - chosen[1:3]).abs().max(dim=1).values < 0.09)[
+                (shown.x[:, 0] == BLOCK) | (shown.x[:, 0] == 2)
+            ].any()
+        )
+        # the label is the expert's choice on the whole scene: the same cover and place
+        assert torch.equal(shown.x[shown.object_index], chosen)
+        assert torch.equal(shown.x[shown.goal_index], sample.x[sample.goal_index])
+    assert hidden > 0
+
+
+def test_a_finished_tower_elsewhere_keeps_the_label(samples: list[Sample]) -> None:
+    generator = torch.Generator().manual_seed(3)
+    added = 0
+    for sample in samples:
+        graph = add_finished_tower(as_graph(sample), 7, generator, GEOMETRY)
+        if graph is not as_graph(sample) and graph.x.shape[0] > sample.x.shape[0]:
+            added += 1
+            assert int(sample.x[sample.object_index, 0]) == BLOCK
+            new = graph.x[graph.x[:, 4] == 1.0]
+            assert float(new[:, 3].max()) == pytest.approx(0.04 * 6.5)  # seven levels
+        assert_expert_agrees(graph)
+    assert added >= len(samples) // 3
+
+
 def test_idle_covers_are_dropped_only_when_blocks_are_moved(samples: list[Sample]) -> None:
     dropped = 0
     for sample in samples:
@@ -123,7 +209,12 @@ def test_idle_covers_are_dropped_only_when_blocks_are_moved(samples: list[Sample
 
 
 def test_randomized_copies_keep_the_label_and_are_seeded(samples: list[Sample]) -> None:
-    augmentation = Augmentation(copies=3, noise=0.0, translate_xy=0.0, translate_z=0.0)
+    # Hiding a box's contents shows a partial view, which the expert cannot read (tested
+    # above); position noise is perception noise: the label is the choice on the true scene,
+    # which the expert's own footprint tests may read differently on a noisy copy.
+    augmentation = Augmentation(
+        copies=3, noise=0.0, noise_xy=0.0, translate_xy=0.0, translate_z=0.0, hide_probability=0.0
+    )
     first = augmentation.apply(samples, torch.Generator().manual_seed(4))
     again = augmentation.apply(samples, torch.Generator().manual_seed(4))
     for a, b in zip(first, again, strict=True):

@@ -54,6 +54,10 @@ def test_augmentation_keeps_labels_and_moves_scenes_rigidly(demo_log: Path) -> N
         tower_probability=0.0,
         distractor_probability=0.0,
         drop_covers_probability=0.0,
+        hide_probability=0.0,
+        open_box_probability=0.0,
+        closing_box_probability=0.0,
+        finished_tower_probability=0.0,
     )
     out = augmentation.apply(demos.samples[:3], torch.Generator().manual_seed(0))
     assert len(out) == 9

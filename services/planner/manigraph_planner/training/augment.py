@@ -1,7 +1,8 @@
-"""Augmentation: ~20 expert trajectories become ~900 training graphs (the paper's number).
+"""Augmentation: ~20 expert trajectories become thousands of training graphs.
 
-Each demonstrated decision is kept and ``copies`` randomized copies of it are added. A copy
-goes through these steps, none of which changes what the expert would decide:
+Each demonstrated decision is kept and ``copies`` randomized copies of it are added (the
+trainer draws fresh copies every ``TrainConfig.resample_every`` epochs). A copy goes through
+these steps; each keeps what the expert decides (step 3 is the one exception, argued there):
 
 1. **Tower extension** (probability ``tower_probability``): taller source towers, goal stacks
    with filled goals below and free goals above, up to ``max_levels`` each
@@ -10,24 +11,37 @@ goes through these steps, none of which changes what the expert would decide:
 2. **Idle covers dropped** (probability ``drop_covers_probability``) where the expert moves a
    block and no cover lies over a box
    (:func:`~manigraph_planner.training.structure.drop_idle_covers`): the demonstrations always
-   show a box; the stacking tasks never do. Then **distractors** (probability
-   ``distractor_probability``; none where the covers were dropped): a closed box and/or a
-   free storage place elsewhere on the table
-   (:func:`~manigraph_planner.training.structure.add_distractors`). The demonstrations show
-   one box; box rearrangement has two.
-3. **Rigid translation** of the whole scene, uniform within ±``translate_xy`` in x and y and
+   show a box; the stacking tasks never do.
+3. **Box contents hidden** (probability ``hide_probability``) where the expert takes a cover
+   off a box: the blocks and goals inside are removed, as a robot sees a closed box whose
+   contents it has not observed (box rearrangement;
+   :func:`~manigraph_planner.training.structure.hide_box_contents`). The label is the
+   expert's choice on the whole scene; the box must still be opened.
+4. **Distractors**: where the expert closes a box, a second closed box (probability
+   ``closing_box_probability``), half the time holding blocks in their goals (a box packed
+   earlier); elsewhere (probability ``distractor_probability``; none where the covers were
+   dropped) a closed box and/or a free storage place
+   (:func:`~manigraph_planner.training.structure.add_distractors`). Then an empty open box,
+   its cover stored (``open_box_probability``,
+   :func:`~manigraph_planner.training.structure.add_open_box`), and, where a block is moved,
+   a finished goal stack with free goals on top elsewhere (``finished_tower_probability``,
+   up to ``max_finished_levels``;
+   :func:`~manigraph_planner.training.structure.add_finished_tower`). The demonstrations show
+   one box; box rearrangement has two, and a K-stack's last blocks stand low beside a tall
+   goal stack.
+5. **Rigid translation** of the whole scene, uniform within ±``translate_xy`` in x and y and
    ``[0, translate_z]`` up: which block is highest or which goal lowest does not change when
    everything moves together.
-4. **Position noise** on every node, Gaussian: ``noise_xy`` metres in x and y, ``noise`` in z.
+6. **Position noise** on every node, Gaussian: ``noise_xy`` metres in x and y, ``noise`` in z.
    Both stay well below a block's size, so no stacked block changes place in the order and
    footprints still overlap; x/y noise teaches that goals need not stand in exact columns
    (a pyramid's do not).
 
-Architectures that *sum* over their neighbours (``gcn``, ``gated``) get steps 3 and 4 only
+Architectures that *sum* over their neighbours (``gcn``, ``gated``) get steps 5 and 6 only
 (:func:`augmentation_for`): tower extension grows graphs from about 10 to about 90 nodes, a
 sum grows with them, and measured on this project the sum architectures then lose even K = 9
-stacking (gcn: 1.00 with steps 3-4 only, 0.00 with all four). ``sage`` (mean) and ``gat``
-(attention) are normalised over neighbours and gain from every step.
+stacking (gcn: 1.00 with steps 5-6 only, 0.00 with the structural steps). ``sage`` (mean)
+and ``gat`` (attention) are normalised over neighbours and gain from every step.
 
 Node order is not augmented: every architecture is permutation-equivariant (tested).
 Why each step keeps the label is argued in :mod:`~manigraph_planner.training.structure` and
@@ -36,7 +50,7 @@ checked against the expert in ``tests/planner/training/test_structure.py``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import torch
 
@@ -46,14 +60,18 @@ from manigraph_planner.training.structure import (
     Graph,
     SceneGeometry,
     add_distractors,
+    add_finished_tower,
+    add_open_box,
     drop_idle_covers,
     extend_towers,
+    hide_box_contents,
+    is_closing,
 )
 
 
 @dataclass(frozen=True)
 class Augmentation:
-    copies: int = 8
+    copies: int = 16
     translate_xy: float = 0.15
     translate_z: float = 0.6
     noise: float = 0.004
@@ -63,6 +81,11 @@ class Augmentation:
     max_free_levels: int = 24
     distractor_probability: float = 0.5
     drop_covers_probability: float = 0.5
+    hide_probability: float = 0.5
+    open_box_probability: float = 0.3
+    closing_box_probability: float = 1.0
+    finished_tower_probability: float = 0.5
+    max_finished_levels: int = 40
     geometry: SceneGeometry = field(default_factory=SceneGeometry)
 
     def __post_init__(self) -> None:
@@ -71,10 +94,18 @@ class Augmentation:
         for name in ("translate_xy", "translate_z", "noise", "noise_xy"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name}: must be >= 0 metres")
-        for name in ("tower_probability", "distractor_probability", "drop_covers_probability"):
+        for name in (
+            "tower_probability",
+            "distractor_probability",
+            "drop_covers_probability",
+            "hide_probability",
+            "open_box_probability",
+            "closing_box_probability",
+            "finished_tower_probability",
+        ):
             if not 0 <= getattr(self, name) <= 1:
                 raise ValueError(f"{name}: must be in [0, 1]")
-        for name in ("max_levels", "max_free_levels"):
+        for name in ("max_levels", "max_free_levels", "max_finished_levels"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name}: must be >= 0")
 
@@ -94,9 +125,24 @@ class Augmentation:
             graph = extend_towers(graph, source, below, above, self.geometry)
         if self._chance(self.drop_covers_probability, generator):
             graph = drop_idle_covers(graph, self.geometry)
-        if self._chance(self.distractor_probability, generator):
+        if self._chance(self.hide_probability, generator):
+            graph = hide_box_contents(graph, self.geometry)
+        if is_closing(graph, self.geometry) and self._chance(
+            self.closing_box_probability, generator
+        ):
+            packed = self._levels(generator, 4) if self._chance(0.5, generator) else 0
+            graph = add_distractors(
+                graph, True, self._chance(0.5, generator), generator, self.geometry, packed
+            )
+        elif self._chance(self.distractor_probability, generator):
             box, storage = (self._chance(0.5, generator) for _ in range(2))
             graph = add_distractors(graph, box, storage or not box, generator, self.geometry)
+        if self._chance(self.open_box_probability, generator):
+            graph = add_open_box(graph, generator, self.geometry)
+        if self._chance(self.finished_tower_probability, generator):
+            levels = self._levels(generator, self.max_finished_levels)
+            free = self._levels(generator, self.max_free_levels)
+            graph = add_finished_tower(graph, levels, generator, self.geometry, free)
         x = self._jitter(graph.x, generator)
         return Sample(x, x[:, 0] <= BLOCK, graph.object_index, graph.goal_index)
 
@@ -123,14 +169,26 @@ class Augmentation:
 SUM_AGGREGATING = frozenset({"gcn", "gated"})
 
 
-def augmentation_for(architecture: str, copies: int = 8) -> Augmentation:
-    """The default augmentation for ``architecture`` with ``copies`` copies per sample."""
+def augmentation_for(architecture: str, copies: int | None = None) -> Augmentation:
+    """The default augmentation for ``architecture``; ``copies`` per sample (default: 16, or
+    8 for the sum architectures, the recipe measured for each)."""
     if architecture in SUM_AGGREGATING:
         return Augmentation(
-            copies=copies,
+            copies=8 if copies is None else copies,
             noise_xy=0.004,
             tower_probability=0.0,
             distractor_probability=0.0,
             drop_covers_probability=0.0,
+            hide_probability=0.0,
+            open_box_probability=0.0,
+            closing_box_probability=0.0,
+            finished_tower_probability=0.0,
         )
-    return replace(Augmentation(), copies=copies)
+    return Augmentation() if copies is None else Augmentation(copies=copies)
+
+
+def resample_every_for(architecture: str) -> int:
+    """Epochs between fresh draws of augmented copies: every 10 for ``sage`` and ``gat``
+    (the structural steps have many more scenes to show than one draw holds); never for the
+    sum architectures, whose translation-and-noise recipe was measured with one draw."""
+    return 0 if architecture in SUM_AGGREGATING else 10

@@ -44,6 +44,11 @@ BLOCK = FEATURE_SPEC.code("block")
 BLOCK_GOAL = FEATURE_SPEC.code("block-goal")
 COVER_GOAL = FEATURE_SPEC.code("cover-goal")
 
+#: Cells of a box's block grid, as the tasks fill them: the centre first, then around it.
+BOX_CELLS = sorted(
+    ((i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)), key=lambda c: (abs(c[0]) + abs(c[1]), c)
+)
+
 #: Nodes closer than this in x and y stand in one column.
 COLUMN_TOLERANCE = 0.01
 
@@ -67,6 +72,9 @@ class SceneGeometry:
 
     Args:
         block_size: edge of a block; towers grow in steps of it.
+        cover_thickness: a cover's thickness (a stored cover's centre is this / 2 above
+            the table).
+        grid_pitch: spacing of the block grid on a box's floor.
         box_half_width: half the outer width of a box (cover); no tower is extended this close
             to a box site.
         site_distance: a distractor keeps at least this far (x and y) from every other node.
@@ -74,6 +82,8 @@ class SceneGeometry:
     """
 
     block_size: float = 0.04
+    cover_thickness: float = 0.01
+    grid_pitch: float = 0.045
     box_half_width: float = 0.09
     site_distance: float = 0.2
     workspace_x: tuple[float, float] = (0.3, 0.7)
@@ -149,6 +159,10 @@ def extend_towers(
         stacks = []
     if in_box["source"]:
         sources = []
+        # Blocks on a box floor stand at one height: beside a tall finished goal stack,
+        # "take the lowest block" would explain the expert as well as "the highest" does, and
+        # a K-stack's last blocks (low, beside a tall goal stack) would go wrong.
+        stack_levels = 0
     new_objects: list[list[float]] = []
     new_goals: list[list[float]] = []
     for column in sources:
@@ -176,9 +190,12 @@ def add_distractors(
     storage: bool,
     generator: torch.Generator,
     geometry: SceneGeometry,
+    packed: int = 0,
 ) -> Graph:
     """Add a closed box (cover on its lid goal) and/or a free storage place, each at a free
-    table site. Needs a demonstrated box to copy heights from; else returns ``graph``."""
+    table site. The box holds ``packed`` blocks in their goals (a box packed earlier, seen
+    while it was open), else nothing observed. Needs a demonstrated box to copy heights
+    from; else returns ``graph``."""
     x = graph.x
     covers = x[x[:, 0] == COVER_GOAL, 3]
     if covers.numel() < 2:
@@ -186,8 +203,7 @@ def add_distractors(
     lid_z, storage_z = float(covers.max()), float(covers.min())
     if lid_z - storage_z < geometry.block_size:
         return graph
-    chosen = x[graph.object_index]
-    if int(chosen[0]) == COVER and float(chosen[3]) > geometry.block_size:
+    if _opened_cover(graph, geometry) is not None:
         # The expert is opening a box. A second closed box would show two covers that differ
         # only in where they stand, which architectures that aggregate over the whole graph
         # (sum or mean) cannot tell apart; no test scene asks for that choice.
@@ -206,6 +222,11 @@ def add_distractors(
         if node == "box":
             new_objects.append([COVER, sx, sy, lid_z, 1.0])
             new_goals.append([COVER_GOAL, sx, sy, lid_z, 1.0])
+            floor = storage_z - geometry.cover_thickness / 2 + geometry.block_size / 2
+            for dx, dy in BOX_CELLS[:packed]:
+                cell = [sx + dx * geometry.grid_pitch, sy + dy * geometry.grid_pitch, floor, 1.0]
+                new_objects.append([BLOCK, *cell])
+                new_goals.append([BLOCK_GOAL, *cell])
         else:
             new_goals.append([COVER_GOAL, sx, sy, storage_z, 0.0])
     if not new_goals:
@@ -232,6 +253,101 @@ def drop_idle_covers(graph: Graph, geometry: SceneGeometry) -> Graph:
     covers = x[:, 0] == COVER
     if not bool(covers.any()) or bool((x[covers, 3] > geometry.block_size).any()):
         return graph
-    keep = ~(covers | (x[:, 0] == COVER_GOAL))
+    return _remove(graph, covers | (x[:, 0] == COVER_GOAL))
+
+
+def _remove(graph: Graph, drop: Tensor) -> Graph:
+    """``graph`` without the nodes where ``drop`` is true (never the expert's nodes)."""
+    keep = ~drop
     index = torch.cumsum(keep.long(), 0) - 1
-    return Graph(x[keep].clone(), int(index[graph.object_index]), int(index[graph.goal_index]))
+    return Graph(
+        graph.x[keep].clone(), int(index[graph.object_index]), int(index[graph.goal_index])
+    )
+
+
+def _opened_cover(graph: Graph, geometry: SceneGeometry) -> Tensor | None:
+    """The expert's cover row when it is taking a cover off a box, else None."""
+    chosen = graph.x[graph.object_index]
+    if int(chosen[0]) == COVER and float(chosen[3]) > geometry.block_size:
+        return chosen
+    return None
+
+
+def hide_box_contents(graph: Graph, geometry: SceneGeometry) -> Graph:
+    """When the expert takes a cover off a box, remove the blocks and block goals inside that
+    box: the scene as a robot sees it when what a closed box holds is not observed (box
+    rearrangement). The box still has to be opened for the task to go on, so the label is
+    the expert's choice on the full scene. Returns ``graph`` itself otherwise."""
+    cover = _opened_cover(graph, geometry)
+    if cover is None:
+        return graph
+    x = graph.x
+    inside = (x[:, 1:3] - cover[1:3]).abs().max(dim=1).values <= geometry.box_half_width
+    drop = inside & (x[:, 3] < cover[3]) & ((x[:, 0] == BLOCK) | (x[:, 0] == BLOCK_GOAL))
+    if not bool(drop.any()):
+        return graph
+    return _remove(graph, drop)
+
+
+def add_open_box(graph: Graph, generator: torch.Generator, geometry: SceneGeometry) -> Graph:
+    """Add an empty open box elsewhere: a free lid goal, its cover in a storage place.
+
+    The expert ignores it when moving or uncovering blocks (the new lid is higher than any
+    storage place, so it is never the lowest free cover goal); when closing, the new stored
+    cover and lid tie with the demonstrated ones, and either pairing closes a box. Needs a
+    demonstrated box to copy heights from; else returns ``graph``."""
+    x = graph.x
+    heights = x[x[:, 0] == COVER_GOAL, 3]
+    if heights.numel() < 2:
+        return graph
+    lid_z, storage_z = float(heights.max()), float(heights.min())
+    if lid_z - storage_z < geometry.block_size:
+        return graph
+    box = _free_site(x[:, 1:3], generator, geometry)
+    if box is None:
+        return graph
+    store = _free_site(torch.cat([x[:, 1:3], box.unsqueeze(0)]), generator, geometry)
+    if store is None:
+        return graph
+    (bx, by), (sx, sy) = box.tolist(), store.tolist()
+    cover = [[COVER, sx, sy, storage_z, 1.0]]
+    goals = [[COVER_GOAL, bx, by, lid_z, 0.0], [COVER_GOAL, sx, sy, storage_z, 1.0]]
+    return _rebuild(graph, x.clone(), cover, goals)
+
+
+def is_closing(graph: Graph, geometry: SceneGeometry) -> bool:
+    """The expert puts a cover from the table back onto a box."""
+    chosen = graph.x[graph.object_index]
+    return int(chosen[0]) == COVER and float(chosen[3]) <= geometry.block_size
+
+
+def add_finished_tower(
+    graph: Graph,
+    levels: int,
+    generator: torch.Generator,
+    geometry: SceneGeometry,
+    free_levels: int = 0,
+) -> Graph:
+    """Add a goal stack elsewhere: ``levels`` filled block goals, each holding its block, and
+    ``free_levels`` free goals on top, where the expert moves a block to a goal on a box
+    floor.
+
+    Rule 1 never moves a block that is in a goal nor fills a filled goal, and the new free
+    goals stand higher than any goal on a box floor, so the label stays.
+    In the demonstrations a tall filled goal stack comes only with box unpacking, where every
+    block still to move lies on the box floor; without this edit "the lowest block" explains
+    those decisions as well as "the highest", and a K-stack's last blocks go wrong."""
+    x = graph.x
+    if levels < 1 or int(x[graph.object_index, 0]) != BLOCK:
+        return graph
+    floor = geometry.block_size / 2 + COLUMN_TOLERANCE
+    if free_levels and float(x[graph.goal_index, 3]) > floor:
+        free_levels = 0  # the expert's goal is not on a floor: new free goals could be lower
+    site = _free_site(x[:, 1:3], generator, geometry)
+    if site is None:
+        return graph
+    sx, sy = site.tolist()
+    z = [geometry.block_size * (i + 0.5) for i in range(levels + free_levels)]
+    blocks = [[BLOCK, sx, sy, h, 1.0] for h in z[:levels]]
+    goals = [[BLOCK_GOAL, sx, sy, h, float(i < levels)] for i, h in enumerate(z)]
+    return _rebuild(graph, x.clone(), blocks, goals)

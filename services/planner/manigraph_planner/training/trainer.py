@@ -12,7 +12,11 @@ from typing import TextIO
 import torch
 
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
-from manigraph_planner.training.augment import Augmentation, augmentation_for
+from manigraph_planner.training.augment import (
+    Augmentation,
+    augmentation_for,
+    resample_every_for,
+)
 from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
 from manigraph_planner.training.dataset import Demonstrations, Sample
 from manigraph_planner.training.padded_batch import PaddedBatch
@@ -32,8 +36,9 @@ class TrainConfig:
     feature_scale: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0, 1.0)
     #: None: the architecture's default (:func:`augmentation_for`).
     augmentation: Augmentation | None = None
-    #: Draw fresh augmented copies every this many epochs (0: draw them once).
-    resample_every: int = 0
+    #: Draw fresh augmented copies every this many epochs (0: draw them once; None: the
+    #: architecture's default, :func:`resample_every_for`).
+    resample_every: int | None = None
     #: How a batch runs through the network (:data:`BATCH_LAYOUTS`): "padded", dense algebra
     #: on complete graphs padded per group of similar sizes; "pyg", the slower reference, PyG
     #: message passing over explicit edges. Same loss and gradients up to float rounding.
@@ -43,6 +48,8 @@ class TrainConfig:
         for name in ("epochs", "batch_size", "hidden_channels", "num_layers"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name}: must be >= 1")
+        if self.resample_every is None:
+            object.__setattr__(self, "resample_every", resample_every_for(self.architecture))
         if self.resample_every < 0:
             raise ValueError("resample_every: must be >= 0 epochs")
         if self.learning_rate <= 0:
