@@ -111,7 +111,7 @@ def _columns(x: Tensor, rows: Tensor) -> list[Tensor]:
 def _away_from_boxes(x: Tensor, column: Tensor, boxes: Tensor, geometry: SceneGeometry) -> bool:
     if boxes.numel() == 0:
         return True
-    gap = (boxes - x[column[0], 1:3]).abs().max(dim=1).values
+    gap = (boxes - x[column[0], 1:3]).abs().amax(dim=1)
     return bool((gap > geometry.box_half_width).all())
 
 
@@ -239,7 +239,7 @@ def _free_site(taken: Tensor, generator: torch.Generator, geometry: SceneGeometr
     high = torch.tensor([geometry.workspace_x[1], geometry.workspace_y[1]])
     for _ in range(50):
         site = low + torch.rand(2, generator=generator) * (high - low)
-        if bool(((taken - site).abs().max(dim=1).values >= geometry.site_distance).all()):
+        if bool(((taken - site).abs().amax(dim=1) >= geometry.site_distance).all()):
             return site
     return None
 
@@ -282,7 +282,7 @@ def hide_box_contents(graph: Graph, geometry: SceneGeometry) -> Graph:
     if cover is None:
         return graph
     x = graph.x
-    inside = (x[:, 1:3] - cover[1:3]).abs().max(dim=1).values <= geometry.box_half_width
+    inside = (x[:, 1:3] - cover[1:3]).abs().amax(dim=1) <= geometry.box_half_width
     drop = inside & (x[:, 3] < cover[3]) & ((x[:, 0] == BLOCK) | (x[:, 0] == BLOCK_GOAL))
     if not bool(drop.any()):
         return graph
