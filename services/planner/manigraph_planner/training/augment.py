@@ -78,7 +78,7 @@ class Augmentation:
     noise_xy: float = 0.01
     tower_probability: float = 0.5
     max_levels: int = 24
-    max_free_levels: int = 40
+    max_free_levels: int = 24
     distractor_probability: float = 0.5
     drop_covers_probability: float = 0.5
     hide_probability: float = 0.5
