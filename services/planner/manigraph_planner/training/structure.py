@@ -184,6 +184,18 @@ def extend_towers(
     return _rebuild(graph, x, new_objects, new_goals)
 
 
+def _lid_and_storage_heights(x: Tensor, geometry: SceneGeometry) -> tuple[float, float] | None:
+    """Heights of a demonstrated box's lid and storage place (the highest and lowest cover
+    goal), or None where the graph shows no box with both."""
+    heights = x[x[:, 0] == COVER_GOAL, 3]
+    if heights.numel() < 2:
+        return None
+    lid_z, storage_z = float(heights.max()), float(heights.min())
+    if lid_z - storage_z < geometry.block_size:
+        return None
+    return lid_z, storage_z
+
+
 def add_distractors(
     graph: Graph,
     closed_box: bool,
@@ -197,12 +209,10 @@ def add_distractors(
     while it was open), else nothing observed. Needs a demonstrated box to copy heights
     from; else returns ``graph``."""
     x = graph.x
-    covers = x[x[:, 0] == COVER_GOAL, 3]
-    if covers.numel() < 2:
+    heights = _lid_and_storage_heights(x, geometry)
+    if heights is None:
         return graph
-    lid_z, storage_z = float(covers.max()), float(covers.min())
-    if lid_z - storage_z < geometry.block_size:
-        return graph
+    lid_z, storage_z = heights
     if _opened_cover(graph, geometry) is not None:
         # The expert is opening a box. A second closed box would show two covers that differ
         # only in where they stand, which architectures that aggregate over the whole graph
@@ -297,12 +307,10 @@ def add_open_box(graph: Graph, generator: torch.Generator, geometry: SceneGeomet
     cover and lid tie with the demonstrated ones, and either pairing closes a box. Needs a
     demonstrated box to copy heights from; else returns ``graph``."""
     x = graph.x
-    heights = x[x[:, 0] == COVER_GOAL, 3]
-    if heights.numel() < 2:
+    heights = _lid_and_storage_heights(x, geometry)
+    if heights is None:
         return graph
-    lid_z, storage_z = float(heights.max()), float(heights.min())
-    if lid_z - storage_z < geometry.block_size:
-        return graph
+    lid_z, storage_z = heights
     box = _free_site(x[:, 1:3], generator, geometry)
     if box is None:
         return graph
