@@ -47,18 +47,7 @@ def test_a_log_without_decisions_is_refused(tmp_path: Path) -> None:
 
 def test_augmentation_keeps_labels_and_moves_scenes_rigidly(demo_log: Path) -> None:
     demos = load_demonstrations([demo_log])
-    augmentation = Augmentation(
-        copies=2,
-        noise=0.0,
-        noise_xy=0.0,
-        tower_probability=0.0,
-        distractor_probability=0.0,
-        drop_covers_probability=0.0,
-        hide_probability=0.0,
-        open_box_probability=0.0,
-        closing_box_probability=0.0,
-        finished_tower_probability=0.0,
-    )
+    augmentation = Augmentation(copies=2, noise=0.0, noise_xy=0.0).without_structure()
     out = augmentation.apply(demos.samples[:3], torch.Generator().manual_seed(0))
     assert len(out) == 9
     original, copy = out[0], out[3]

@@ -50,7 +50,7 @@ checked against the expert in ``tests/planner/training/test_structure.py``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import torch
 
@@ -66,6 +66,17 @@ from manigraph_planner.training.structure import (
     extend_towers,
     hide_box_contents,
     is_closing,
+)
+
+#: The probabilities of the structural steps 1-4 (see the module docstring).
+STRUCTURAL_PROBABILITIES = (
+    "tower_probability",
+    "drop_covers_probability",
+    "hide_probability",
+    "closing_box_probability",
+    "distractor_probability",
+    "open_box_probability",
+    "finished_tower_probability",
 )
 
 
@@ -94,20 +105,17 @@ class Augmentation:
         for name in ("translate_xy", "translate_z", "noise", "noise_xy"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name}: must be >= 0 metres")
-        for name in (
-            "tower_probability",
-            "distractor_probability",
-            "drop_covers_probability",
-            "hide_probability",
-            "open_box_probability",
-            "closing_box_probability",
-            "finished_tower_probability",
-        ):
+        for name in STRUCTURAL_PROBABILITIES:
             if not 0 <= getattr(self, name) <= 1:
                 raise ValueError(f"{name}: must be in [0, 1]")
         for name in ("max_levels", "max_free_levels", "max_finished_levels"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name}: must be >= 0")
+
+    def without_structure(self) -> Augmentation:
+        """This augmentation with every structural step (1-4) off: rigid translation and
+        position noise only."""
+        return replace(self, **{name: 0.0 for name in STRUCTURAL_PROBABILITIES})
 
     def apply(self, samples: list[Sample], generator: torch.Generator) -> list[Sample]:
         """The originals followed by ``copies`` randomized copies of each."""
@@ -174,16 +182,8 @@ def augmentation_for(architecture: str, copies: int | None = None) -> Augmentati
     8 for the sum architectures, the recipe measured for each)."""
     if architecture in SUM_AGGREGATING:
         return Augmentation(
-            copies=8 if copies is None else copies,
-            noise_xy=0.004,
-            tower_probability=0.0,
-            distractor_probability=0.0,
-            drop_covers_probability=0.0,
-            hide_probability=0.0,
-            open_box_probability=0.0,
-            closing_box_probability=0.0,
-            finished_tower_probability=0.0,
-        )
+            copies=8 if copies is None else copies, noise_xy=0.004
+        ).without_structure()
     return Augmentation() if copies is None else Augmentation(copies=copies)
 
 
