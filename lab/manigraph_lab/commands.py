@@ -111,3 +111,32 @@ suite_command = Command(
     configure=_suite_configure,
     run=_suite_run,
 )
+
+
+def _select_configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("checkpoints", type=Path, nargs="+", help="candidate checkpoints")
+    parser.add_argument("-o", "--output", type=Path, required=True, help="where the kept one goes")
+    parser.add_argument("--episodes", type=int, default=30, help="validation episodes per cell")
+    parser.add_argument("--table", type=Path, help="also write the Markdown table here")
+
+
+def _select_run(args: argparse.Namespace) -> int:
+    import torch
+
+    from manigraph_lab.selection import select_checkpoint
+
+    torch.set_num_threads(2)
+    chosen, table = select_checkpoint(args.checkpoints, args.output, args.episodes)
+    if args.table is not None:
+        args.table.parent.mkdir(parents=True, exist_ok=True)
+        args.table.write_text(table)
+    print(table)
+    print(json.dumps({"checkpoint": str(args.output), "kept": str(chosen.path), **chosen.scores}))
+    return 0
+
+
+select_command = Command(
+    help="keep the candidate checkpoint with the best validation success (seeds 1000+)",
+    configure=_select_configure,
+    run=_select_run,
+)

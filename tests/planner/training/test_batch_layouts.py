@@ -48,7 +48,7 @@ def test_a_padded_batch_pads_every_graph_to_the_largest(samples: list[Sample]) -
 
 def test_size_groups_bound_the_padding_of_every_graph() -> None:
     sizes = [11, 6, 81, 12, 13, 40, 6, 25, 9]
-    groups = size_groups(sizes)
+    groups = size_groups(sizes, max_ratio=2.0)
     assert [[sizes[i] for i in group] for group in groups] == [
         [6, 6, 9, 11, 12],
         [13, 25],

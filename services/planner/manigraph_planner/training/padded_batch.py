@@ -52,7 +52,7 @@ class PaddedBatch:
         return self.x.shape[0]
 
 
-def size_groups(sizes: Sequence[int], max_ratio: float = 2.0) -> list[list[int]]:
+def size_groups(sizes: Sequence[int], max_ratio: float = 3.0) -> list[list[int]]:
     """Splits a batch into groups of similar graph sizes, to pad each to its own largest.
 
     One padded batch holding graphs of 6 and 80 nodes computes as if every graph had 80,
@@ -60,6 +60,11 @@ def size_groups(sizes: Sequence[int], max_ratio: float = 2.0) -> list[list[int]]
     graph with more than ``max_ratio`` times the nodes of the group's smallest, so padding
     at most multiplies a graph's nodes by ``max_ratio``. The batch itself is unchanged:
     its loss is the graph-count-weighted mean of the groups' losses, the same number.
+
+    Each group is one more pass of small tensor operations, so fewer, more padded groups
+    can be faster: with the default augmentation (graphs of 6 to ~125 nodes, batches of 64)
+    a GAT epoch took 0.55 s at ``max_ratio`` 2 and 0.45 s at 3 on this project's 2-core
+    machine; 1.3 and "one group" were both slower.
 
     Args:
         sizes: node count of each graph of the batch.

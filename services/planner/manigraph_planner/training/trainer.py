@@ -97,6 +97,23 @@ def accuracy(net: PolicyNet, samples: list[Sample], batch_layout: str = "padded"
 def train(
     demos: Demonstrations, config: TrainConfig, progress: TextIO | None = sys.stderr
 ) -> tuple[PolicyNet, dict[str, object]]:
+    """Train a policy on ``demos``; returns it with metrics (loss, accuracy, seconds).
+
+    Denormal floats are flushed to zero while it runs (:func:`torch.set_flush_denormal`,
+    turned off again at the end): as a policy trains, attention weights and gradients decay
+    into the denormal range, where CPU arithmetic is many times slower; measured here, a GAT
+    epoch went from 0.45 s to 0.72 s within 60 epochs without it, and stayed at 0.45 s with.
+    """
+    torch.set_flush_denormal(True)
+    try:
+        return _train(demos, config, progress)
+    finally:
+        torch.set_flush_denormal(False)
+
+
+def _train(
+    demos: Demonstrations, config: TrainConfig, progress: TextIO | None
+) -> tuple[PolicyNet, dict[str, object]]:
     torch.manual_seed(config.seed)
     random.seed(config.seed)
     generator = torch.Generator().manual_seed(config.seed)
