@@ -33,7 +33,6 @@ __all__ = [
     "neighbour_mean",
     "neighbour_softmax",
     "neighbour_sum",
-    "neighbours",
 ]
 
 
@@ -64,9 +63,7 @@ def neighbour_mean(x: Tensor, mask: Tensor | None = None) -> Tensor:
     return neighbour_sum(x, mask) / neighbours.clamp(min=1)
 
 
-def neighbour_softmax(
-    scores: Tensor, mask: Tensor | None = None, edges: Tensor | None = None
-) -> Tensor:
+def neighbour_softmax(scores: Tensor, mask: Tensor | None = None) -> Tensor:
     r"""Row-wise softmax over the neighbours: entry :math:`(i, j)` is
     :math:`\exp(s_{ij}) / \sum_{k \neq i} \exp(s_{ik})` for real nodes :math:`j \neq i`, else 0
     (PyG's :func:`~torch_geometric.utils.softmax` over the edges into :math:`i`).
@@ -74,11 +71,9 @@ def neighbour_softmax(
     Shapes:
         - **scores:** :math:`(N, N)`, or :math:`(B, N_{max}, N_{max})` with **mask**
           :math:`(B, N_{max})`; row :math:`i` the target, column :math:`j` the source
-        - **edges:** ``neighbours(N, mask)``, if the caller has it already (layers share it)
         - **output:** like ``scores``; all-zero rows where a node has no neighbours
     """
-    if edges is None:
-        edges = neighbours(scores.shape[-1], mask, scores.device)
+    edges = _neighbours(scores.shape[-1], mask, scores.device)
     # The smallest finite score, not -inf: a row without neighbours then stays finite (and is
     # zeroed below) instead of becoming NaN, which would also poison the gradients.
     lowest = torch.finfo(scores.dtype).min
@@ -95,7 +90,7 @@ def complete_edge_index(mask: Tensor) -> Tensor:
         - **mask:** :math:`(B, N_{max})`
         - **output:** :math:`(2, \sum_b N_b (N_b - 1))` int64
     """
-    graph, source, target = neighbours(mask.shape[-1], mask, mask.device).nonzero().unbind(1)
+    graph, source, target = _neighbours(mask.shape[-1], mask, mask.device).nonzero().unbind(1)
     offset = graph * mask.shape[-1]
     return torch.stack([offset + source, offset + target])
 
@@ -116,7 +111,7 @@ def message_passing_on_complete(
     return out.view(*mask.shape, -1)
 
 
-def neighbours(num_nodes: int, mask: Tensor | None, device: torch.device) -> Tensor:
+def _neighbours(num_nodes: int, mask: Tensor | None, device: torch.device) -> Tensor:
     """True at ``[..., i, j]`` where ``i != j`` are real nodes of one graph (symmetric).
     Shapes: :math:`(N, N)`, or :math:`(B, N_{max}, N_{max})` with a mask."""
     edges = ~torch.eye(num_nodes, dtype=torch.bool, device=device)

@@ -20,7 +20,7 @@ from torch import Tensor, nn
 from torch_geometric.nn import GATConv
 
 from manigraph_planner.gnn.models.backbone import ConvStack, register_architecture
-from manigraph_planner.gnn.models.complete_graph import neighbour_softmax, neighbours
+from manigraph_planner.gnn.models.complete_graph import neighbour_softmax
 
 
 @register_architecture("gat")
@@ -30,17 +30,7 @@ class GATBackbone(ConvStack):
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
         return GATConv(in_channels, out_channels, heads=1, add_self_loops=False, residual=True)
 
-    def forward_complete(self, x: Tensor, mask: Tensor | None = None) -> Tensor:
-        edges = neighbours(x.shape[-2], mask, x.device)  # the same for every layer
-        for conv in self.convs:
-            x = self._attend(conv, x, mask, edges).relu()
-        return x
-
     def conv_complete(self, conv: nn.Module, x: Tensor, mask: Tensor | None = None) -> Tensor:
-        return self._attend(conv, x, mask, neighbours(x.shape[-2], mask, x.device))
-
-    @staticmethod
-    def _attend(conv: nn.Module, x: Tensor, mask: Tensor | None, edges: Tensor) -> Tensor:
         r"""The layer as an :math:`N \times N` attention matrix, one per graph of a padded
         batch. With one head, PyG's ``att_src`` and ``att_dst`` (shape :math:`(1, 1, C)`) are
         the two halves of :math:`\mathbf{a}`; the score of edge :math:`j \to i` is
@@ -52,5 +42,5 @@ class GATBackbone(ConvStack):
         score_dst = projected @ gat.att_dst.view(-1)
         pairs = score_dst.unsqueeze(-1) + score_src.unsqueeze(-2)  # [..., i, j]: edge j -> i
         scores = F.leaky_relu(pairs, gat.negative_slope)
-        out = neighbour_softmax(scores, mask, edges) @ projected + gat.res(x)
+        out = neighbour_softmax(scores, mask) @ projected + gat.res(x)
         return out + gat.bias
