@@ -8,8 +8,8 @@
 #   scripts/train-shipped-checkpoints.sh [SEED ...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-seeds=("${@:-0 1 2}")
-read -r -a seeds <<<"${seeds[*]}"
+seeds=("$@")
+[ "${#seeds[@]}" -gt 0 ] || seeds=(0 1 2)
 run() { python3 -m uv run --frozen --all-packages "$@"; }
 run manigraph demos -o data/demos.mcap --trajectories 20 --seed 0
 mkdir -p results/suite/checkpoints results/selection

@@ -59,6 +59,11 @@ def evaluate(
     return summarize(policy.name, spec, records, seconds, decisions)
 
 
+def success_rate(policy: Policy, spec: EvalSpec) -> float:
+    """The fraction of ``spec``'s episodes that ``policy`` finishes, quietly."""
+    return float(evaluate(policy, spec, progress=None)["success_rate"])  # type: ignore[arg-type]
+
+
 def summarize(
     policy: str, spec: EvalSpec, records: list[EpisodeRecord], seconds: float, decisions: int
 ) -> dict[str, object]:

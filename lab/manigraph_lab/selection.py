@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TextIO
 
-from manigraph_lab.evaluate import evaluate
+from manigraph_lab.evaluate import success_rate
 from manigraph_lab.suite import Cell, cells
 
 #: First episode seed of validation episodes.
@@ -53,7 +53,7 @@ def score(
         policy = load_policy(str(path))
         scores = {}
         for cell in table:
-            scores[cell.label] = float(evaluate(policy, cell.spec, progress=None)["success_rate"])  # type: ignore[arg-type]
+            scores[cell.label] = success_rate(policy, cell.spec)
             if progress is not None:
                 print(f"  {path.name}: {cell.label}: {scores[cell.label]:.3f}", file=progress)
         candidates.append(Candidate(path, scores))
@@ -61,8 +61,8 @@ def score(
 
 
 def best(candidates: list[Candidate]) -> Candidate:
-    """Highest mean success; the earliest candidate among equals."""
-    return max(candidates, key=lambda c: (c.mean, -candidates.index(c)))
+    """Highest mean success; the earliest candidate among equals (``max`` keeps the first)."""
+    return max(candidates, key=lambda c: c.mean)
 
 
 def markdown(candidates: list[Candidate], chosen: Candidate, episodes: int, seed: int) -> str:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_lab.evaluate import EvalSpec, evaluate
+from manigraph_lab.evaluate import EvalSpec, success_rate
 from manigraph_planner.policies import load_policy
 
 
@@ -85,12 +85,12 @@ def run_suite(
         for seed in seeds:
             policy = load_policy(str(checkpoint_for(out, demos, arch, seed, epochs)))
             for cell in table:
-                rate = float(evaluate(policy, cell.spec, progress=None)["success_rate"])  # type: ignore[arg-type]
+                rate = success_rate(policy, cell.spec)
                 results[arch][cell.label].append(rate)
                 print(f"{arch} seed {seed}: {cell.label}: {rate:.3f}", file=sys.stderr, flush=True)
             for k in CURVE_K:
                 spec = EvalSpec("stack", k, episodes=curve_episodes, seed=10_000)
-                curves[arch][k].append(float(evaluate(policy, spec, progress=None)["success_rate"]))  # type: ignore[arg-type]
+                curves[arch][k].append(success_rate(policy, spec))
     (out / "generalization.md").write_text(markdown(table, results, seeds, episodes))
     plot(curves, out / "success_vs_k.png", len(seeds), curve_episodes)
     summary = {
