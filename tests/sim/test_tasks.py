@@ -101,6 +101,32 @@ def test_box_pack_starts_closed_and_storage_is_optional() -> None:
     assert after.object(top.id).position.z > scene.goal("lid_goal_0").position.z
 
 
+@pytest.mark.parametrize("task", ["box-pack", "box-unpack", "box-rearrangement"])
+def test_every_storage_place_takes_a_cover(task: str) -> None:
+    """A storage place never lies so close to a box that a cover put there rests on the
+    box's rim (sites 20 cm apart can still be 15 cm apart in x and y; a cover is 16 cm)."""
+    for seed in range(200):
+        request = EpisodeRequest(episode_id="e", task=task, blocks=4, seed=seed)
+        for store in _storage_places(request):
+            sim = GeometricBackend()
+            sim.reset(request, 0.0)
+            scene = sim.scene(0.0)
+            assert scene is not None
+            cover, goal = scene.object("cover_0"), scene.goal(store)
+            assert sim.execute(command(GripperOp.PICK, cover.id, cover.position), 0.0).ok
+            assert sim.execute(command(GripperOp.PLACE, cover.id, goal.position), 0.0).ok
+            after = sim.scene(0.0)
+            assert after is not None and after.goal(store).filled, f"seed {seed}: {store}"
+
+
+def _storage_places(request: EpisodeRequest) -> list[str]:
+    sim = GeometricBackend()
+    sim.reset(request, 0.0)
+    scene = sim.scene(0.0)
+    assert scene is not None
+    return [g.id for g in scene.goals if g.id.startswith("storage")]
+
+
 def test_blocks_in_a_closed_box_cannot_be_picked() -> None:
     sim = GeometricBackend()
     sim.reset(EpisodeRequest(episode_id="e", task="box-unpack", blocks=2, seed=0), 0.0)

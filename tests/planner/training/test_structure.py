@@ -22,6 +22,7 @@ from manigraph_planner.training.structure import (
     extend_towers,
     hide_box_contents,
     is_closing,
+    open_box_contents,
 )
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
 
@@ -135,6 +136,36 @@ def test_an_open_box_elsewhere_keeps_the_label(samples: list[Sample]) -> None:
             assert graph.x.shape[0] == sample.x.shape[0] + 3  # a stored cover, its place, a lid
         assert_expert_agrees(graph)
     assert added >= len(samples) // 2
+
+
+def test_an_opening_expert_can_be_shown_an_open_box_with_blocks_or_goals(
+    samples: list[Sample],
+) -> None:
+    generator = torch.Generator().manual_seed(3)
+    shown = {"blocks": 0, "goals": 0}
+    for sample in samples:
+        graph = as_graph(sample)
+        allowed = open_box_contents(graph, GEOMETRY)
+        # Hiding the box's contents (the label is the expert's on the whole scene) leaves
+        # the same choice: only what lies outside the box being opened counts.
+        assert open_box_contents(hide_box_contents(graph, GEOMETRY), GEOMETRY) == allowed
+        for kind in ("blocks", "goals"):
+            count = {"loose_blocks": 4} if kind == "blocks" else {"free_goals": 4}
+            edited = add_open_box(graph, generator, GEOMETRY, **count)
+            if edited.x.shape[0] == graph.x.shape[0]:
+                continue  # no free site on the table
+            if kind in allowed:
+                assert edited.x.shape[0] == graph.x.shape[0] + 3 + 4
+                assert_expert_agrees(edited)
+                shown[kind] += 1
+            elif allowed:
+                # The other kind would hand the expert a block to move: the guard matters.
+                decision = ExpertPolicy().decide(as_scene(edited.x))
+                assert decision is not None
+                assert int(edited.x[int(decision.object_id[1:]), 0]) == BLOCK
+    assert shown["blocks"] and shown["goals"]
+    closing = next(as_graph(s) for s in samples if is_closing(as_graph(s), GEOMETRY))
+    assert open_box_contents(closing, GEOMETRY) == ()
 
 
 def test_a_closing_expert_can_be_shown_a_second_closed_box(samples: list[Sample]) -> None:

@@ -22,9 +22,13 @@ these steps; each keeps what the expert decides (step 3 is the one exception, ar
    earlier), and a free storage place (``closing_storage_probability``); elsewhere
    (probability ``distractor_probability``; none where the covers were dropped) a closed box
    and/or a free storage place
-   (:func:`~manigraph_planner.training.structure.add_distractors`). Then an empty open box,
-   its cover stored (``open_box_probability``,
-   :func:`~manigraph_planner.training.structure.add_open_box`), and, where a block is moved,
+   (:func:`~manigraph_planner.training.structure.add_distractors`). Then an open box, its
+   cover stored (:func:`~manigraph_planner.training.structure.add_open_box`): where the
+   expert opens a box, with probability ``open_box_contents_probability``, one holding 1-9
+   loose blocks or free block goals on its floor, whichever keeps the label
+   (:func:`~manigraph_planner.training.structure.open_box_contents`): box rearrangement's
+   second step, one box open and the other still closed; otherwise an empty one
+   (``open_box_probability``). And, where a block is moved,
    a finished goal stack with free goals on top elsewhere (``finished_tower_probability``,
    up to ``max_finished_levels``;
    :func:`~manigraph_planner.training.structure.add_finished_tower`). The demonstrations show
@@ -62,6 +66,7 @@ import torch
 from manigraph_planner.training.dataset import Sample
 from manigraph_planner.training.structure import (
     BLOCK,
+    BOX_CELLS,
     Graph,
     SceneGeometry,
     add_distractors,
@@ -71,6 +76,7 @@ from manigraph_planner.training.structure import (
     extend_towers,
     hide_box_contents,
     is_closing,
+    open_box_contents,
 )
 
 #: The probabilities of the structural steps 1-4 (see the module docstring).
@@ -82,6 +88,7 @@ STRUCTURAL_PROBABILITIES = (
     "closing_storage_probability",
     "distractor_probability",
     "open_box_probability",
+    "open_box_contents_probability",
     "finished_tower_probability",
 )
 
@@ -100,6 +107,7 @@ class Augmentation:
     drop_covers_probability: float = 0.5
     hide_probability: float = 0.5
     open_box_probability: float = 0.3
+    open_box_contents_probability: float = 0.5
     closing_box_probability: float = 1.0
     closing_storage_probability: float = 0.5
     finished_tower_probability: float = 0.5
@@ -151,7 +159,15 @@ class Augmentation:
         elif self._chance(self.distractor_probability, generator):
             box, storage = (self._chance(0.5, generator) for _ in range(2))
             graph = add_distractors(graph, box, storage or not box, generator, self.geometry)
-        if self._chance(self.open_box_probability, generator):
+        contents = open_box_contents(graph, self.geometry)
+        if contents and self._chance(self.open_box_contents_probability, generator):
+            kind = contents[int(torch.randint(len(contents), (1,), generator=generator))]
+            count = 1 + self._levels(generator, len(BOX_CELLS) - 1)
+            if kind == "blocks":
+                graph = add_open_box(graph, generator, self.geometry, loose_blocks=count)
+            else:
+                graph = add_open_box(graph, generator, self.geometry, free_goals=count)
+        elif self._chance(self.open_box_probability, generator):
             graph = add_open_box(graph, generator, self.geometry)
         if self._chance(self.finished_tower_probability, generator):
             levels = self._levels(generator, self.max_finished_levels)

@@ -299,13 +299,21 @@ def hide_box_contents(graph: Graph, geometry: SceneGeometry) -> Graph:
     return _remove(graph, drop)
 
 
-def add_open_box(graph: Graph, generator: torch.Generator, geometry: SceneGeometry) -> Graph:
-    """Add an empty open box elsewhere: a free lid goal, its cover in a storage place.
+def add_open_box(
+    graph: Graph,
+    generator: torch.Generator,
+    geometry: SceneGeometry,
+    loose_blocks: int = 0,
+    free_goals: int = 0,
+) -> Graph:
+    """Add an open box elsewhere: a free lid goal, its cover in a storage place, and on its
+    floor ``loose_blocks`` blocks in no goal or ``free_goals`` free block goals (see
+    :func:`open_box_contents` for when either keeps the label).
 
-    The expert ignores it when moving or uncovering blocks (the new lid is higher than any
-    storage place, so it is never the lowest free cover goal); when closing, the new stored
-    cover and lid tie with the demonstrated ones, and either pairing closes a box. Needs a
-    demonstrated box to copy heights from; else returns ``graph``."""
+    An empty one: the expert ignores it when moving or uncovering blocks (the new lid is
+    higher than any storage place, so it is never the lowest free cover goal); when closing,
+    the new stored cover and lid tie with the demonstrated ones, and either pairing closes a
+    box. Needs a demonstrated box to copy heights from; else returns ``graph``."""
     x = graph.x
     heights = _lid_and_storage_heights(x, geometry)
     if heights is None:
@@ -318,9 +326,43 @@ def add_open_box(graph: Graph, generator: torch.Generator, geometry: SceneGeomet
     if store is None:
         return graph
     (bx, by), (sx, sy) = box.tolist(), store.tolist()
-    cover = [[COVER, sx, sy, storage_z, 1.0]]
+    objects = [[COVER, sx, sy, storage_z, 1.0]]
     goals = [[COVER_GOAL, bx, by, lid_z, 0.0], [COVER_GOAL, sx, sy, storage_z, 1.0]]
-    return _rebuild(graph, x.clone(), cover, goals)
+    floor = storage_z - geometry.cover_thickness / 2 + geometry.block_size / 2
+    for i, (dx, dy) in enumerate(BOX_CELLS[: max(loose_blocks, free_goals)]):
+        cell = [bx + dx * geometry.grid_pitch, by + dy * geometry.grid_pitch, floor, 0.0]
+        if i < loose_blocks:
+            objects.append([BLOCK, *cell])
+        if i < free_goals:
+            goals.append([BLOCK_GOAL, *cell])
+    return _rebuild(graph, x.clone(), objects, goals)
+
+
+def open_box_contents(graph: Graph, geometry: SceneGeometry) -> tuple[str, ...]:
+    """What an open box added while the expert takes a cover off a box may hold and keep
+    the label: ``"blocks"`` (loose blocks on its floor) where no free block goal lies outside
+    the box being opened, ``"goals"`` (free block goals on its floor) where no block still
+    to move lies outside it; nothing where the expert is not opening a box.
+
+    Rule 1 moves a block only when a movable block and an uncovered free goal both exist;
+    the box being opened hides (covers) everything inside it, so with only one of the two
+    outside it, rule 1 still has nothing to do and rule 2 opens the same box: the new
+    blocks or goals lie under no cover. This is box rearrangement's second step: one box
+    open, its blocks (or its free goals) in view, the other box still closed."""
+    cover = _opened_cover(graph, geometry)
+    if cover is None:
+        return ()
+    x = graph.x
+    inside = ((x[:, 1:3] - cover[1:3]).abs().amax(dim=1) <= geometry.box_half_width) & (
+        x[:, 3] < cover[3]
+    )
+    outside_free = ~inside & (x[:, 4] == 0.0)
+    kinds = []
+    if not bool((outside_free & (x[:, 0] == BLOCK_GOAL)).any()):
+        kinds.append("blocks")
+    if not bool((outside_free & (x[:, 0] == BLOCK)).any()):
+        kinds.append("goals")
+    return tuple(kinds)
 
 
 def is_closing(graph: Graph, geometry: SceneGeometry) -> bool:
