@@ -39,7 +39,13 @@ def test_policy_takes_the_recorded_decision_on_every_recorded_scene(log: Path) -
     assert actions, f"{log.name} holds no decisions"
     policy = load_policy(str(checkpoint_of(log)))
     for action in actions:
-        decision = policy.decide(scenes[(action.episode_id, action.scene_sequence)])
+        key = (action.episode_id, action.scene_sequence)
+        assert key in scenes, (
+            f"{log.name} lacks scene {action.scene_sequence}, decided on in "
+            f"{action.decision_id}: scenes are sent 'latest only' and the recorder missed it; "
+            "regenerate the log (scripts/regenerate-golden-logs.sh) on a quiet machine"
+        )
+        decision = policy.decide(scenes[key])
         assert decision is not None
         assert (decision.object_id, decision.goal_id) == (action.object_id, action.goal_id), (
             f"{log.name} {action.decision_id}"

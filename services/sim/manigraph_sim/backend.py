@@ -39,6 +39,62 @@ class SimBackend(ABC):
         """The end event, once, when the episode has just ended; else None."""
 
 
+class EpisodeBackend(SimBackend):
+    """A backend's episode bookkeeping: the request, the goals that must be filled, the step
+    budget, and start and end events. Subclasses lay out their world, say which goals are
+    occupied (:meth:`occupied_goals`) and decide when the episode has ended (``ended``)."""
+
+    def __init__(self) -> None:
+        self.request: EpisodeRequest | None = None
+        self.required: set[str] = set()
+        self.steps = 0
+        self.max_steps = 0
+        self.sequence = 0
+        self.ended = True
+        self._end_reported = True
+
+    def begin(
+        self, request: EpisodeRequest, required: set[str], max_steps: int, stamp: float
+    ) -> EpisodeEvent:
+        """Start ``request``'s episode (its world laid out); returns its start event."""
+        self.request = request
+        self.required = required
+        self.steps = 0
+        self.max_steps = max_steps
+        self.ended = False
+        self._end_reported = False
+        return self._event(EpisodePhase.START, stamp)
+
+    @abstractmethod
+    def occupied_goals(self) -> set[str]:
+        """Ids of the goals something fills now."""
+
+    def required_filled(self) -> int:
+        return len(self.required & self.occupied_goals())
+
+    def end_event(self, stamp: float) -> EpisodeEvent | None:
+        if not self.ended or self._end_reported or self.request is None:
+            return None
+        self._end_reported = True
+        self.episode_ended()
+        return self._event(EpisodePhase.END, stamp)
+
+    def episode_ended(self) -> None:
+        """Called once as the end event is made (e.g. to write the episode's video)."""
+
+    def _event(self, phase: EpisodePhase, stamp: float) -> EpisodeEvent:
+        assert self.request is not None
+        return episode_event(
+            self.request,
+            phase,
+            stamp,
+            filled=self.required_filled(),
+            total=len(self.required),
+            steps=self.steps,
+            max_steps=self.max_steps,
+        )
+
+
 def episode_event(
     request: EpisodeRequest,
     phase: EpisodePhase,

@@ -7,14 +7,13 @@ import numpy as np
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
     EpisodeEvent,
-    EpisodePhase,
     EpisodeRequest,
     GripperOp,
     RobotCommand,
     RobotFeedback,
     Scene,
 )
-from manigraph_sim.backend import SimBackend, episode_event, register_backend
+from manigraph_sim.backend import EpisodeBackend, register_backend
 from manigraph_sim.geometric.world import GeometricWorld
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.tasks.box_geometry import BoxGeometry
@@ -22,19 +21,13 @@ from manigraph_sim.tasks.from_request import episode_layout
 
 
 @register_backend("geometric")
-class GeometricBackend(SimBackend):
+class GeometricBackend(EpisodeBackend):
     def __init__(self, goal_tolerance: float = 0.01, boxes: BoxGeometry | None = None) -> None:
+        super().__init__()
         self.goal_tolerance = goal_tolerance
         #: The box tasks' geometry (None: the default, the demonstrations').
         self.boxes = boxes
         self.world: GeometricWorld | None = None
-        self.required: set[str] = set()
-        self.request: EpisodeRequest | None = None
-        self.steps = 0
-        self.max_steps = 0
-        self.sequence = 0
-        self.ended = True
-        self._end_reported = True
 
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
         episode = episode_layout(request, self.boxes)
@@ -46,13 +39,7 @@ class GeometricBackend(SimBackend):
             containers=layout.containers,
             hide_inside_closed=layout.partially_observable,
         )
-        self.required = layout.required_goals()
-        self.request = request
-        self.steps = 0
-        self.max_steps = episode.max_steps
-        self.ended = False
-        self._end_reported = False
-        return self._event(EpisodePhase.START, stamp)
+        return self.begin(request, layout.required_goals(), episode.max_steps, stamp)
 
     def scene(self, stamp: float) -> Scene | None:
         if self.world is None or self.request is None:
@@ -87,24 +74,6 @@ class GeometricBackend(SimBackend):
         if self.required_filled() == len(self.required) or self.steps >= self.max_steps:
             self.ended = True
 
-    def required_filled(self) -> int:
+    def occupied_goals(self) -> set[str]:
         assert self.world is not None
-        return len(self.required & self.world.occupancy().keys())
-
-    def end_event(self, stamp: float) -> EpisodeEvent | None:
-        if not self.ended or self._end_reported or self.world is None:
-            return None
-        self._end_reported = True
-        return self._event(EpisodePhase.END, stamp)
-
-    def _event(self, phase: EpisodePhase, stamp: float) -> EpisodeEvent:
-        assert self.world is not None and self.request is not None
-        return episode_event(
-            self.request,
-            phase,
-            stamp,
-            filled=self.required_filled(),
-            total=len(self.required),
-            steps=self.steps,
-            max_steps=self.max_steps,
-        )
+        return set(self.world.occupancy())

@@ -26,7 +26,6 @@ from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_shared.grasp_points import grasp_height
 from manigraph_shared.messages import (
     EpisodeEvent,
-    EpisodePhase,
     EpisodeRequest,
     GripperTarget,
     JointState,
@@ -38,7 +37,7 @@ from manigraph_shared.messages import (
     Scene,
     SkillStatus,
 )
-from manigraph_sim.backend import SimBackend, episode_event
+from manigraph_sim.backend import EpisodeBackend
 from manigraph_sim.geometric.world import Body, GeometricWorld
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
@@ -54,7 +53,7 @@ HELD_DISTANCE = 0.03
 START_TOLERANCE = 0.05
 
 
-class PhysicsBackend(SimBackend):
+class PhysicsBackend(EpisodeBackend):
     """Runs as fast as it can, or in real time with ``realtime=True``."""
 
     def __init__(
@@ -66,6 +65,7 @@ class PhysicsBackend(SimBackend):
     ) -> None:
         if not 0 < goal_tolerance <= 0.1:
             raise ConfigError("goal_tolerance", f"{goal_tolerance} must be in (0, 0.1] metres")
+        super().__init__()
         self.goal_tolerance = goal_tolerance
         self.realtime = realtime
         self.video_config = video
@@ -75,16 +75,9 @@ class PhysicsBackend(SimBackend):
         self.config = config or PhysicsConfig()
         self.world: PhysicsWorld | None = None
         self.layout: Layout | None = None
-        self.request: EpisodeRequest | None = None
-        self.required: set[str] = set()
         #: Boxes seen open in this episode: their contents stay observed (partial observability).
         self.revealed: set[str] = set()
-        self.steps = 0
-        self.max_steps = 0
         self.physics_steps = 0
-        self.sequence = 0
-        self.ended = True
-        self._end_reported = True
 
     # --- episodes ---------------------------------------------------------------------------
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
@@ -102,13 +95,7 @@ class PhysicsBackend(SimBackend):
             self.world.on_step.append(self.video.on_step)
             self.video.capture()
         self.layout = layout
-        self.request = request
-        self.required = layout.required_goals()
-        self.steps = 0
-        self.max_steps = episode.max_steps
-        self.ended = False
-        self._end_reported = False
-        return self._event(EpisodePhase.START, stamp)
+        return self.begin(request, layout.required_goals(), episode.max_steps, stamp)
 
     def _geometric_view(self) -> GeometricWorld:
         """The simulated poses as a geometric world, to apply its goal and visibility rules."""
@@ -233,25 +220,9 @@ class PhysicsBackend(SimBackend):
         done = not self.world.gripper_closed and self.required_filled() == len(self.required)
         self.ended = done or self.steps >= self.max_steps
 
-    def required_filled(self) -> int:
-        return len(self.required & self._geometric_view().occupancy().keys())
+    def occupied_goals(self) -> set[str]:
+        return set(self._geometric_view().occupancy())
 
-    def end_event(self, stamp: float) -> EpisodeEvent | None:
-        if not self.ended or self._end_reported or self.world is None:
-            return None
-        self._end_reported = True
+    def episode_ended(self) -> None:
         if self.video is not None and self.request is not None:
             self.videos_written.append(self.video.write(self.request.episode_id, self.request.seed))
-        return self._event(EpisodePhase.END, stamp)
-
-    def _event(self, phase: EpisodePhase, stamp: float) -> EpisodeEvent:
-        assert self.request is not None
-        return episode_event(
-            self.request,
-            phase,
-            stamp,
-            filled=self.required_filled(),
-            total=len(self.required),
-            steps=self.steps,
-            max_steps=self.max_steps,
-        )
