@@ -42,7 +42,7 @@ def test_validation_episodes_are_the_suites_cells_on_other_seeds() -> None:
 
 @pytest.mark.slow
 def test_select_writes_the_better_checkpoint_with_every_candidates_scores(tmp_path: Path) -> None:
-    # The shipped sage solves the stacking cells the shipped gated fails (README table).
+    # The shipped sage solves K = 40 stacking, which the shipped gated fails (README table).
     candidates = [CHECKPOINTS / "gated.pt", CHECKPOINTS / "sage.pt"]
     out = tmp_path / "kept.pt"
     chosen, table = select_checkpoint(candidates, out, episodes=3, progress=None)

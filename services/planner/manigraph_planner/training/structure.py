@@ -232,16 +232,25 @@ def add_distractors(
         if node == "box":
             new_objects.append([COVER, sx, sy, lid_z, 1.0])
             new_goals.append([COVER_GOAL, sx, sy, lid_z, 1.0])
-            floor = storage_z - geometry.cover_thickness / 2 + geometry.block_size / 2
-            for dx, dy in BOX_CELLS[:packed]:
-                cell = [sx + dx * geometry.grid_pitch, sy + dy * geometry.grid_pitch, floor, 1.0]
-                new_objects.append([BLOCK, *cell])
-                new_goals.append([BLOCK_GOAL, *cell])
+            for cell in _floor_cells(site, packed, storage_z, geometry):
+                new_objects.append([BLOCK, *cell, 1.0])
+                new_goals.append([BLOCK_GOAL, *cell, 1.0])
         else:
             new_goals.append([COVER_GOAL, sx, sy, storage_z, 0.0])
     if not new_goals:
         return graph
     return _rebuild(graph, x.clone(), new_objects, new_goals)
+
+
+def _floor_cells(
+    site: Tensor, count: int, storage_z: float, geometry: SceneGeometry
+) -> list[list[float]]:
+    """Centres ``[x, y, z]`` of the first ``count`` cells of the block grid on the floor of a
+    box at ``site`` (the table is a stored cover's half thickness below ``storage_z``)."""
+    sx, sy = site.tolist()
+    floor = storage_z - geometry.cover_thickness / 2 + geometry.block_size / 2
+    pitch = geometry.grid_pitch
+    return [[sx + dx * pitch, sy + dy * pitch, floor] for dx, dy in BOX_CELLS[:count]]
 
 
 def _free_site(taken: Tensor, generator: torch.Generator, geometry: SceneGeometry) -> Tensor | None:
@@ -283,6 +292,12 @@ def _opened_cover(graph: Graph, geometry: SceneGeometry) -> Tensor | None:
     return None
 
 
+def _under(cover: Tensor, x: Tensor, geometry: SceneGeometry) -> Tensor:
+    """Which nodes lie inside the box that ``cover`` (a node row) closes."""
+    beside = (x[:, 1:3] - cover[1:3]).abs().amax(dim=1) <= geometry.box_half_width
+    return beside & (x[:, 3] < cover[3])
+
+
 def hide_box_contents(graph: Graph, geometry: SceneGeometry) -> Graph:
     """When the expert takes a cover off a box, remove the blocks and block goals inside that
     box: the scene as a robot sees it when what a closed box holds is not observed (box
@@ -292,8 +307,7 @@ def hide_box_contents(graph: Graph, geometry: SceneGeometry) -> Graph:
     if cover is None:
         return graph
     x = graph.x
-    inside = (x[:, 1:3] - cover[1:3]).abs().amax(dim=1) <= geometry.box_half_width
-    drop = inside & (x[:, 3] < cover[3]) & ((x[:, 0] == BLOCK) | (x[:, 0] == BLOCK_GOAL))
+    drop = _under(cover, x, geometry) & ((x[:, 0] == BLOCK) | (x[:, 0] == BLOCK_GOAL))
     if not bool(drop.any()):
         return graph
     return _remove(graph, drop)
@@ -328,13 +342,12 @@ def add_open_box(
     (bx, by), (sx, sy) = box.tolist(), store.tolist()
     objects = [[COVER, sx, sy, storage_z, 1.0]]
     goals = [[COVER_GOAL, bx, by, lid_z, 0.0], [COVER_GOAL, sx, sy, storage_z, 1.0]]
-    floor = storage_z - geometry.cover_thickness / 2 + geometry.block_size / 2
-    for i, (dx, dy) in enumerate(BOX_CELLS[: max(loose_blocks, free_goals)]):
-        cell = [bx + dx * geometry.grid_pitch, by + dy * geometry.grid_pitch, floor, 0.0]
-        if i < loose_blocks:
-            objects.append([BLOCK, *cell])
-        if i < free_goals:
-            goals.append([BLOCK_GOAL, *cell])
+    objects += [
+        [BLOCK, *cell, 0.0] for cell in _floor_cells(box, loose_blocks, storage_z, geometry)
+    ]
+    goals += [
+        [BLOCK_GOAL, *cell, 0.0] for cell in _floor_cells(box, free_goals, storage_z, geometry)
+    ]
     return _rebuild(graph, x.clone(), objects, goals)
 
 
@@ -353,10 +366,7 @@ def open_box_contents(graph: Graph, geometry: SceneGeometry) -> tuple[str, ...]:
     if cover is None:
         return ()
     x = graph.x
-    inside = ((x[:, 1:3] - cover[1:3]).abs().amax(dim=1) <= geometry.box_half_width) & (
-        x[:, 3] < cover[3]
-    )
-    outside_free = ~inside & (x[:, 4] == 0.0)
+    outside_free = ~_under(cover, x, geometry) & (x[:, 4] == 0.0)
     kinds = []
     if not bool((outside_free & (x[:, 0] == BLOCK_GOAL)).any()):
         kinds.append("blocks")
