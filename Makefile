@@ -26,7 +26,7 @@ test-fast: install  ## unit tests only
 lint: install
 	$(RUN) ruff check .
 	$(RUN) ruff format --check .
-	$(RUN) mypy shared/manigraph_shared
+	$(RUN) mypy shared/manigraph_shared tools/manigraph_tools
 
 format: install
 	$(RUN) ruff format .

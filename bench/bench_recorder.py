@@ -14,7 +14,7 @@ from pathlib import Path
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action
-from manigraph_shared.testing import stack
+from manigraph_tools.testing import stack
 
 
 def main() -> None:

@@ -15,8 +15,8 @@ import time
 from pathlib import Path
 
 from manigraph_shared.messages import Action, EpisodeRequest, Scene
-from manigraph_shared.testing import stack
 from manigraph_sim.geometric.backend import GeometricBackend
+from manigraph_tools.testing import stack
 
 
 def scene_for(blocks: int, episode: str) -> Scene:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from manigraph_shared.contract_doc import field_tables, key_table
+from manigraph_tools.contract_doc import field_tables, key_table
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 

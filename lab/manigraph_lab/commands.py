@@ -49,8 +49,8 @@ def _eval_configure(parser: argparse.ArgumentParser) -> None:
 def _eval_run(args: argparse.Namespace) -> int:
     from manigraph_lab.evaluate import EvalSpec, evaluate
     from manigraph_planner.policies import load_policy
-    from manigraph_shared.episodes import read_task_file
     from manigraph_shared.errors import ConfigError
+    from manigraph_tools.episodes import read_task_file
 
     if args.noise < 0:
         raise ConfigError("noise", "must be >= 0 metres")

@@ -21,7 +21,7 @@ import pytest
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import EpisodeEvent
-from manigraph_shared.testing import free_port
+from manigraph_tools.testing import free_port
 
 # The first test also builds every image: cold, on a fresh engine, that takes 6-15 minutes
 # (the torch wheels), far past the suite's 300 s per-test limit.

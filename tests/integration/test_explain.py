@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from manigraph_shared.messages import Action, ExplainRequest, Explanation
-from manigraph_shared.testing import Stack
+from manigraph_tools.testing import Stack
 
 pytestmark = pytest.mark.integration
 

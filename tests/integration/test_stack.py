@@ -12,7 +12,7 @@ from mcap.reader import make_reader
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, Scene, ServiceStatus
-from manigraph_shared.testing import Stack, free_port, run_up
+from manigraph_tools.testing import Stack, free_port, run_up
 
 pytestmark = pytest.mark.integration
 

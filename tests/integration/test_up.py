@@ -14,7 +14,7 @@ import pytest
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, Explanation
-from manigraph_shared.testing import free_port, run_up
+from manigraph_tools.testing import free_port, run_up
 
 CHECKPOINTS = Path(__file__).resolve().parents[2] / "checkpoints"
 

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from manigraph_shared.testing import run_up
+from manigraph_tools.testing import run_up
 
 pytestmark = pytest.mark.integration
 

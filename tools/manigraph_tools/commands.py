@@ -10,19 +10,19 @@ import threading
 import time
 from pathlib import Path
 
-from manigraph_shared import contract_doc, doctor
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
-from manigraph_shared.episodes import EpisodePlan, read_task_file, run_episodes
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
-from manigraph_shared.recorder import Recorder
-from manigraph_shared.replay import ActionCheck, Replayer, recorded_actions
-from manigraph_shared.router import run_router
 from manigraph_shared.service import run_service
-from manigraph_shared.supervisor import ProcessSpec, Supervisor
+from manigraph_tools import contract_doc, doctor
+from manigraph_tools.episodes import EpisodePlan, read_task_file, run_episodes
+from manigraph_tools.recorder import Recorder
+from manigraph_tools.replay import ActionCheck, Replayer, recorded_actions
+from manigraph_tools.router import run_router
+from manigraph_tools.supervisor import ProcessSpec, Supervisor
 
 
 def _emit_json(summary: dict[str, object], readable: bool = False) -> None:

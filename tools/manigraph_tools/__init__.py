@@ -1,0 +1,1 @@
+"""manigraph stack tools: router, recorder, replay, doctor, run and up, over the contract."""
