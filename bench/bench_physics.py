@@ -11,9 +11,9 @@ import time
 
 import numpy as np
 
+from manigraph_lab.in_process import InProcessJointTransport
 from manigraph_shared.messages import Action, EpisodeRequest, SkillState
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_sim.physics.in_process import InProcessTransport
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver
 from manigraph_skills.motion.model import top_down
@@ -72,7 +72,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=5)
     args = parser.parse_args()
     backend = PhysicsBackend()
-    driver = PandaMotionDriver(InProcessTransport(backend))
+    driver = PandaMotionDriver(InProcessJointTransport(backend))
     skill = PickAndPlace(driver, Workspace())
     timestep = backend.config.timestep
 

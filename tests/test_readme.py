@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from manigraph_tools.contract_doc import field_tables, key_table
+from manigraph_tools.contract_doc import field_tables, flow_diagram, key_table
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 
@@ -27,3 +27,10 @@ def test_readme_field_tables_match_the_message_declarations() -> None:
 def test_readme_names_the_two_commands() -> None:
     text = README.read_text()
     assert "make up" in text and "make test" in text
+
+
+def test_readme_flow_diagram_matches_the_service_manifests() -> None:
+    text = README.read_text()
+    block = re.search(r"<!-- flow:start -->\n```mermaid\n(.*?)\n```\n<!-- flow:end -->", text, re.S)
+    assert block is not None, "README lost its flow:start/flow:end markers"
+    assert block.group(1).strip() == flow_diagram().strip(), "run `manigraph keys --flow`"

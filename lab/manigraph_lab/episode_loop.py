@@ -1,8 +1,13 @@
-"""Episodes in one process: the geometric world, a policy, and the same messages as the stack.
+"""Episodes in one process: a sim backend, a policy, and the services' own logic.
 
-This is what ``manigraph eval`` and ``manigraph demos`` run: no bus, so thousands of episodes
-take seconds, but every step goes through the contract's ``Scene`` and ``RobotCommand`` so the
-in-process result is the result the services would produce (a test checks that parity).
+This is what ``manigraph eval`` and ``manigraph demos`` run. There is no bus, so thousands of
+episodes take seconds, but nothing is re-implemented either: decisions come from the planner's
+``DecisionMaker``, and are executed by the skills' ``PickAndPlace`` with the skills' own robot
+driver, whose commands a transport hands straight to the backend. In-process and distributed
+runs therefore cannot drift apart (a test checks that they take the same decisions).
+
+Time is a step clock: every message of step ``t`` is stamped ``t``, so logs (and the
+demonstrations' data hash) are the same on every machine.
 """
 
 from __future__ import annotations
@@ -12,18 +17,23 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from manigraph_lab.in_process import InProcessGripperTransport
+from manigraph_planner.decisions import DecisionMaker
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.messages import (
     Action,
     EpisodeEvent,
     EpisodeRequest,
-    GripperOp,
-    RobotCommand,
     Scene,
+    SkillState,
     Vector3,
 )
-from manigraph_sim.backend import SimBackend
+from manigraph_sim.backend import EpisodeBackend, SimBackend
 from manigraph_sim.geometric.backend import GeometricBackend
+from manigraph_skills.drivers.base import RobotDriver
+from manigraph_skills.drivers.gripper import GripperDriver
+from manigraph_skills.pick_and_place import PickAndPlace
+from manigraph_skills.workspace import Workspace
 
 
 @dataclass
@@ -44,6 +54,21 @@ class EpisodeRecord:
     @property
     def success(self) -> bool:
         return bool(self.end.success)
+
+
+class StepClock:
+    """The episode's clock: ``clock()`` is the current step's time; the loop advances it."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def gripper_driver(backend: SimBackend, clock: StepClock) -> RobotDriver:
+    """The geometric world's robot: the skills' gripper driver, commands straight to the world."""
+    return GripperDriver(InProcessGripperTransport(backend), clock)
 
 
 def add_noise(scene: Scene, sigma: float, rng: np.random.Generator) -> Scene:
@@ -70,62 +95,43 @@ def run_episode(
     request: EpisodeRequest,
     noise: float = 0.0,
     backend_factory: Callable[[], SimBackend] = GeometricBackend,
+    driver_factory: Callable[[SimBackend, StepClock], RobotDriver] = gripper_driver,
+    workspace: Workspace | None = None,
 ) -> EpisodeRecord:
     """One episode to its end (success, step budget, or a policy with nothing to do).
 
-    Observation noise reaches the policy only; the robot acts on the object and goal the
+    Observation noise reaches the policy only; the skill acts on the object and goal the
     policy named, at their true poses, as a PickAndPlace primitive with its own grasp
     perception would. The noise stream is seeded by the episode seed.
     """
     backend = backend_factory()
-    clock = 0.0
-    start = backend.reset(request, clock)
+    clock = StepClock()
+    start = backend.reset(request, clock())
+    planner = DecisionMaker(policy, clock)
+    planner.on_episode(start)
+    skill = PickAndPlace(driver_factory(backend, clock), workspace or Workspace(), clock)
     rng = np.random.default_rng([request.seed, 7919])
-    record_steps: list[Step] = []
-    step = 0
+    steps: list[Step] = []
     while True:
-        clock += 1.0
-        end = backend.end_event(clock)
+        clock.now += 1.0
+        end = backend.end_event(clock())
         if end is not None:
-            return EpisodeRecord(request, start, end, record_steps)
-        truth = backend.scene(clock)
+            return EpisodeRecord(request, start, end, steps)
+        truth = backend.scene(clock())
         assert truth is not None
         observed = add_noise(truth, noise, rng)
-        decision = policy.decide(observed)
-        if decision is None:
-            return EpisodeRecord(request, start, _stuck(backend, request, clock), record_steps)
-        action = decision.to_action(truth, step, policy.name, clock)
-        step += 1
-        ok, reason = _pick_and_place(backend, truth, action, clock)
-        record_steps.append(Step(observed, action, ok, reason))
+        action = planner.on_scene(observed)
+        if action is None:
+            return EpisodeRecord(request, start, _stuck(backend, clock()), steps)
+        status = skill.execute(action, truth, report=backend.skill_finished)
+        planner.on_status(status)
+        steps.append(Step(observed, action, status.state is SkillState.SUCCEEDED, status.reason))
 
 
-def _pick_and_place(
-    backend: SimBackend, truth: Scene, action: Action, clock: float
-) -> tuple[bool, str | None]:
-    item = truth.object(action.object_id)
-    goal = truth.goal(action.goal_id)
-    for op, position in ((GripperOp.PICK, item.position), (GripperOp.PLACE, goal.position)):
-        feedback = backend.execute(
-            RobotCommand(
-                command_id=f"{action.decision_id}.{op}",
-                decision_id=action.decision_id,
-                op=op,
-                object_id=item.id,
-                position=position,
-                stamp=clock,
-            ),
-            clock,
-        )
-        if not feedback.ok:
-            return False, feedback.reason
-    return True, None
-
-
-def _stuck(backend: SimBackend, request: EpisodeRequest, clock: float) -> EpisodeEvent:
+def _stuck(backend: SimBackend, stamp: float) -> EpisodeEvent:
     """The policy had nothing to do before the goals were filled: a failed episode."""
-    assert isinstance(backend, GeometricBackend)
+    assert isinstance(backend, EpisodeBackend)
     backend.ended = True
-    end = backend.end_event(clock)
+    end = backend.end_event(stamp)
     assert end is not None
     return end.model_copy(update={"reason": "policy had nothing to do"})

@@ -9,6 +9,7 @@ from typing import Any
 
 import pytest
 
+from manigraph_lab.in_process import InProcessJointTransport
 from manigraph_shared.messages import (
     Action,
     EpisodeRequest,
@@ -16,7 +17,6 @@ from manigraph_shared.messages import (
     SkillStatus,
 )
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_sim.physics.in_process import InProcessTransport
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.pick_and_place import PickAndPlace
 from manigraph_skills.workspace import Workspace
@@ -27,7 +27,7 @@ class InProcessLoop:
 
     def __init__(self, backend: PhysicsBackend, workspace: Workspace | None = None) -> None:
         self.backend = backend
-        self.driver = PandaMotionDriver(InProcessTransport(backend))
+        self.driver = PandaMotionDriver(InProcessJointTransport(backend))
         self.skill = PickAndPlace(self.driver, workspace or Workspace())
         self.decisions = 0
 

@@ -14,6 +14,7 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError
+from manigraph_shared.manifest import driver_for_world, load_manifests
 from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
 from manigraph_shared.service import run_service
@@ -189,9 +190,15 @@ doctor_command = Command(
 # --- keys ---------------------------------------------------------------------------------------
 def _keys_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fields", action="store_true", help="also print every message's fields")
+    parser.add_argument(
+        "--flow", action="store_true", help="print the services' flow diagram (Mermaid) instead"
+    )
 
 
 def _keys_run(args: argparse.Namespace) -> int:
+    if args.flow:
+        print(contract_doc.flow_diagram())
+        return 0
     print(contract_doc.key_table())
     if args.fields:
         print()
@@ -255,9 +262,10 @@ run_command = Command(
 )
 
 
-#: The robot driver the skills service needs for each sim backend: the geometric world takes
-#: Cartesian gripper commands, the physics Panda joint trajectories planned by the skills.
-SKILLS_DRIVER_FOR_SIM = {"geometric": "sim-gripper", "physics": "panda-sim"}
+def _skills_driver(sim_backend: str) -> str:
+    """The skills driver that needs only what the sim backend offers, from their manifests."""
+    manifests = load_manifests()
+    return driver_for_world(manifests["sim"], sim_backend, manifests["skills"])
 
 
 def _sim_args(args: argparse.Namespace) -> list[str]:
@@ -284,7 +292,7 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--sim",
         default="geometric",
-        choices=sorted(SKILLS_DRIVER_FOR_SIM),
+        choices=["geometric", "physics"],
         help="sim backend (default: geometric)",
     )
     parser.add_argument(
@@ -334,7 +342,7 @@ def _up_run(args: argparse.Namespace) -> int:
             + (["--explain-decisions"] if args.explain_decisions else []),
             bus_env,
         ),
-        ProcessSpec("skills", ["skills", "--driver", SKILLS_DRIVER_FOR_SIM[args.sim]], bus_env),
+        ProcessSpec("skills", ["skills", "--driver", _skills_driver(args.sim)], bus_env),
     ]
     supervisor = Supervisor(args.log_dir)
     summary: dict[str, object] | None = None

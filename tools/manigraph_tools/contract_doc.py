@@ -1,4 +1,5 @@
-"""The README's key table and field tables, generated from the message declarations."""
+"""The docs' generated blocks: the key and field tables from the message declarations, and
+the flow diagram from the services' manifests."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from enum import Enum
 from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 
+from manigraph_shared.manifest import load_manifests, mermaid_flow
 from manigraph_shared.messages import Delivery, Message
 
 DELIVERY_NOTE = {
@@ -77,3 +79,8 @@ def _describe(info: FieldInfo) -> str:
             if value is not None:
                 text += f" ({bound} {value})"
     return text.strip()
+
+
+def flow_diagram() -> str:
+    """Who sends what to whom, from every installed package's manifest (Mermaid)."""
+    return mermaid_flow(load_manifests().values())

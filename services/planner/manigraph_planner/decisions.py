@@ -5,6 +5,7 @@ from __future__ import annotations
 import threading
 import time
 from collections import OrderedDict
+from collections.abc import Callable
 
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene, SkillStatus
@@ -61,8 +62,9 @@ class DecisionMaker:
     ``<episode>:<step>``; the same log therefore drives a fresh planner to the same decisions.
     """
 
-    def __init__(self, policy: Policy) -> None:
+    def __init__(self, policy: Policy, clock: Callable[[], float] = time.time) -> None:
         self.policy = policy
+        self.clock = clock
         self.episode_id: str | None = None
         self.step = 0
         self.pending: str | None = None
@@ -114,7 +116,7 @@ class DecisionMaker:
         decision = self.policy.decide(scene)
         if decision is None:
             return None
-        action = decision.to_action(scene, self.step, self.policy.name, time.time())
+        action = decision.to_action(scene, self.step, self.policy.name, self.clock())
         self.step += 1
         self.history.add(scene, action)
         self.pending = action.decision_id

@@ -4,15 +4,20 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from typing import ClassVar
 
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import (
     EpisodeEvent,
     EpisodePhase,
     EpisodeRequest,
+    JointState,
+    JointTrajectoryCommand,
+    JointTrajectoryResult,
     RobotCommand,
     RobotFeedback,
     Scene,
+    SkillStatus,
 )
 
 
@@ -20,7 +25,11 @@ class SimBackend(ABC):
     """A world that can be reset into a seeded episode, observed and commanded.
 
     All methods take and return contract messages, so the logic is testable without a bus.
+    ``abilities`` are the optional ports of the sim's manifest (``manigraph_sim.manifest``)
+    that this backend serves.
     """
+
+    abilities: ClassVar[frozenset[str]] = frozenset()
 
     @abstractmethod
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
@@ -37,6 +46,25 @@ class SimBackend(ABC):
     @abstractmethod
     def end_event(self, stamp: float) -> EpisodeEvent | None:
         """The end event, once, when the episode has just ended; else None."""
+
+    def skill_finished(self, status: SkillStatus) -> None:
+        """A skill reported ``status``; a backend that counts steps by finished skills (the
+        physics world, whose robot takes many trajectories per skill) overrides this."""
+
+
+class JointedArmBackend(SimBackend):
+    """A world whose robot is a jointed arm: it executes joint trajectories and reports joint
+    state (the manifest's ``joint_trajectories`` ability)."""
+
+    @abstractmethod
+    def execute_trajectory(
+        self, command: JointTrajectoryCommand, stamp: float
+    ) -> JointTrajectoryResult:
+        """Follow ``command``'s trajectory (and gripper action) to its end."""
+
+    @abstractmethod
+    def joint_state(self, stamp: float) -> JointState | None:
+        """The arm's joints now, or None before the first episode."""
 
 
 class EpisodeBackend(SimBackend):

@@ -13,7 +13,8 @@ from manigraph_shared.messages import (
     SkillStatus,
 )
 from manigraph_shared.service import Service
-from manigraph_sim.backend import SimBackend
+from manigraph_sim.backend import JointedArmBackend, SimBackend
+from manigraph_sim.manifest import JOINTS
 
 
 class SimService(Service):
@@ -32,7 +33,7 @@ class SimService(Service):
         self.bus.serve(EpisodeRequest, self._reset_from_query)
         self.on(RobotCommand, self._execute)
         self.on(SkillStatus, self._on_skill_status)
-        if hasattr(self.backend, "execute_trajectory"):  # a backend with a jointed arm
+        if JOINTS in self.backend.abilities:
             self.on(JointTrajectoryCommand, self._execute_trajectory)
 
     def _reset_from_query(self, request: EpisodeRequest) -> EpisodeEvent:
@@ -88,7 +89,8 @@ class SimService(Service):
             self.bus.publish(end)
 
     def _execute_trajectory(self, command: JointTrajectoryCommand) -> None:
-        result = self.backend.execute_trajectory(command, time.time())  # type: ignore[attr-defined]
+        assert isinstance(self.backend, JointedArmBackend)
+        result = self.backend.execute_trajectory(command, time.time())
         if not result.ok:
             self.log.info("trajectory %s failed: %s", command.command_id, result.reason)
         self._publish_scene()
@@ -96,9 +98,7 @@ class SimService(Service):
         self._publish_end()
 
     def _on_skill_status(self, status: SkillStatus) -> None:
-        skill_finished = getattr(self.backend, "skill_finished", None)
-        if skill_finished is not None:  # a backend that counts steps by finished skills
-            skill_finished(status)
+        self.backend.skill_finished(status)
         if status.state.terminal:
             self._publish_scene()  # a fresh observation for the next decision, now
         self._publish_end()
@@ -107,9 +107,10 @@ class SimService(Service):
         scene = self.backend.scene(time.time())
         if scene is not None:
             self.bus.publish(scene)
-        joint_state = getattr(self.backend, "joint_state", None)
-        if joint_state is not None and (state := joint_state(time.time())) is not None:
-            self.bus.publish(state)
+        if isinstance(self.backend, JointedArmBackend):
+            state = self.backend.joint_state(time.time())
+            if state is not None:
+                self.bus.publish(state)
 
     def tick(self) -> None:
         self._publish_scene()

@@ -15,9 +15,12 @@ SKILL = "pick_and_place"
 
 
 class PickAndPlace:
-    def __init__(self, driver: RobotDriver, workspace: Workspace) -> None:
+    def __init__(
+        self, driver: RobotDriver, workspace: Workspace, clock: Callable[[], float] = time.time
+    ) -> None:
         self.driver = driver
         self.workspace = workspace
+        self.clock = clock
 
     def execute(
         self, action: Action, scene: Scene | None, report: Callable[[SkillStatus], None]
@@ -31,7 +34,7 @@ class PickAndPlace:
                 state=state,
                 reason=reason,
                 detail=detail,
-                stamp=time.time(),
+                stamp=self.clock(),
             )
             report(message)
             return message

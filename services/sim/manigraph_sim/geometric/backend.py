@@ -15,6 +15,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_sim.backend import EpisodeBackend, register_backend
 from manigraph_sim.geometric.world import GeometricWorld
+from manigraph_sim.manifest import GRIPPER
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.tasks.box_geometry import BoxGeometry
 from manigraph_sim.tasks.from_request import episode_layout
@@ -22,6 +23,8 @@ from manigraph_sim.tasks.from_request import episode_layout
 
 @register_backend("geometric")
 class GeometricBackend(EpisodeBackend):
+    abilities = frozenset({GRIPPER})
+
     def __init__(self, goal_tolerance: float = 0.01, boxes: BoxGeometry | None = None) -> None:
         super().__init__()
         self.goal_tolerance = goal_tolerance

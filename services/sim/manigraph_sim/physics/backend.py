@@ -37,8 +37,9 @@ from manigraph_shared.messages import (
     Scene,
     SkillStatus,
 )
-from manigraph_sim.backend import EpisodeBackend
+from manigraph_sim.backend import EpisodeBackend, JointedArmBackend
 from manigraph_sim.geometric.world import Body, GeometricWorld
+from manigraph_sim.manifest import JOINTS
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig
@@ -53,8 +54,10 @@ HELD_DISTANCE = 0.03
 START_TOLERANCE = 0.05
 
 
-class PhysicsBackend(EpisodeBackend):
+class PhysicsBackend(EpisodeBackend, JointedArmBackend):
     """Runs as fast as it can, or in real time with ``realtime=True``."""
+
+    abilities = frozenset({JOINTS})
 
     def __init__(
         self,

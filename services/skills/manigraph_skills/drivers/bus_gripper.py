@@ -1,25 +1,22 @@
-"""The geometric sim's robot: Cartesian gripper commands over the bus, one answer each."""
+"""``sim-gripper``: the geometric sim's robot, Cartesian gripper commands over the bus."""
 
 from __future__ import annotations
 
-import itertools
 import threading
-import time
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import SkillError
-from manigraph_shared.messages import GripperOp, Quaternion, RobotCommand, RobotFeedback, Vector3
-from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver, register_driver
+from manigraph_shared.messages import RobotCommand, RobotFeedback
+from manigraph_skills.drivers.base import register_driver
+from manigraph_skills.drivers.gripper import GripperDriver
 
 
-@register_driver("sim-gripper")
-class BusGripperDriver(RobotDriver):
-    """Sends ``RobotCommand`` on ``manigraph/robot/command`` and waits for its feedback."""
+class BusGripperTransport:
+    """Publishes ``RobotCommand`` on ``manigraph/robot/command`` and waits for its feedback."""
 
     def __init__(self, bus: Bus, timeout: float = 10.0) -> None:
         self.bus = bus
         self.timeout = timeout
-        self._ids = itertools.count()
         self._waiting: dict[str, threading.Event] = {}
         self._answers: dict[str, RobotFeedback] = {}
         self._lock = threading.Lock()
@@ -32,55 +29,25 @@ class BusGripperDriver(RobotDriver):
                 self._answers[feedback.command_id] = feedback
                 event.set()
 
-    def _send(
-        self,
-        op: GripperOp,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-    ) -> None:
-        command_id = f"{decision_id}.{next(self._ids)}"
+    def execute(self, command: RobotCommand) -> RobotFeedback:
         event = threading.Event()
         with self._lock:
-            self._waiting[command_id] = event
+            self._waiting[command.command_id] = event
         try:
-            self.bus.publish(
-                RobotCommand(
-                    command_id=command_id,
-                    decision_id=decision_id,
-                    op=op,
-                    object_id=object_id,
-                    position=position,
-                    orientation=orientation,
-                    stamp=time.time(),
-                )
-            )
+            self.bus.publish(command)
             if not event.wait(self.timeout):
-                raise SkillError("driver_timeout", f"no answer to {op} within {self.timeout} s")
-            feedback = self._answers.pop(command_id)
+                raise SkillError(
+                    "driver_timeout", f"no answer to {command.op} within {self.timeout} s"
+                )
+            with self._lock:
+                return self._answers.pop(command.command_id)
         finally:
             with self._lock:
-                self._waiting.pop(command_id, None)
-        if not feedback.ok:
-            raise SkillError(feedback.reason or "driver_error", feedback.detail)
+                self._waiting.pop(command.command_id, None)
+                self._answers.pop(command.command_id, None)
 
-    def pick(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        self._send(GripperOp.PICK, decision_id, object_id, position, orientation)
 
-    def place(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        self._send(GripperOp.PLACE, decision_id, object_id, position, orientation)
+@register_driver("sim-gripper")
+class BusGripperDriver(GripperDriver):
+    def __init__(self, bus: Bus, timeout: float = 10.0) -> None:
+        super().__init__(BusGripperTransport(bus, timeout))

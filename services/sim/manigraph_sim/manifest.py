@@ -1,0 +1,40 @@
+"""What the sim service consumes and produces (see ``manigraph_shared.manifest``)."""
+
+from manigraph_shared.manifest import Manifest, port
+from manigraph_shared.messages import (
+    EpisodeEvent,
+    EpisodeRequest,
+    JointState,
+    JointTrajectoryCommand,
+    JointTrajectoryResult,
+    RobotCommand,
+    RobotFeedback,
+    Scene,
+    ServiceStatus,
+    SkillStatus,
+)
+
+#: The geometric world takes Cartesian gripper commands; the physics world moves a jointed arm.
+GRIPPER = "gripper_commands"
+JOINTS = "joint_trajectories"
+
+MANIFEST = Manifest(
+    service="sim",
+    summary="geometric or physics world",
+    consumes=(
+        port(RobotCommand, GRIPPER),
+        port(JointTrajectoryCommand, JOINTS),
+        port(SkillStatus),
+    ),
+    produces=(
+        port(Scene),
+        port(EpisodeEvent),
+        port(RobotFeedback, GRIPPER),
+        port(JointTrajectoryResult, JOINTS),
+        port(JointState, JOINTS),
+        port(ServiceStatus),
+    ),
+    serves=(port(EpisodeRequest),),
+    variant_option="backend",
+    variants={"geometric": frozenset({GRIPPER}), "physics": frozenset({JOINTS})},
+)

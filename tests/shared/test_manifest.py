@@ -1,0 +1,60 @@
+"""Service manifests: gated ports, driver matching, and the flow diagram drawn from them."""
+
+from __future__ import annotations
+
+import pytest
+
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.manifest import Manifest, driver_for_world, load_manifests, mermaid_flow, port
+from manigraph_shared.messages import Action, JointState, RobotCommand, Scene
+
+
+def test_every_service_and_tool_declares_a_manifest() -> None:
+    assert {"sim", "planner", "skills", "perception", "recorder", "run"} <= set(load_manifests())
+
+
+@pytest.mark.parametrize(
+    ("backend", "driver"), [("geometric", "sim-gripper"), ("physics", "panda-sim")]
+)
+def test_up_matches_the_skills_driver_to_what_the_sim_backend_offers(
+    backend: str, driver: str
+) -> None:
+    manifests = load_manifests()
+    assert driver_for_world(manifests["sim"], backend, manifests["skills"]) == driver
+
+
+def test_a_driver_no_world_offers_is_never_picked_and_no_match_is_an_error() -> None:
+    world = Manifest("w", "w", produces=(port(Scene),), variants={"toy": frozenset({"a"})})
+    robot = Manifest("r", "r", variant_option="driver", variants={"real": frozenset({"b"})})
+    with pytest.raises(ConfigError, match="driver: no r driver needs only what w 'toy' offers"):
+        driver_for_world(world, "toy", robot)
+    with pytest.raises(ConfigError, match="'nope' is not one of toy"):
+        driver_for_world(world, "nope", robot)
+
+
+def test_a_port_gated_by_an_undeclared_ability_is_refused() -> None:
+    with pytest.raises(ConfigError, match=r"x\.manifest: port manigraph/robot/joint_state"):
+        Manifest("x", "x", produces=(port(JointState, "joints"),))
+
+
+def test_flow_draws_an_arrow_from_each_producer_to_each_consumer_dotted_when_gated() -> None:
+    world = Manifest(
+        "world",
+        "w",
+        produces=(port(Scene),),
+        consumes=(port(RobotCommand, "grip"),),
+        variants={"v": frozenset({"grip"})},
+    )
+    brain = Manifest("brain", "b", consumes=(port(Scene),), produces=(port(Action),))
+    hand = Manifest(
+        "hand",
+        "h",
+        consumes=(port(Action),),
+        produces=(port(RobotCommand, "grip"),),
+        variants={"d": frozenset({"grip"})},
+    )
+    flow = mermaid_flow([world, brain, hand])
+    assert 'WORLD -- "manigraph/world/scene" --> BRAIN' in flow
+    assert 'BRAIN -- "manigraph/planner/action" --> HAND' in flow
+    assert 'HAND -. "manigraph/robot/command (grip)" .-> WORLD' in flow
+    assert "HAND -- " not in flow.replace('HAND -. "', "")  # the gated edge only, dotted

@@ -1,0 +1,19 @@
+"""What the stack tools consume and produce (see ``manigraph_shared.manifest``)."""
+
+from manigraph_shared.manifest import Manifest, port
+from manigraph_shared.messages import EpisodeEvent, EpisodeRequest, ExplainRequest
+
+RECORDER = Manifest(service="recorder", summary="manigraph record: MCAP", observes_all=True)
+
+EPISODE_CLIENT = Manifest(
+    service="run",
+    summary="manigraph run / up: episode client",
+    consumes=(port(EpisodeEvent),),
+    requests=(port(EpisodeRequest),),
+)
+
+EXPLAIN_CLIENT = Manifest(
+    service="explain",
+    summary="manigraph explain: why that decision",
+    requests=(port(ExplainRequest),),
+)
