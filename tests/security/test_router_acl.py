@@ -7,7 +7,6 @@ one after it, and the reader must receive only the rightful one.
 
 from __future__ import annotations
 
-import json
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -30,7 +29,7 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_tools.certs import make_certificates
-from manigraph_tools.testing import Stack, stack
+from manigraph_tools.testing import Stack, open_raw_session, stack
 
 pytestmark = pytest.mark.integration
 NOW = 1_700_000_000.0
@@ -191,23 +190,11 @@ def test_a_service_can_only_announce_itself(router: Stack) -> None:
     assert services == ["recorder"]
 
 
-def raw_client(endpoint: str, **tls: str) -> zenoh.Session:
-    config = zenoh.Config()
-    config.insert_json5("mode", '"client"')
-    config.insert_json5("connect/endpoints", json.dumps([endpoint]))
-    config.insert_json5("scouting/multicast/enabled", "false")
-    config.insert_json5("connect/timeout_ms", "1500")
-    config.insert_json5("connect/exit_on_failure", "true")
-    for key, value in tls.items():
-        config.insert_json5(f"transport/link/tls/{key}", json.dumps(value))
-    return zenoh.open(config)
-
-
 def test_a_client_without_a_certificate_cannot_connect(router: Stack, certs: Path) -> None:
     with pytest.raises(zenoh.ZError):  # the server is trusted, but it wants our certificate
-        raw_client(router.endpoint, root_ca_certificate=str(certs / "ca.pem"))
+        open_raw_session(router.endpoint, root_ca_certificate=str(certs / "ca.pem"))
     with pytest.raises(zenoh.ZError):  # plain TCP to the TLS port
-        raw_client(router.endpoint.replace("tls/", "tcp/"))
+        open_raw_session(router.endpoint.replace("tls/", "tcp/"))
 
 
 def test_a_certificate_from_another_ca_cannot_connect(
@@ -215,7 +202,7 @@ def test_a_certificate_from_another_ca_cannot_connect(
 ) -> None:
     make_certificates(tmp_path, ["planner"])  # same name, a CA the router does not trust
     with pytest.raises(zenoh.ZError):
-        raw_client(
+        open_raw_session(
             router.endpoint,
             root_ca_certificate=str(certs / "ca.pem"),
             connect_certificate=str(tmp_path / "planner.pem"),

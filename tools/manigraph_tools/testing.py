@@ -6,6 +6,7 @@ multicast scouting off, talks to them over a real Zenoh session, and stops them 
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import socket
@@ -15,6 +16,8 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+
+import zenoh
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
@@ -140,6 +143,21 @@ def stack(log_dir: Path, tls_dir: Path | None = None) -> Iterator[Stack]:
         yield running
     finally:
         running.stop_all()
+
+
+def open_raw_session(endpoint: str, **tls: str) -> zenoh.Session:
+    """A bare Zenoh client of ``endpoint`` (one attempt, 1.5 s), with the raw ``tls`` keys of
+    ``transport/link/tls`` given, and without the checks of ``BusConfig``: what an intruder
+    would open. Raises ``zenoh.ZError`` when the router refuses it."""
+    config = zenoh.Config()
+    config.insert_json5("mode", '"client"')
+    config.insert_json5("connect/endpoints", json.dumps([endpoint]))
+    config.insert_json5("scouting/multicast/enabled", "false")
+    config.insert_json5("connect/timeout_ms", "1500")
+    config.insert_json5("connect/exit_on_failure", "true")
+    for key, value in tls.items():
+        config.insert_json5(f"transport/link/tls/{key}", json.dumps(value))
+    return zenoh.open(config)
 
 
 def run_up(*args: str, timeout: float = 180.0) -> subprocess.CompletedProcess[str]:
