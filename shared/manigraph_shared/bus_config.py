@@ -88,7 +88,8 @@ class BusConfig:
             if self.tls_identity is not None:
                 raise ConfigError("tls_dir", "--tls-identity needs --tls-dir (MANIGRAPH_TLS_DIR)")
             for name, endpoint in endpoints:
-                if endpoint.startswith("tls/"):
+                # a Zenoh config file of one's own may carry its TLS settings itself
+                if endpoint.startswith("tls/") and self.config_file is None:
                     raise ConfigError(
                         "tls_dir",
                         f"{name} endpoint '{endpoint}' needs --tls-dir and --tls-identity",

@@ -69,6 +69,13 @@ def test_bad_tls_settings_are_refused_naming_the_field(
     assert problem.format(certs=certs) in error.value.problem
 
 
+def test_a_zenoh_config_file_may_bring_its_own_tls_settings(tmp_path: Path) -> None:
+    own = tmp_path / "zenoh.json5"
+    own.write_text('{ transport: { link: { tls: { root_ca_certificate: "ca.pem" } } } }')
+    config = from_flags(["-c", str(own), "-e", "tls/10.0.0.1:7447"], {})
+    assert config.connect == ("tls/10.0.0.1:7447",) and not config.tls
+
+
 def test_an_unreadable_key_is_refused_naming_the_file(tmp_path: Path, certs: Path) -> None:
     for name in ("ca.pem", "sim.pem"):
         (tmp_path / name).write_bytes((certs / name).read_bytes())
