@@ -12,7 +12,7 @@ import contextlib
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any, TypeVar
 
 import zenoh
@@ -32,15 +32,18 @@ DEFAULT_QUERY_TIMEOUT = 5.0
 _ATTEMPT_MS = 2000
 
 
-def open_session(config: BusConfig) -> zenoh.Session:
-    """Open a session; a client retries until its router answers or ``wait_seconds`` pass."""
+def open_session(config: BusConfig, overrides: Mapping[str, object] | None = None) -> zenoh.Session:
+    """Open a session; a client retries until its router answers or ``wait_seconds`` pass.
+
+    ``overrides`` are further Zenoh configuration keys (the router's access control).
+    """
     deadline = None if config.wait_seconds is None else time.monotonic() + config.wait_seconds
     attempt = 0
     while True:
         attempt += 1
         zconfig = zenoh.Config.from_file(str(config.config_file)) if config.config_file else None
         zconfig = zconfig or zenoh.Config()
-        for key, value in config.zenoh_json().items():
+        for key, value in {**config.zenoh_json(), **(overrides or {})}.items():
             zconfig.insert_json5(key, _json(value))
         if config.mode != "router":
             zconfig.insert_json5("connect/timeout_ms", str(_ATTEMPT_MS))
@@ -71,8 +74,8 @@ class Bus:
         self._declared: list[Any] = []
 
     @classmethod
-    def open(cls, config: BusConfig) -> Bus:
-        return cls(open_session(config))
+    def open(cls, config: BusConfig, overrides: Mapping[str, object] | None = None) -> Bus:
+        return cls(open_session(config, overrides))
 
     # --- pub/sub ----------------------------------------------------------------------------
     def publish(self, message: Message) -> None:

@@ -3,6 +3,10 @@
 The flags are zenoh-python's usual ones (``--mode --connect --listen --config
 --no-multicast-scouting``); each has an environment variable so containers can be configured
 without a command line. Flags win over the environment.
+
+Mutual TLS is chosen with ``--tls-dir`` (a directory written by ``manigraph certs``) and
+``--tls-identity`` (whose certificate this process presents); endpoints are then
+``tls/HOST:PORT``. Without them the bus is plain TCP, meant for loopback development.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from pathlib import Path
 from manigraph_shared.errors import ConfigError
 
 DEFAULT_ROUTER = "tcp/127.0.0.1:7447"
+DEFAULT_TLS_ROUTER = "tls/127.0.0.1:7447"
 MODES = ("client", "peer", "router")
 
 ENV = {
@@ -25,7 +30,17 @@ ENV = {
     "config": "MANIGRAPH_ZENOH_CONFIG",
     "no_multicast_scouting": "MANIGRAPH_ZENOH_NO_MULTICAST_SCOUTING",
     "wait_seconds": "MANIGRAPH_ZENOH_WAIT_SECONDS",
+    "tls_dir": "MANIGRAPH_TLS_DIR",
+    "tls_identity": "MANIGRAPH_TLS_IDENTITY",
 }
+
+#: The CA certificate's file name inside a TLS directory written by ``manigraph certs``.
+TLS_CA_FILE = "ca.pem"
+
+
+def tls_files(directory: Path, identity: str) -> tuple[Path, Path, Path]:
+    """The CA certificate, the identity's certificate and its private key in ``directory``."""
+    return directory / TLS_CA_FILE, directory / f"{identity}.pem", directory / f"{identity}.key"
 
 
 @dataclass(frozen=True)
@@ -43,6 +58,10 @@ class BusConfig:
     multicast_scouting: bool = False
     #: How long a client waits for its router; ``None`` waits forever (services do).
     wait_seconds: float | None = None
+    #: Directory of ``manigraph certs`` output; set, every link is mutual TLS.
+    tls_dir: Path | None = None
+    #: Whose certificate this process presents (its common name is what access control sees).
+    tls_identity: str | None = None
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
@@ -57,6 +76,43 @@ class BusConfig:
             raise ConfigError("wait_seconds", "must be >= 0")
         if self.config_file is not None and not self.config_file.is_file():
             raise ConfigError("config", f"no such file: {self.config_file}")
+        self._check_tls()
+
+    @property
+    def tls(self) -> bool:
+        return self.tls_dir is not None
+
+    def _check_tls(self) -> None:
+        endpoints = [("connect", e) for e in self.connect] + [("listen", e) for e in self.listen]
+        if self.tls_dir is None:
+            if self.tls_identity is not None:
+                raise ConfigError("tls_dir", "--tls-identity needs --tls-dir (MANIGRAPH_TLS_DIR)")
+            for name, endpoint in endpoints:
+                # a Zenoh config file of one's own may carry its TLS settings itself
+                if endpoint.startswith("tls/") and self.config_file is None:
+                    raise ConfigError(
+                        "tls_dir",
+                        f"{name} endpoint '{endpoint}' needs --tls-dir and --tls-identity",
+                    )
+            return
+        if not self.tls_identity:
+            raise ConfigError(
+                "tls_identity", "--tls-dir needs the identity to present (MANIGRAPH_TLS_IDENTITY)"
+            )
+        for name, endpoint in endpoints:
+            if not endpoint.startswith("tls/"):
+                raise ConfigError(
+                    name, f"'{endpoint}' is not a TLS endpoint; with --tls-dir use tls/HOST:PORT"
+                )
+        if not self.tls_dir.is_dir():
+            raise ConfigError("tls_dir", f"no such directory: {self.tls_dir}")
+        for path in tls_files(self.tls_dir, self.tls_identity):
+            try:
+                with path.open("rb") as handle:
+                    handle.read(1)
+            except OSError as exc:
+                problem = exc.strerror or type(exc).__name__
+                raise ConfigError("tls_dir", f"cannot read {path}: {problem}") from None
 
     def zenoh_json(self) -> dict[str, object]:
         """The settings as Zenoh configuration keys (applied over ``config_file``)."""
@@ -68,11 +124,22 @@ class BusConfig:
             settings["connect/endpoints"] = list(self.connect)
         if self.listen:
             settings["listen/endpoints"] = list(self.listen)
+        if self.tls_dir is not None and self.tls_identity is not None:
+            ca, cert, key = (str(p.resolve()) for p in tls_files(self.tls_dir, self.tls_identity))
+            tls = "transport/link/tls"
+            settings[f"{tls}/root_ca_certificate"] = ca
+            settings[f"{tls}/enable_mtls"] = True
+            # one certificate for both sides: a router listens with it, a client connects with it
+            settings[f"{tls}/listen_certificate"] = cert
+            settings[f"{tls}/listen_private_key"] = key
+            settings[f"{tls}/connect_certificate"] = cert
+            settings[f"{tls}/connect_private_key"] = key
         return settings
 
     def describe(self) -> str:
         where = ",".join(self.listen if self.mode == "router" else self.connect) or "-"
-        return f"{self.mode} {where}"
+        who = f" as {self.tls_identity}" if self.tls else ""
+        return f"{self.mode} {where}{who}"
 
 
 def add_bus_arguments(parser: argparse.ArgumentParser) -> None:
@@ -102,6 +169,15 @@ def add_bus_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         help=f"how long to wait for the router (default: forever) [{ENV['wait_seconds']}]",
     )
+    group.add_argument(
+        "--tls-dir",
+        type=Path,
+        help=f"mutual TLS with the certificates of `manigraph certs` in DIR [{ENV['tls_dir']}]",
+    )
+    group.add_argument(
+        "--tls-identity",
+        help=f"which certificate in --tls-dir to present, e.g. planner [{ENV['tls_identity']}]",
+    )
 
 
 def bus_config_from_args(
@@ -110,14 +186,17 @@ def bus_config_from_args(
     mode: str | None = None,
     wait_seconds: float | None = None,
     environ: dict[str, str] | None = None,
+    identity: str | None = None,
 ) -> BusConfig:
-    """Flags first, then ``MANIGRAPH_ZENOH_*`` variables, then the defaults.
+    """Flags first, then ``MANIGRAPH_ZENOH_*`` / ``MANIGRAPH_TLS_*`` variables, then the defaults.
 
     ``mode="router"`` is binding: a router ignores the environment's mode and connect
-    endpoints, which in a stack name the router itself.
+    endpoints, which in a stack name the router itself. ``identity`` is the TLS identity
+    used when a TLS directory is given but no identity (the router: ``router``).
     """
     env = os.environ if environ is None else environ
     is_router = mode == "router"
+    identity_default = identity or ("router" if is_router else None)
 
     def pick(name: str) -> object:
         value = getattr(args, name, None)
@@ -128,14 +207,17 @@ def bus_config_from_args(
     chosen_mode = "router" if is_router else pick("mode") or mode or "client"
     connect = _endpoints(pick("connect"))
     listen = _endpoints(pick("listen"))
+    tls_dir = pick("tls_dir")
+    default_router = DEFAULT_TLS_ROUTER if tls_dir else DEFAULT_ROUTER
     if not connect and chosen_mode == "client":
-        connect = (DEFAULT_ROUTER,)
+        connect = (default_router,)
     if chosen_mode == "router" and not listen:
-        listen = (DEFAULT_ROUTER,)
+        listen = (default_router,)
     no_scouting = pick("no_multicast_scouting")
     multicast = _flag_false(no_scouting, ENV["no_multicast_scouting"])
     wait = pick("wait_seconds")
     config = pick("config")
+    chosen_identity = pick("tls_identity") or (identity_default if tls_dir else None)
     return BusConfig(
         mode=str(chosen_mode),
         connect=connect,
@@ -143,6 +225,8 @@ def bus_config_from_args(
         config_file=Path(str(config)) if config else None,
         multicast_scouting=multicast,
         wait_seconds=_seconds(wait, ENV["wait_seconds"]) if wait is not None else wait_seconds,
+        tls_dir=Path(str(tls_dir)) if tls_dir else None,
+        tls_identity=str(chosen_identity) if chosen_identity else None,
     )
 
 

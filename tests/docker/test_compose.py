@@ -1,5 +1,9 @@
 """The container path users take: build, `docker compose up`, an episode, a killed service.
 
+The stack runs as compose.yaml ships it: mutual TLS and the router's access control, with
+certificates made by the one-shot `certs` service; a client without a certificate (or with
+the wrong one) cannot publish a decision.
+
 Works with `docker compose` (v2) and the older `docker-compose` (v1, what Debian 12 ships).
 
 Runs whenever a Docker engine answers; otherwise it is reported as skipped, with the reason.
@@ -18,10 +22,13 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+import zenoh
 
+from manigraph_shared.bus import Bus
+from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.mcap_log import read_log
-from manigraph_shared.messages import EpisodeEvent
-from manigraph_tools.testing import free_port
+from manigraph_shared.messages import Action, EpisodeEvent
+from manigraph_tools.testing import free_port, open_raw_session
 
 # The first test also builds every image: cold, on a fresh engine, that takes 6-15 minutes
 # (the torch wheels), far past the suite's 300 s per-test limit.
@@ -57,6 +64,7 @@ class Compose:
         self.command = compose_command() or ["docker", "compose"]
         self.project = project
         self.logs = logs
+        self.port = port
         self.env = {
             **os.environ,
             "COMPOSE_PROJECT_NAME": project,
@@ -86,6 +94,12 @@ class Compose:
         return self(
             "run", "--rm", "--no-deps", "tools", "manigraph", *args, timeout=timeout, check=False
         )
+
+    def copy_certificate(self, name: str, into: Path) -> Path:
+        """One file of the stack's `certs` volume, read through the tools image."""
+        result = self("run", "--rm", "--no-deps", "-T", "tools", "cat", f"/certs/{name}")
+        (into / name).write_text(result.stdout)
+        return into / name
 
     def health(self, service: str) -> str:
         container = self("ps", "-q", service, check=False).stdout.strip()
@@ -134,7 +148,7 @@ def compose() -> Iterator[Compose]:
         stack("up", "-d")
         yield stack
     finally:
-        stack("down", "--remove-orphans", "--timeout", "20", check=False)
+        stack("down", "--volumes", "--remove-orphans", "--timeout", "20", check=False)
 
 
 def ended_episodes(logs: Path, since: float) -> list[EpisodeEvent]:
@@ -174,3 +188,44 @@ def test_a_killed_planner_is_reported_missing_and_recovers(compose: Compose) -> 
     result = compose.tools("run", "--blocks", "3", "--episodes", "1", "--seed", "9")
     assert result.returncode == 0, result.stderr[-3000:]
     assert json.loads(result.stdout.strip().splitlines()[-1])["success_rate"] == 1.0
+
+
+def test_a_client_without_a_certificate_cannot_publish_an_action(
+    compose: Compose, tmp_path: Path
+) -> None:
+    compose.wait_healthy(["router", "sim", "planner", "skills"])
+    endpoint = f"tls/127.0.0.1:{compose.port}"  # the router's published port, from the host
+    ca = compose.copy_certificate("ca.pem", tmp_path)
+    with pytest.raises(zenoh.ZError):  # plain TCP, as before this stack had TLS
+        open_raw_session(endpoint.replace("tls/", "tcp/"))
+    with pytest.raises(zenoh.ZError):  # TLS that trusts the router but shows no certificate
+        open_raw_session(endpoint, root_ca_certificate=str(ca))
+    # a valid certificate of the wrong identity connects, but its decision reaches no one
+    for name in ("client.pem", "client.key", "recorder.pem", "recorder.key"):
+        compose.copy_certificate(name, tmp_path)
+    seen: list[str] = []
+
+    def config(identity: str) -> BusConfig:
+        return BusConfig(
+            connect=(endpoint,), tls_dir=tmp_path, tls_identity=identity, wait_seconds=10
+        )
+
+    with Bus.open(config("client")) as watcher, Bus.open(config("recorder")) as forger:
+        watcher.subscribe(Action, lambda action: seen.append(action.episode_id))
+        time.sleep(0.5)
+        forger.publish(
+            Action(
+                decision_id="forged:0",
+                episode_id="forged",
+                scene_sequence=0,
+                object_id="block_0",
+                goal_id="goal_0",
+                policy="forger",
+                stamp=time.time(),
+            )
+        )
+        result = compose.tools("run", "--blocks", "3", "--episodes", "1", "--seed", "2")
+        assert result.returncode == 0, result.stderr[-3000:]
+        time.sleep(0.5)
+    assert seen, "the episode's own decisions reach an authorised reader"
+    assert "forged" not in seen

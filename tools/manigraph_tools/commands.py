@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import signal
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
+from manigraph_shared.bus_config import BusConfig, add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.manifest import driver_for_world, load_manifests
@@ -19,6 +21,7 @@ from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
 from manigraph_shared.service import run_service
 from manigraph_tools import contract_doc, doctor
+from manigraph_tools.certs import make_certificates
 from manigraph_tools.episodes import EpisodePlan, read_task_file, run_episodes
 from manigraph_tools.recorder import Recorder
 from manigraph_tools.replay import ActionCheck, Replayer, recorded_actions
@@ -313,6 +316,12 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         help="GNN policies: publish an Explanation beside every decision (lands in --record)",
     )
     parser.add_argument("--port", type=int, default=7447, help="router port on 127.0.0.1")
+    parser.add_argument(
+        "--secure",
+        action="store_true",
+        help="mutual TLS and the router's access control, with certificates made for this run "
+        "in a temporary directory (default: plain TCP on loopback, for development)",
+    )
     parser.add_argument("--log-dir", type=Path, help="also write <service>.log files here")
 
 
@@ -325,38 +334,53 @@ def _up_run(args: argparse.Namespace) -> int:
     # some CI runners) would otherwise never see Ctrl-C, and SIGTERM should stop it the same way.
     signal.signal(signal.SIGINT, _interrupt)
     signal.signal(signal.SIGTERM, _interrupt)
-    endpoint = f"tcp/127.0.0.1:{args.port}"
+    tls_dir = Path(tempfile.mkdtemp(prefix="manigraph-certs-")) if args.secure else None
+    endpoint = f"{'tls' if tls_dir else 'tcp'}/127.0.0.1:{args.port}"
     bus_env = {
         "MANIGRAPH_ZENOH_MODE": "client",
         "MANIGRAPH_ZENOH_CONNECT": endpoint,
         "MANIGRAPH_ZENOH_NO_MULTICAST_SCOUTING": "1",
+        "MANIGRAPH_TLS_DIR": str(tls_dir or ""),  # plain TCP is chosen, not inherited
+        "MANIGRAPH_TLS_IDENTITY": "",
     }
-    specs = [ProcessSpec("router", ["router", "--listen", endpoint])]
+    if tls_dir is not None:
+        make_certificates(tls_dir, force=True)
+
+    def spec(name: str, argv: list[str]) -> ProcessSpec:
+        identity = {"MANIGRAPH_TLS_IDENTITY": name} if tls_dir else {}
+        return ProcessSpec(name, argv, {**bus_env, **identity})
+
+    specs = [spec("router", ["router", "--listen", endpoint])]
     if args.record:
-        specs.append(ProcessSpec("recorder", ["record", "--output", str(args.record)], bus_env))
+        specs.append(spec("recorder", ["record", "--output", str(args.record)]))
     specs += [
-        ProcessSpec("sim", ["sim", "--backend", args.sim, *_sim_args(args)], bus_env),
-        ProcessSpec(
+        spec("sim", ["sim", "--backend", args.sim, *_sim_args(args)]),
+        spec(
             "planner",
             ["planner", "--policy", args.policy]
             + (["--explain-decisions"] if args.explain_decisions else []),
-            bus_env,
         ),
-        ProcessSpec("skills", ["skills", "--driver", _skills_driver(args.sim)], bus_env),
+        spec("skills", ["skills", "--driver", _skills_driver(args.sim)]),
     ]
     supervisor = Supervisor(args.log_dir)
     summary: dict[str, object] | None = None
+    client = BusConfig(
+        connect=(endpoint,),
+        wait_seconds=30.0,
+        tls_dir=tls_dir,
+        tls_identity="client" if tls_dir else None,
+    )
     try:
-        for spec in specs:
-            supervisor.start(spec)
-        with Bus.open(
-            bus_config_from_args(
-                argparse.Namespace(connect=[endpoint], no_multicast_scouting=True),
-                wait_seconds=30.0,
+        for process in specs:
+            supervisor.start(process)
+        with Bus.open(client) as bus:
+            supervisor.wait_alive(bus, [process.name for process in specs])
+            security = "mutual TLS + access control" if tls_dir else "plain TCP"
+            print(
+                "stack is up: " + ", ".join(s.name for s in specs) + f" ({security})",
+                file=sys.stderr,
+                flush=True,
             )
-        ) as bus:
-            supervisor.wait_alive(bus, [spec.name for spec in specs])
-            print("stack is up: " + ", ".join(s.name for s in specs), file=sys.stderr, flush=True)
             if args.episodes is None:
                 print("Ctrl-C stops every service", file=sys.stderr, flush=True)
                 while True:
@@ -367,6 +391,8 @@ def _up_run(args: argparse.Namespace) -> int:
         print("stopping the stack", file=sys.stderr)
     finally:
         supervisor.stop()
+        if tls_dir is not None:
+            shutil.rmtree(tls_dir, ignore_errors=True)
     if summary is not None:
         _emit_json(summary, readable=not args.json)
     return 0

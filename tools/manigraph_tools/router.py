@@ -1,4 +1,8 @@
-"""``manigraph router``: a Zenoh router in this Python process, so no separate binary is needed."""
+"""``manigraph router``: a Zenoh router in this Python process, so no separate binary is needed.
+
+With TLS (``--tls-dir``) the router requires a client certificate from every connection and
+enforces the access-control policy of ``manigraph_tools.access``: deny unless granted.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +12,7 @@ import threading
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
+from manigraph_tools.access import access_control
 
 log = logging.getLogger("manigraph.router")
 
@@ -16,9 +21,16 @@ def run_router(config: BusConfig) -> int:
     stop = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    with Bus.open(config) as bus:
+    overrides = {"access_control": access_control()} if config.tls else {}
+    with Bus.open(config, overrides) as bus:
         bus.declare_alive("router")
         log.info("zenoh router listening on %s", ",".join(config.listen))
+        if config.tls:
+            log.info(
+                "mutual TLS as %s; access control on (deny unless granted)", config.tls_identity
+            )
+        else:
+            log.warning("plain TCP: no authentication, no access control (development only)")
         stop.wait()
         log.info("stopping")
     return 0

@@ -6,6 +6,7 @@ multicast scouting off, talks to them over a real Zenoh session, and stops them 
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import socket
@@ -15,6 +16,8 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+
+import zenoh
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
@@ -27,11 +30,16 @@ def free_port() -> int:
 
 
 class Stack:
-    """Processes of one test stack sharing one router endpoint."""
+    """Processes of one test stack sharing one router endpoint.
 
-    def __init__(self, port: int, log_dir: Path) -> None:
+    With ``tls_dir`` (certificates of ``manigraph certs``) the stack runs with mutual TLS and
+    the router's access control; each process presents the identity it is started with.
+    """
+
+    def __init__(self, port: int, log_dir: Path, tls_dir: Path | None = None) -> None:
         self.port = port
-        self.endpoint = f"tcp/127.0.0.1:{port}"
+        self.tls_dir = tls_dir
+        self.endpoint = f"{'tls' if tls_dir else 'tcp'}/127.0.0.1:{port}"
         self.log_dir = log_dir
         self.processes: dict[str, subprocess.Popen[bytes]] = {}
 
@@ -42,10 +50,17 @@ class Stack:
             "MANIGRAPH_ZENOH_MODE": "client",
             "MANIGRAPH_ZENOH_CONNECT": self.endpoint,
             "MANIGRAPH_ZENOH_NO_MULTICAST_SCOUTING": "1",
+            "MANIGRAPH_TLS_DIR": str(self.tls_dir or ""),
+            "MANIGRAPH_TLS_IDENTITY": "",
             "PYTHONUNBUFFERED": "1",
         }
 
-    def start(self, name: str, *args: str) -> subprocess.Popen[bytes]:
+    def env_as(self, identity: str) -> dict[str, str]:
+        """The environment of a process presenting ``identity`` (ignored without TLS)."""
+        return {**self.env, "MANIGRAPH_TLS_IDENTITY": identity if self.tls_dir else ""}
+
+    def start(self, name: str, *args: str, identity: str | None = None) -> subprocess.Popen[bytes]:
+        """Start ``manigraph ARGS`` as ``name``; with TLS it presents ``identity`` (or ``name``)."""
         if name == "router" and not args:
             args = ("router", "--listen", self.endpoint)
         log = (self.log_dir / f"{name}.log").open("ab")
@@ -54,18 +69,20 @@ class Stack:
             stdout=log,
             stderr=subprocess.STDOUT,
             stdin=subprocess.DEVNULL,
-            env=self.env,
+            env=self.env_as(identity or name),
         )
         self.processes[name] = process
         return process
 
-    def run(self, *args: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
+    def run(
+        self, *args: str, timeout: float = 120.0, identity: str = "client"
+    ) -> subprocess.CompletedProcess[str]:
         """Run one manigraph command to completion against this stack."""
         return subprocess.run(
             [sys.executable, "-m", "manigraph_shared.cli", *args],
             capture_output=True,
             text=True,
-            env=self.env,
+            env=self.env_as(identity),
             timeout=timeout,
             check=False,
         )
@@ -89,9 +106,17 @@ class Stack:
         for name in reversed(list(self.processes)):
             self.stop(name)
 
+    def bus_config(self, identity: str = "client", wait_seconds: float = 20.0) -> BusConfig:
+        return BusConfig(
+            connect=(self.endpoint,),
+            wait_seconds=wait_seconds,
+            tls_dir=self.tls_dir,
+            tls_identity=identity if self.tls_dir else None,
+        )
+
     @contextmanager
-    def client(self, wait_seconds: float = 20.0) -> Iterator[Bus]:
-        bus = Bus.open(BusConfig(connect=(self.endpoint,), wait_seconds=wait_seconds))
+    def client(self, wait_seconds: float = 20.0, identity: str = "client") -> Iterator[Bus]:
+        bus = Bus.open(self.bus_config(identity, wait_seconds))
         try:
             yield bus
         finally:
@@ -112,12 +137,27 @@ class Stack:
 
 
 @contextmanager
-def stack(log_dir: Path) -> Iterator[Stack]:
-    running = Stack(free_port(), log_dir)
+def stack(log_dir: Path, tls_dir: Path | None = None) -> Iterator[Stack]:
+    running = Stack(free_port(), log_dir, tls_dir)
     try:
         yield running
     finally:
         running.stop_all()
+
+
+def open_raw_session(endpoint: str, **tls: str) -> zenoh.Session:
+    """A bare Zenoh client of ``endpoint`` (one attempt, 1.5 s), with the raw ``tls`` keys of
+    ``transport/link/tls`` given, and without the checks of ``BusConfig``: what an intruder
+    would open. Raises ``zenoh.ZError`` when the router refuses it."""
+    config = zenoh.Config()
+    config.insert_json5("mode", '"client"')
+    config.insert_json5("connect/endpoints", json.dumps([endpoint]))
+    config.insert_json5("scouting/multicast/enabled", "false")
+    config.insert_json5("connect/timeout_ms", "1500")
+    config.insert_json5("connect/exit_on_failure", "true")
+    for key, value in tls.items():
+        config.insert_json5(f"transport/link/tls/{key}", json.dumps(value))
+    return zenoh.open(config)
 
 
 def run_up(*args: str, timeout: float = 180.0) -> subprocess.CompletedProcess[str]:
