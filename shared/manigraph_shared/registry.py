@@ -203,15 +203,20 @@ class Registry(Generic[T]):
             )
 
     def _flag_help(self, item: OptionField, users: list[tuple[str, Any]]) -> str:
+        """The field's help, then which entries take the flag (unless all do) and their
+        defaults (one if they agree; none for a switch or an unset default)."""
+        notes = []
+        if len(users) < len(self._entries) or len(self._entries) == 1:
+            notes.append(", ".join(user for user, _ in users) + " only")
+        defaults = [default for _, default in users]
+        if item.kind is not bool and any(d is not None for d in defaults):
+            if all(d == defaults[0] for d in defaults):
+                notes.append(f"default: {describe_default(defaults[0])}")
+            else:
+                listed = ", ".join(f"{u} {describe_default(d)}" for u, d in users)
+                notes.append(f"default: {listed}")
         text = item.help + (f", {item.unit}" if item.unit else "")
-        everyone = len(users) == len(self._entries) and len(self._entries) > 1
-        defaults = {default for _, default in users}
-        if item.kind is bool:
-            return text if everyone else f"{text} ({', '.join(u for u, _ in users)} only)"
-        if everyone and len(defaults) == 1:
-            return f"{text} (default: {describe_default(users[0][1])})"
-        listed = ", ".join(f"{user} {describe_default(default)}" for user, default in users)
-        return f"{text} (default: {listed}{'' if everyone else '; only these'})"
+        return f"{text} ({'; '.join(notes)})" if notes else text
 
     def given_options(self, args: argparse.Namespace) -> dict[str, Any]:
         """The options flags :meth:`add_arguments` added that were given on the command line."""

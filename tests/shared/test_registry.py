@@ -143,7 +143,7 @@ def test_flags_generated_with_defaults_help_and_choices() -> None:
     assert flags["mode"].choices == ["fast", "safe"]
     assert flags["grip"].choices == ["soft", "hard"]
     # --speed is shared by two entries with their own defaults; the help names both
-    assert "fraction of top speed (default: arm 0.5, gripper 1.0; only these)" in " ".join(
+    assert "fraction of top speed (arm, gripper only; default: arm 0.5, gripper 1.0)" in " ".join(
         text.split()
     )
     assert "run in real time (arm only)" in " ".join(text.split())
