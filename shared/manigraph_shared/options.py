@@ -66,9 +66,19 @@ class Interval:
         return self.high is None or (value < self.high if self.high_open else value <= self.high)
 
     def __str__(self) -> str:
+        """``(0, 0.1]``, or ``>= 1`` / ``< 5`` when one side is open-ended."""
+        if self.high is None and self.low is not None:
+            return f"{'>' if self.low_open else '>='} {self.low:g}"
+        if self.low is None and self.high is not None:
+            return f"{'<' if self.high_open else '<='} {self.high:g}"
         low = "(-inf" if self.low is None else f"{'(' if self.low_open else '['}{self.low:g}"
         high = "inf)" if self.high is None else f"{self.high:g}{')' if self.high_open else ']'}"
         return f"{low}, {high}"
+
+    def describe(self) -> str:
+        """As said after "must be": ``in (0, 0.1]`` or ``>= 1``."""
+        text = str(self)
+        return text if text[0] in "<>" else f"in {text}"
 
 
 def option(
@@ -116,7 +126,7 @@ class OptionField:
         else:
             text = _TYPE_WORDS.get(self.kind, getattr(self.kind, "__name__", str(self.kind)))
             if self.within is not None:
-                text += f" in {self.within}" + (f" {self.unit}" if self.unit else "")
+                text += f" {self.within.describe()}" + (f" {self.unit}" if self.unit else "")
         return text + (" (or unset)" if self.optional and self.default is None else "")
 
     def check(self, value: Any) -> Any:
@@ -129,7 +139,7 @@ class OptionField:
             raise ConfigError(self.name, f"must be {self.allowed()}, got {value!r}")
         if self.within is not None and converted not in self.within:
             unit = f" {self.unit}" if self.unit else ""
-            raise ConfigError(self.name, f"must be in {self.within}{unit}, got {value!r}")
+            raise ConfigError(self.name, f"must be {self.within.describe()}{unit}, got {value!r}")
         return converted
 
 
@@ -285,7 +295,7 @@ def add_option_arguments(
         default = defaults.get(item.name, item.default)
         required = default is dataclasses.MISSING
         text = item.help + (f", {item.unit}" if item.unit else "")
-        if not required and item.kind is not bool:
+        if not required and item.kind is not bool and default is not None:
             text += f" (default: {describe_default(default)})"
         parser.add_argument(
             flag_name(item.name),

@@ -18,6 +18,7 @@ Register a new backend with its options dataclass::
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from manigraph_shared.options import Interval, Options, option
@@ -50,7 +51,7 @@ class PhysicsOptions(Options):
         0.02, help="how close to a goal fills it", within=GOAL_TOLERANCE, unit="metres"
     )
     realtime: bool = option(False, help="simulate in real time, not flat out")
-    video: str | None = option(
+    video: Path | None = option(
         None,
         help="render each episode to this .gif/.mp4 ({episode}, {seed} allowed; needs Vulkan, "
         "see scripts/install-vulkan.sh)",

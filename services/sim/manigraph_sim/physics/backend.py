@@ -81,7 +81,7 @@ class PhysicsBackend(EpisodeBackend):
 
     @classmethod
     def from_options(cls, options: Any) -> PhysicsBackend:
-        video = VideoConfig(options.video) if options.video else None
+        video = VideoConfig(str(options.video)) if options.video else None
         return cls(options.goal_tolerance, options.realtime, video=video)
 
     # --- episodes ---------------------------------------------------------------------------
