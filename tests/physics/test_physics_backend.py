@@ -24,6 +24,7 @@ from manigraph_shared.messages import (
 from manigraph_sim.backends import create_backend
 from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig
+from manigraph_skills.drivers import Motion
 from manigraph_skills.workspace import Workspace
 
 Loop = Any  # tests/physics/conftest.py: Loop
@@ -93,7 +94,7 @@ def test_an_unreachable_target_is_refused_with_no_ik_solution(loop: Loop) -> Non
     before = loop.backend.physics_steps
     far = Vector3(x=1.6, y=0.0, z=0.02)
     with pytest.raises(SkillError) as caught:
-        loop.driver.pick("e0:1", "block_1", far, loop.scene().objects[0].orientation)
+        loop.driver.pick(Motion("e0:1", "block_1", far, loop.scene().objects[0].orientation))
     assert caught.value.reason == "no_ik_solution"
     assert loop.backend.physics_steps == before
 

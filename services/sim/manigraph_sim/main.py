@@ -27,7 +27,6 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--backend",
         default="geometric",
-        choices=BACKENDS.names(),
         help=f"sim backend (default: geometric); {BACKENDS.describe()}",
     )
     add_option_arguments(parser, SimServiceOptions)

@@ -5,16 +5,19 @@ from __future__ import annotations
 import itertools
 import threading
 import time
+from typing import Any
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import SkillError
-from manigraph_shared.messages import GripperOp, Quaternion, RobotCommand, RobotFeedback, Vector3
-from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver, register_driver
+from manigraph_shared.messages import GripperOp, RobotCommand, RobotFeedback
+from manigraph_skills.drivers.base import Motion, RobotDriver
 
 
-@register_driver("sim-gripper")
 class BusGripperDriver(RobotDriver):
-    """Sends ``RobotCommand`` on ``manigraph/robot/command`` and waits for its feedback."""
+    """Sends ``RobotCommand`` on ``manigraph/robot/command`` and waits for its feedback.
+    Registered as ``sim-gripper``; ignores the motion's grasp (the gripper is magic)."""
+
+    name = "sim-gripper"
 
     def __init__(self, bus: Bus, timeout: float = 10.0) -> None:
         self.bus = bus
@@ -32,15 +35,8 @@ class BusGripperDriver(RobotDriver):
                 self._answers[feedback.command_id] = feedback
                 event.set()
 
-    def _send(
-        self,
-        op: GripperOp,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-    ) -> None:
-        command_id = f"{decision_id}.{next(self._ids)}"
+    def _send(self, op: GripperOp, motion: Motion) -> None:
+        command_id = f"{motion.decision_id}.{next(self._ids)}"
         event = threading.Event()
         with self._lock:
             self._waiting[command_id] = event
@@ -48,11 +44,11 @@ class BusGripperDriver(RobotDriver):
             self.bus.publish(
                 RobotCommand(
                     command_id=command_id,
-                    decision_id=decision_id,
+                    decision_id=motion.decision_id,
                     op=op,
-                    object_id=object_id,
-                    position=position,
-                    orientation=orientation,
+                    object_id=motion.object_id,
+                    position=motion.position,
+                    orientation=motion.orientation,
                     stamp=time.time(),
                 )
             )
@@ -65,22 +61,12 @@ class BusGripperDriver(RobotDriver):
         if not feedback.ok:
             raise SkillError(feedback.reason or "driver_error", feedback.detail)
 
-    def pick(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        self._send(GripperOp.PICK, decision_id, object_id, position, orientation)
+    @classmethod
+    def from_options(cls, bus: Bus, options: Any) -> BusGripperDriver:
+        return cls(bus, options.timeout)
 
-    def place(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        self._send(GripperOp.PLACE, decision_id, object_id, position, orientation)
+    def pick(self, motion: Motion) -> None:
+        self._send(GripperOp.PICK, motion)
+
+    def place(self, motion: Motion) -> None:
+        self._send(GripperOp.PLACE, motion)
