@@ -4,9 +4,17 @@ from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
 from manigraph_shared.cli import Command
+from manigraph_shared.options import (
+    Interval,
+    Options,
+    add_option_arguments,
+    option,
+    options_from_args,
+)
 
 
 def _demos_configure(parser: argparse.ArgumentParser) -> None:
@@ -34,44 +42,48 @@ demos_command = Command(
 )
 
 
+@dataclass(frozen=True)
+class EvalOptions(Options):
+    policy: str = option("expert", help="policy name or checkpoint file")
+    noise: float = option(0.0, help="observation noise sigma", within=Interval(0, None), unit="m")
+
+
 def _eval_configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--policy", default="expert", help="policy name or checkpoint file")
-    parser.add_argument("--task", default="stack")
-    parser.add_argument("--task-file", type=Path, help="a TOML layout of your own (see README)")
-    parser.add_argument("--blocks", type=int, default=4)
-    parser.add_argument("--stacks", type=int, default=1)
-    parser.add_argument("--episodes", type=int, default=100)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--noise", type=float, default=0.0, help="observation noise sigma, m")
-    parser.add_argument("--json", action="store_true", help="last line: one JSON object")
+    from manigraph_tools.episodes import EpisodeOptions
+
+    add_option_arguments(parser, EvalOptions)
+    # The episode flags of run and up; every episode runs to its end in-process, no timeout.
+    add_option_arguments(
+        parser.add_argument_group("episodes"),
+        EpisodeOptions,
+        defaults={"episodes": 100},
+        exclude=["timeout"],
+    )
 
 
 def _eval_run(args: argparse.Namespace) -> int:
     from manigraph_lab.evaluate import EvalSpec, evaluate
     from manigraph_planner.policies import load_policy
-    from manigraph_shared.errors import ConfigError
-    from manigraph_tools.episodes import read_task_file
+    from manigraph_tools.episodes import EpisodeOptions
 
-    if args.noise < 0:
-        raise ConfigError("noise", "must be >= 0 metres")
-    if args.episodes < 1:
-        raise ConfigError("episodes", "must be >= 1")
-    task_file = read_task_file(args.task_file)
+    options = options_from_args(EvalOptions, args)
+    episodes = options_from_args(EpisodeOptions, args)
+    task_file = episodes.task_text()
     if task_file is not None:
         from manigraph_sim.tasks.task_file import parse_task_file
 
         parse_task_file(task_file)  # a bad file stops here, naming the line or field
     spec = EvalSpec(
-        "file" if task_file else args.task,
-        args.blocks,
-        args.stacks,
-        args.episodes,
-        args.seed,
-        args.noise,
+        "file" if task_file else episodes.task,
+        episodes.blocks,
+        episodes.stacks,
+        episodes.episodes or 1,
+        episodes.seed,
+        options.noise,
         task_file,
     )
-    summary = evaluate(load_policy(args.policy), spec)
-    if args.json:
+    summary = evaluate(load_policy(options.policy), spec)
+    if episodes.json:
         print(json.dumps(summary))
     else:
         for key, value in summary.items():

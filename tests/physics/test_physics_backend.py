@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import sapien
 
-from manigraph_shared.errors import ConfigError, SkillError, TaskError
+from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_shared.messages import (
     EpisodeRequest,
     GripperOp,
@@ -21,9 +21,10 @@ from manigraph_shared.messages import (
     SkillState,
     Vector3,
 )
-from manigraph_sim.backend import create_backend
+from manigraph_sim.backends import create_backend
 from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig
+from manigraph_skills.drivers import Motion
 from manigraph_skills.workspace import Workspace
 
 Loop = Any  # tests/physics/conftest.py: Loop
@@ -93,7 +94,7 @@ def test_an_unreachable_target_is_refused_with_no_ik_solution(loop: Loop) -> Non
     before = loop.backend.physics_steps
     far = Vector3(x=1.6, y=0.0, z=0.02)
     with pytest.raises(SkillError) as caught:
-        loop.driver.pick("e0:1", "block_1", far, loop.scene().objects[0].orientation)
+        loop.driver.pick(Motion("e0:1", "block_1", far, loop.scene().objects[0].orientation))
     assert caught.value.reason == "no_ik_solution"
     assert loop.backend.physics_steps == before
 
@@ -124,7 +125,7 @@ def test_the_physics_sim_refuses_cartesian_gripper_commands_and_unknown_tasks() 
         stamp=1.0,
     )
     assert backend.execute(command, 1.0).reason == "unsupported"
-    with pytest.raises(TaskError, match="task"):
+    with pytest.raises(ConfigError, match="task: 'boxes' is not one of"):
         backend.reset(EpisodeRequest(episode_id="b", task="boxes", blocks=2, seed=0), 1.0)
 
 

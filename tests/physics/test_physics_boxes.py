@@ -12,7 +12,7 @@ import pytest
 from manigraph_planner.policies.expert import ExpertPolicy
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest, SkillState
-from manigraph_sim.backend import create_backend
+from manigraph_sim.backends import create_backend
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.tasks import get_task
 from manigraph_sim.tasks.base import TaskParams

@@ -8,7 +8,7 @@ import pytest
 
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest
-from manigraph_sim.backend import create_backend
+from manigraph_sim.backends import create_backend
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.tasks import get_task
 from manigraph_sim.tasks.base import TaskParams
@@ -33,7 +33,7 @@ def test_the_default_geometry_is_the_demonstrations() -> None:
 
 def test_the_geometric_world_can_lay_out_the_physical_boxes() -> None:
     request = EpisodeRequest(episode_id="e", task="box-pack", blocks=3, seed=2)
-    backend = create_backend("geometric", boxes=PHYSICS_BOXES)
+    backend = create_backend("geometric", box_geometry="physics")
     backend.reset(request, 1.0)
     scene = backend.scene(1.0)
     assert scene is not None

@@ -3,10 +3,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from manigraph_shared.errors import SkillError, TaskError
-from manigraph_sim.geometric.world import Body, GeometricWorld, Goal
+from manigraph_shared.errors import ConfigError, SkillError, TaskError
+from manigraph_sim.geometric.world import GeometricWorld
 from manigraph_sim.tasks import get_task
-from manigraph_sim.tasks.base import BLOCK_SIZE, TaskParams
+from manigraph_sim.tasks.base import TaskParams
+from manigraph_sim.world_model import BLOCK_SIZE, Body, Goal
 
 SIZE = np.full(3, BLOCK_SIZE)
 
@@ -91,7 +92,7 @@ def test_stack_layout_is_seeded() -> None:
 
 
 def test_unknown_task_and_bad_parameters_are_named() -> None:
-    with pytest.raises(TaskError, match="unknown task 'tower'"):
+    with pytest.raises(ConfigError, match=r"task: 'tower' is not one of: .*, stack, multistack"):
         get_task("tower", TaskParams())
     with pytest.raises(TaskError, match="stacks"):
         get_task("stack", TaskParams(stacks=2))

@@ -14,8 +14,10 @@ from manigraph_shared.messages import (
     Quaternion,
     Vector3,
 )
-from manigraph_skills.drivers import DRIVERS
+from manigraph_skills.drivers import DRIVERS, Motion, create_driver
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+from manigraph_skills.drivers.panda_sim import PandaSimDriver
+from manigraph_skills.drivers.registry import MotionOptions
 from manigraph_skills.motion import HOME_Q
 
 BLOCK = Vector3(x=0.5, y=0.1, z=0.02)
@@ -63,8 +65,8 @@ class ScriptedArm:
 def test_a_pick_and_place_sends_pick_carry_and_release_motions() -> None:
     arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=np.array(GOAL.as_tuple()))
     driver = PandaMotionDriver(arm)
-    driver.pick("e:0", "block_0", BLOCK, Quaternion())
-    driver.place("e:0", "block_0", GOAL, Quaternion())
+    driver.pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
+    driver.place(Motion("e:0", "block_0", GOAL, Quaternion()))
     pick, carry, release = arm.sent
     assert pick.points[0].gripper is GripperTarget.OPEN
     assert pick.points[-1].gripper is GripperTarget.CLOSED
@@ -77,7 +79,7 @@ def test_a_pick_and_place_sends_pick_carry_and_release_motions() -> None:
 def test_fingers_closing_on_nothing_is_grasp_slipped_and_the_hand_opens() -> None:
     arm = ScriptedArm(widths=[0.0, 0.08])
     with pytest.raises(SkillError) as caught:
-        PandaMotionDriver(arm).pick("e:0", "block_0", BLOCK, Quaternion())
+        PandaMotionDriver(arm).pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
     assert caught.value.reason == "grasp_slipped"
     assert arm.sent[-1].points[-1].gripper is GripperTarget.OPEN
 
@@ -85,9 +87,9 @@ def test_fingers_closing_on_nothing_is_grasp_slipped_and_the_hand_opens() -> Non
 def test_an_object_lost_during_the_transfer_is_grasp_slipped() -> None:
     arm = ScriptedArm(widths=[0.04, 0.001, 0.08])
     driver = PandaMotionDriver(arm)
-    driver.pick("e:0", "block_0", BLOCK, Quaternion())
+    driver.pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
     with pytest.raises(SkillError, match="transfer") as caught:
-        driver.place("e:0", "block_0", GOAL, Quaternion())
+        driver.place(Motion("e:0", "block_0", GOAL, Quaternion()))
     assert caught.value.reason == "grasp_slipped"
 
 
@@ -95,27 +97,35 @@ def test_an_object_resting_off_its_goal_is_placement_missed() -> None:
     off = np.array(GOAL.as_tuple()) + np.array([0.05, 0.0, 0.0])
     arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=off)
     driver = PandaMotionDriver(arm)
-    driver.pick("e:0", "block_0", BLOCK, Quaternion())
+    driver.pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
     with pytest.raises(SkillError) as caught:
-        driver.place("e:0", "block_0", GOAL, Quaternion())
+        driver.place(Motion("e:0", "block_0", GOAL, Quaternion()))
     assert caught.value.reason == "placement_missed" and "50 mm" in caught.value.detail
 
 
 def test_an_arm_that_is_elsewhere_gets_a_plan_from_where_it_is() -> None:
     arm = ScriptedArm(widths=[0.04])
     arm.refuse_first = True
-    PandaMotionDriver(arm).pick("e:0", "block_0", BLOCK, Quaternion())
+    PandaMotionDriver(arm).pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
     assert len(arm.sent) == 2
 
 
 def test_an_unreachable_object_sends_nothing() -> None:
     arm = ScriptedArm(widths=[])
     with pytest.raises(SkillError) as caught:
-        PandaMotionDriver(arm).pick("e:0", "block_0", Vector3(x=1.5, y=0, z=0.02), Quaternion())
+        PandaMotionDriver(arm).pick(
+            Motion("e:0", "block_0", Vector3(x=1.5, y=0, z=0.02), Quaternion())
+        )
     assert caught.value.reason == "no_ik_solution" and arm.sent == []
 
 
 def test_the_driver_is_registered_and_validates_its_settings() -> None:
-    assert "panda-sim" in DRIVERS
-    with pytest.raises(ConfigError, match="placement_tolerance"):
-        PandaMotionDriver(ScriptedArm(widths=[]), placement_tolerance=0.0)
+    assert DRIVERS["panda-sim"] is PandaSimDriver
+    with pytest.raises(ConfigError, match=r"placement_tolerance: must be > 0 m, got 0\.0"):
+        MotionOptions(placement_tolerance=0.0)
+    with pytest.raises(ConfigError) as caught:
+        create_driver("panda-sim", bus=None, min_grasp_width=0.1)
+    assert caught.value.field == "driver.min_grasp_width"
+    assert "must be in [0, 0.08) m" in caught.value.problem
+    with pytest.raises(ConfigError, match=r"driver\.timeout: .franka. takes no options"):
+        create_driver("franka", bus=None, timeout=1.0)

@@ -5,7 +5,6 @@ import pytest
 from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_shared.messages import (
     Action,
-    Quaternion,
     Scene,
     SceneGoal,
     SceneObject,
@@ -13,7 +12,7 @@ from manigraph_shared.messages import (
     SkillStatus,
     Vector3,
 )
-from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver
+from manigraph_skills.drivers.base import Motion, RobotDriver
 from manigraph_skills.pick_and_place import PickAndPlace
 from manigraph_skills.workspace import Workspace
 
@@ -27,27 +26,13 @@ class RecordingArm(RobotDriver):
         self.calls: list[tuple[str, str, tuple[float, float, float]]] = []
         self.fail_pick = fail_pick
 
-    def pick(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        self.calls.append(("pick", object_id, position.as_tuple()))
+    def pick(self, motion: Motion) -> None:
+        self.calls.append(("pick", motion.object_id, motion.position.as_tuple()))
         if self.fail_pick:
             raise SkillError(self.fail_pick, "as told")
 
-    def place(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        self.calls.append(("place", object_id, position.as_tuple()))
+    def place(self, motion: Motion) -> None:
+        self.calls.append(("place", motion.object_id, motion.position.as_tuple()))
 
 
 def scene(goal_x: float = 0.4) -> Scene:

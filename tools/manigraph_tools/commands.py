@@ -11,18 +11,20 @@ import tempfile
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig, add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
-from manigraph_shared.errors import ConfigError
 from manigraph_shared.manifest import driver_for_world, load_manifests
 from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
+from manigraph_shared.options import add_option_arguments, options_from_args
+from manigraph_shared.registry import Registry
 from manigraph_shared.service import run_service
 from manigraph_tools import contract_doc, doctor
 from manigraph_tools.certs import make_certificates
-from manigraph_tools.episodes import EpisodePlan, read_task_file, run_episodes
+from manigraph_tools.episodes import EpisodeOptions, EpisodePlan, run_episodes
 from manigraph_tools.recorder import Recorder
 from manigraph_tools.replay import ActionCheck, Replayer, recorded_actions
 from manigraph_tools.router import run_router
@@ -218,31 +220,12 @@ keys_command = Command(
 
 # --- run / up -----------------------------------------------------------------------------------
 def _episode_arguments(parser: argparse.ArgumentParser) -> None:
-    group = parser.add_argument_group("episodes")
-    group.add_argument("--task", default="stack", help="task name (default: stack)")
-    group.add_argument("--task-file", type=Path, help="a TOML layout of your own (see README)")
-    group.add_argument("--blocks", type=int, default=4, help="blocks per stack K (default 4)")
-    group.add_argument("--stacks", type=int, default=1, help="number of stacks s (default 1)")
-    group.add_argument("--episodes", type=int, default=None, help="run N episodes, then exit")
-    group.add_argument("--seed", type=int, default=0, help="seed of the first episode")
-    group.add_argument("--timeout", type=float, default=120.0, help="seconds per episode")
-    group.add_argument(
-        "--json", action="store_true", help="print only the JSON summary (stdout, one line)"
-    )
+    add_option_arguments(parser.add_argument_group("episodes"), EpisodeOptions)
 
 
 def _plan(args: argparse.Namespace, episodes: int) -> EpisodePlan:
-    task_file = read_task_file(args.task_file)
-    return EpisodePlan(
-        task="file" if task_file is not None else args.task,
-        task_file=task_file,
-        blocks=args.blocks,
-        stacks=args.stacks,
-        episodes=episodes,
-        seed=args.seed,
-        timeout=args.timeout,
-        run_id=f"{args.task}-{args.blocks}-{int(time.time())}",
-    )
+    options = options_from_args(EpisodeOptions, args)
+    return options.plan(episodes, run_id=f"{options.task}-{options.blocks}-{int(time.time())}")
 
 
 def _run_configure(parser: argparse.ArgumentParser) -> None:
@@ -271,21 +254,14 @@ def _skills_driver(sim_backend: str) -> str:
     return driver_for_world(manifests["sim"], sim_backend, manifests["skills"])
 
 
-def _sim_args(args: argparse.Namespace) -> list[str]:
-    extra: list[str] = []
-    if args.video is not None:
-        if args.sim != "physics":
-            raise ConfigError("video", "needs --sim physics")
-        extra += ["--video", str(args.video.resolve())]
-    if args.realtime:
-        if args.sim != "physics":
-            raise ConfigError("realtime", "needs --sim physics")
-        extra.append("--realtime")
-    if args.box_geometry is not None:
-        if args.sim != "geometric":
-            raise ConfigError("box-geometry", "the physics world always has its own boxes")
-        extra += ["--box-geometry", args.box_geometry]
-    return extra
+def _sim_backends() -> Registry[Any] | None:
+    """The sim's backend registry, whose options ``up`` forwards to ``manigraph sim``; None
+    where the sim is not installed (an image with one service, which cannot run ``up``)."""
+    try:
+        from manigraph_sim.backends import BACKENDS
+    except ImportError:
+        return None
+    return BACKENDS
 
 
 def _up_configure(parser: argparse.ArgumentParser) -> None:
@@ -297,18 +273,6 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         default="geometric",
         choices=["geometric", "physics"],
         help="sim backend (default: geometric)",
-    )
-    parser.add_argument(
-        "--video", type=Path, help="physics: render episodes to this .gif/.mp4 (needs Vulkan)"
-    )
-    parser.add_argument(
-        "--realtime", action="store_true", help="physics: simulate in real time, not flat out"
-    )
-    parser.add_argument(
-        "--box-geometry",
-        choices=["geometric", "physics"],
-        help="geometric sim: lay box tasks out with this geometry (physics: the physics "
-        "world's, to compare both worlds on the same layouts)",
     )
     parser.add_argument(
         "--explain-decisions",
@@ -323,6 +287,11 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         "in a temporary directory (default: plain TCP on loopback, for development)",
     )
     parser.add_argument("--log-dir", type=Path, help="also write <service>.log files here")
+    backends = _sim_backends()
+    if backends is not None:
+        backends.add_arguments(
+            parser.add_argument_group("sim backend options (passed to manigraph sim)")
+        )
 
 
 def _interrupt(signum: int, _frame: object) -> None:
@@ -350,11 +319,16 @@ def _up_run(args: argparse.Namespace) -> int:
         identity = {"MANIGRAPH_TLS_IDENTITY": name} if tls_dir else {}
         return ProcessSpec(name, argv, {**bus_env, **identity})
 
+    backends = _sim_backends()
+    sim_options = (
+        backends.argv(args.sim, backends.given_options(args)) if backends is not None else []
+    )
+    plan = _plan(args, args.episodes) if args.episodes is not None else None
     specs = [spec("router", ["router", "--listen", endpoint])]
     if args.record:
         specs.append(spec("recorder", ["record", "--output", str(args.record)]))
     specs += [
-        spec("sim", ["sim", "--backend", args.sim, *_sim_args(args)]),
+        spec("sim", ["sim", "--backend", args.sim, *sim_options]),
         spec(
             "planner",
             ["planner", "--policy", args.policy]
@@ -381,12 +355,12 @@ def _up_run(args: argparse.Namespace) -> int:
                 file=sys.stderr,
                 flush=True,
             )
-            if args.episodes is None:
+            if plan is None:
                 print("Ctrl-C stops every service", file=sys.stderr, flush=True)
                 while True:
                     supervisor.raise_if_dead()
                     time.sleep(0.5)
-            summary = run_episodes(bus, _plan(args, args.episodes))
+            summary = run_episodes(bus, plan)
     except KeyboardInterrupt:
         print("stopping the stack", file=sys.stderr)
     finally:

@@ -18,6 +18,47 @@ from typing import TextIO
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import BusError, ConfigError
 from manigraph_shared.messages import EpisodeEvent, EpisodePhase, EpisodeRequest
+from manigraph_shared.options import Interval, Options, option
+
+AT_LEAST_ONE = Interval(1, None)
+
+
+@dataclass(frozen=True)
+class EpisodeOptions(Options):
+    """Which episodes to run: the flags ``manigraph run``, ``up`` and ``eval`` share
+    (``add_option_arguments(parser, EpisodeOptions)``)."""
+
+    task: str = option("stack", help="task name")
+    task_file: Path | None = option(None, help="a TOML layout of your own (see README)")
+    blocks: int = option(4, help="blocks per stack K", within=AT_LEAST_ONE)
+    stacks: int = option(1, help="number of stacks s", within=AT_LEAST_ONE)
+    episodes: int | None = option(
+        None,
+        help="run N episodes, then exit (up without it: keep the stack running)",
+        within=AT_LEAST_ONE,
+    )
+    seed: int = option(0, help="seed of the first episode", within=Interval(0, None))
+    timeout: float = option(
+        120.0, help="seconds per episode", within=Interval(0, None, low_open=True)
+    )
+    json: bool = option(False, help="print only the JSON summary (stdout, one line)")
+
+    def task_text(self) -> str | None:
+        """The task file's text (validated later, by the sim), or None without one."""
+        return read_task_file(self.task_file)
+
+    def plan(self, episodes: int, run_id: str = "run") -> EpisodePlan:
+        task_file = self.task_text()
+        return EpisodePlan(
+            task="file" if task_file is not None else self.task,
+            task_file=task_file,
+            blocks=self.blocks,
+            stacks=self.stacks,
+            episodes=episodes,
+            seed=self.seed,
+            timeout=self.timeout,
+            run_id=run_id,
+        )
 
 
 @dataclass(frozen=True)

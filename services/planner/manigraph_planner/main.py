@@ -3,30 +3,38 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import dataclass
 
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
+from manigraph_shared.options import Options, add_option_arguments, option
+
+
+@dataclass(frozen=True)
+class PlannerOptions(Options):
+    policy: str = option(
+        "expert", help="registered policy name (expert) or policy file (a .pt checkpoint)"
+    )
+    explain_decisions: bool = option(
+        False,
+        help="publish an Explanation after every decision (GNN policies; lands in the log)",
+    )
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--policy", default="expert", help="registered policy name or checkpoint path"
-    )
-    parser.add_argument(
-        "--explain-decisions",
-        action="store_true",
-        help="publish an Explanation after every decision (GNN policies; lands in the log)",
-    )
+    add_option_arguments(parser, PlannerOptions)
     add_bus_arguments(parser)
 
 
 def _run(args: argparse.Namespace) -> int:
     from manigraph_planner.policies import load_policy
     from manigraph_planner.service import PlannerService
+    from manigraph_shared.options import options_from_args
     from manigraph_shared.service import run_service
 
-    policy = load_policy(args.policy)
-    if args.explain_decisions:
+    options = options_from_args(PlannerOptions, args)
+    policy = load_policy(options.policy)
+    if options.explain_decisions:
         from manigraph_planner.policies.gnn import GNNPolicy
         from manigraph_shared.errors import ConfigError
 
@@ -36,7 +44,7 @@ def _run(args: argparse.Namespace) -> int:
                 f"only GNN policies can be explained, not '{policy.name}' (give a checkpoint)",
             )
     return run_service(
-        lambda bus: PlannerService(bus, policy, args.explain_decisions),
+        lambda bus: PlannerService(bus, policy, options.explain_decisions),
         bus_config_from_args(args),
     )
 

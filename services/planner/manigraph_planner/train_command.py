@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import replace
 from pathlib import Path
 
 from manigraph_shared.cli import Command
@@ -11,16 +12,16 @@ from manigraph_shared.cli import Command
 
 def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("demos", type=Path, nargs="+", help="MCAP logs with scenes and actions")
-    parser.add_argument("--arch", default="sage", help="gcn, sage, gated or gat")
+    parser.add_argument("--arch", default="sage", help="architecture: gcn, sage, gated or gat")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--epochs", type=int, default=150)
     parser.add_argument(
-        "--copies", type=int, help="augmented copies per sample (default: 16; gcn, gated: 8)"
+        "--copies", type=int, help="augmented copies per sample (default: 16; gcn: 8)"
     )
     parser.add_argument(
         "--resample-every",
         type=int,
-        help="draw fresh copies every N epochs (default: 10; gcn, gated: 0, never)",
+        help="draw fresh copies every N epochs (default: 10; gcn: 0, never)",
     )
     parser.add_argument("-o", "--output", type=Path, help="checkpoint (default checkpoints/)")
 
@@ -28,24 +29,21 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 def _run(args: argparse.Namespace) -> int:
     import torch
 
-    from manigraph_planner.gnn import ARCHITECTURES, save_checkpoint
-    from manigraph_planner.training.augment import augmentation_for
+    from manigraph_planner.gnn import save_checkpoint
     from manigraph_planner.training.dataset import load_demonstrations
+    from manigraph_planner.training.recipes import augmentation_for
     from manigraph_planner.training.trainer import TrainConfig, default_output, train
-    from manigraph_shared.errors import ConfigError
 
-    if args.arch not in ARCHITECTURES:
-        raise ConfigError("arch", f"'{args.arch}' is not one of {', '.join(sorted(ARCHITECTURES))}")
-    try:
-        config = TrainConfig(
-            architecture=args.arch,
-            seed=args.seed,
-            epochs=args.epochs,
-            augmentation=augmentation_for(args.arch, copies=args.copies),
-            resample_every=args.resample_every,
-        )
-    except ValueError as exc:
-        raise ConfigError(str(exc).split(":")[0], str(exc)) from None
+    # TrainConfig checks the architecture (ModelConfig) and takes the defaults of its recipe
+    # (training.recipes); each raises a ConfigError naming the field.
+    config = TrainConfig(
+        architecture=args.arch,
+        seed=args.seed,
+        epochs=args.epochs,
+        resample_every=args.resample_every,
+    )
+    if args.copies is not None:
+        config = replace(config, augmentation=augmentation_for(args.arch, copies=args.copies))
     torch.set_num_threads(2)
     demos = load_demonstrations(args.demos)
     net, metrics = train(demos, config)

@@ -1,12 +1,10 @@
-"""What a sim backend offers the sim service; backends are registered by name."""
+"""What a sim backend offers the sim service (registered by name in ``manigraph_sim.backends``)."""
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable
-from typing import ClassVar
+from typing import Any, ClassVar
 
-from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import (
     EpisodeEvent,
     EpisodePhase,
@@ -30,6 +28,11 @@ class SimBackend(ABC):
     """
 
     abilities: ClassVar[frozenset[str]] = frozenset()
+
+    @classmethod
+    def from_options(cls, options: Any) -> SimBackend:
+        """The backend configured by its registered options (``manigraph_sim.backends``)."""
+        return cls()
 
     @abstractmethod
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
@@ -152,20 +155,3 @@ def episode_event(
         reason=reason,
         stamp=stamp,
     )
-
-
-BACKENDS: dict[str, Callable[..., SimBackend]] = {}
-
-
-def register_backend(name: str) -> Callable[[Callable[..., SimBackend]], Callable[..., SimBackend]]:
-    def register(factory: Callable[..., SimBackend]) -> Callable[..., SimBackend]:
-        BACKENDS[name] = factory
-        return factory
-
-    return register
-
-
-def create_backend(name: str, **options: object) -> SimBackend:
-    if name not in BACKENDS:
-        raise ConfigError("backend", f"'{name}' is not one of {', '.join(sorted(BACKENDS))}")
-    return BACKENDS[name](**options)

@@ -1,77 +1,49 @@
-"""``manigraph sim``: entry point (imports stay lazy so ``manigraph --help`` is fast)."""
+"""``manigraph sim``: entry point (imports stay lazy so ``manigraph --help`` is fast).
+
+Every backend option flag comes from the backend's registered options
+(``manigraph_sim.backends``); a flag the chosen backend does not take stops start-up with a
+``ConfigError`` naming it.
+"""
 
 from __future__ import annotations
 
 import argparse
+from dataclasses import dataclass
 
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
+from manigraph_shared.options import Interval, Options, add_option_arguments, option
+from manigraph_sim.backends import BACKENDS
+
+
+@dataclass(frozen=True)
+class SimServiceOptions(Options):
+    publish_hz: float = option(
+        10.0, help="scene rate", within=Interval(0, 1000, low_open=True), unit="Hz"
+    )
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--backend", default="geometric", help="sim backend: geometric (default) or physics"
+        "--backend",
+        default="geometric",
+        help=f"sim backend (default: geometric); {BACKENDS.describe()}",
     )
-    parser.add_argument("--publish-hz", type=float, default=10.0, help="scene rate (default 10)")
-    parser.add_argument(
-        "--goal-tolerance",
-        type=float,
-        default=None,
-        help="metres from a goal that fill it (default: geometric 0.01, physics 0.02)",
-    )
-    parser.add_argument(
-        "--realtime", action="store_true", help="physics: run in real time, not flat out"
-    )
-    parser.add_argument(
-        "--video",
-        default=None,
-        help="physics: render each episode to this .gif/.mp4 ({episode}, {seed} allowed; "
-        "needs Vulkan, see scripts/install-vulkan.sh)",
-    )
-    parser.add_argument(
-        "--box-geometry",
-        choices=["geometric", "physics"],
-        default=None,
-        help="geometric backend: lay box tasks out with this geometry (default geometric; "
-        "physics: the physics world's roomier boxes, for comparing the two worlds)",
-    )
+    add_option_arguments(parser, SimServiceOptions)
+    BACKENDS.add_arguments(parser.add_argument_group("backend options"))
     add_bus_arguments(parser)
 
 
 def _run(args: argparse.Namespace) -> int:
-    from manigraph_shared.errors import ConfigError
+    from manigraph_shared.options import options_from_args
     from manigraph_shared.service import run_service
-    from manigraph_sim import geometric, physics  # noqa: F401  (register the backends)
-    from manigraph_sim.backend import create_backend
     from manigraph_sim.service import SimService
 
-    if args.publish_hz <= 0 or args.publish_hz > 1000:
-        raise ConfigError("publish-hz", "must be in (0, 1000]")
-    options: dict[str, object] = {}
-    if args.goal_tolerance is not None:
-        if not 0 < args.goal_tolerance <= 0.1:
-            raise ConfigError("goal-tolerance", "must be in (0, 0.1] metres")
-        options["goal_tolerance"] = args.goal_tolerance
-    if args.realtime:
-        if args.backend != "physics":
-            raise ConfigError("realtime", "only the physics backend simulates time")
-        options["realtime"] = True
-    if args.video:
-        if args.backend != "physics":
-            raise ConfigError("video", "only the physics backend renders")
-        from manigraph_sim.physics.video import VideoConfig
-
-        options["video"] = VideoConfig(args.video)
-    if args.box_geometry is not None:
-        if args.backend != "geometric":
-            raise ConfigError("box-geometry", "the physics backend always has its own boxes")
-        from manigraph_sim.physics.box_layout import PHYSICS_BOXES
-
-        if args.box_geometry == "physics":
-            options["boxes"] = PHYSICS_BOXES
-    backend = create_backend(args.backend, **options)
+    service = options_from_args(SimServiceOptions, args)
+    options = BACKENDS.options_from_args(args.backend, args)
+    backend = BACKENDS[args.backend].from_options(options)
     return run_service(
-        lambda bus: SimService(bus, backend, args.publish_hz), bus_config_from_args(args)
+        lambda bus: SimService(bus, backend, service.publish_hz), bus_config_from_args(args)
     )
 
 

@@ -1,4 +1,9 @@
-"""``manigraph skills``: entry point."""
+"""``manigraph skills``: entry point.
+
+The driver's option flags come from its registered options
+(``manigraph_skills.drivers.registry``); a flag the chosen driver does not take stops start-up
+with a ``ConfigError`` naming it.
+"""
 
 from __future__ import annotations
 
@@ -6,31 +11,34 @@ import argparse
 
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
+from manigraph_skills.drivers.registry import DRIVERS
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--driver", default="sim-gripper", help="robot driver (default sim-gripper)"
+        "--driver",
+        default="sim-gripper",
+        help=f"robot driver (default: sim-gripper); {DRIVERS.describe()}",
     )
     parser.add_argument(
         "--workspace",
         default=None,
         help="reachable box xmin,xmax,ymin,ymax,zmin,zmax in metres (robot frame)",
     )
+    DRIVERS.add_arguments(parser.add_argument_group("driver options"))
     add_bus_arguments(parser)
 
 
 def _run(args: argparse.Namespace) -> int:
     from manigraph_shared.service import run_service
-    from manigraph_skills.drivers import DRIVERS, create_driver
     from manigraph_skills.service import SkillsService
     from manigraph_skills.workspace import Workspace
 
     workspace = Workspace.parse(args.workspace) if args.workspace else Workspace()
-    if args.driver not in DRIVERS:
-        create_driver(args.driver)  # raises the ConfigError naming the choices
+    options = DRIVERS.options_from_args(args.driver, args)
+    driver = DRIVERS[args.driver]
     return run_service(
-        lambda bus: SkillsService(bus, lambda b: create_driver(args.driver, bus=b), workspace),
+        lambda bus: SkillsService(bus, lambda b: driver.from_options(b, options), workspace),
         bus_config_from_args(args),
     )
 

@@ -7,7 +7,7 @@ from collections.abc import Callable
 
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus, TrayAction
-from manigraph_skills.drivers.base import RobotDriver
+from manigraph_skills.drivers.base import Motion, RobotDriver
 from manigraph_skills.grasp_choice import choose_grasps
 from manigraph_skills.workspace import Workspace
 
@@ -58,8 +58,9 @@ class PickAndPlace:
                     raise SkillError("outside_workspace", f"{name} at {point.as_tuple()}")
             status(SkillState.RUNNING)
             pick, place = choose_grasps(scene, item, goal.position)
-            self.driver.pick(action.decision_id, item.id, item.position, item.orientation, pick)
-            self.driver.place(action.decision_id, item.id, goal.position, goal.orientation, place)
+            decision = action.decision_id
+            self.driver.pick(Motion(decision, item.id, item.position, item.orientation, pick))
+            self.driver.place(Motion(decision, item.id, goal.position, goal.orientation, place))
         except SkillError as exc:
             return status(SkillState.FAILED, exc.reason, exc.detail)
         return status(SkillState.SUCCEEDED)

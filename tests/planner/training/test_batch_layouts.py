@@ -134,5 +134,5 @@ def test_a_short_training_run_follows_the_same_loss_curve_on_both_layouts(
 
 
 def test_an_unknown_batch_layout_is_refused() -> None:
-    with pytest.raises(ValueError, match=r"^batch_layout: 'sparse' is not one of padded, pyg"):
+    with pytest.raises(ValueError, match=r"^batch_layout: 'sparse' is not one of: padded, pyg"):
         TrainConfig(batch_layout="sparse")

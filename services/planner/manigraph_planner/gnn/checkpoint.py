@@ -33,7 +33,7 @@ from typing import Any, NamedTuple
 import torch
 
 from manigraph_planner.gnn.features import FEATURE_SPEC
-from manigraph_planner.gnn.models import ARCHITECTURES, ModelConfig, PolicyNet
+from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_shared.errors import ConfigError, PolicyError
 
 __all__ = ["CheckpointInfo", "LoadedCheckpoint", "load_checkpoint", "save_checkpoint"]
@@ -213,13 +213,6 @@ def _check_feature_spec(stored: dict[str, Any]) -> None:
 
 
 def _model_config(stored: dict[str, Any]) -> ModelConfig:
-    architecture = stored.get("architecture")
-    if architecture not in ARCHITECTURES:
-        known = tuple(sorted(ARCHITECTURES))
-        raise PolicyError(
-            f"checkpoint model.architecture: file has {architecture!r} but this manigraph "
-            f"knows {known}"
-        )
     try:
         return ModelConfig.from_dict(stored)
     except ConfigError as exc:

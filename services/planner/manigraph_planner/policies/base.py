@@ -9,6 +9,7 @@ from pathlib import Path
 
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import Action, Scene, TrayAction
+from manigraph_shared.registry import Registry
 
 
 @dataclass(frozen=True)
@@ -42,18 +43,15 @@ class Policy(ABC):
         """The next decision, or None when there is nothing left to do."""
 
 
-POLICIES: dict[str, Callable[[], Policy]] = {}
-#: Loaders for policy files, by suffix (``.pt`` checkpoints register themselves here).
-POLICY_FILE_LOADERS: dict[str, Callable[[Path], Policy]] = {}
-
-
-def register_policy(name: str) -> Callable[[type[Policy]], type[Policy]]:
-    def register(cls: type[Policy]) -> type[Policy]:
-        cls.name = name
-        POLICIES[name] = cls
-        return cls
-
-    return register
+#: Policies by name; a policy takes no options (a learned one comes from its checkpoint).
+POLICIES: Registry[type[Policy]] = Registry("policy")
+register_policy = POLICIES.register
+#: Loaders of policy files, by suffix; ``.pt`` checkpoints load a GNN policy (torch is
+#: imported only then).
+POLICY_FILE_LOADERS: Registry[Callable[[Path], Policy]] = Registry("policy file")
+POLICY_FILE_LOADERS.add_lazy(
+    ".pt", "manigraph_planner.policies.gnn:load_gnn_policy", help="a GNN policy checkpoint"
+)
 
 
 def load_policy(spec: str) -> Policy:
@@ -61,12 +59,12 @@ def load_policy(spec: str) -> Policy:
     if spec in POLICIES:
         return POLICIES[spec]()
     path = Path(spec)
-    loader = POLICY_FILE_LOADERS.get(path.suffix)
-    if loader is None:
-        known = ", ".join(sorted(POLICIES))
+    if path.suffix not in POLICY_FILE_LOADERS:
+        known = ", ".join(POLICIES)
+        files = ", ".join(POLICY_FILE_LOADERS)
         raise PolicyError(
-            f"policy: '{spec}' is neither a registered policy ({known}) nor a checkpoint"
+            f"policy: '{spec}' is neither a registered policy ({known}) nor a policy file ({files})"
         )
     if not path.is_file():
         raise PolicyError(f"policy: no such checkpoint file: {path}")
-    return loader(path)
+    return POLICY_FILE_LOADERS[path.suffix](path)

@@ -11,10 +11,10 @@ from torch import Tensor
 from manigraph_planner.gnn.checkpoint import CheckpointInfo, load_checkpoint
 from manigraph_planner.gnn.features import GraphState, scene_to_graph
 from manigraph_planner.gnn.models import PolicyNet
-from manigraph_planner.policies.base import POLICY_FILE_LOADERS, Decision, Policy
+from manigraph_planner.policies.base import Decision, Policy
 from manigraph_shared.messages import Scene
 
-__all__ = ["GNNPolicy", "Probabilities", "decision_from_logits"]
+__all__ = ["GNNPolicy", "Probabilities", "decision_from_logits", "load_gnn_policy"]
 
 
 @dataclass(frozen=True)
@@ -131,4 +131,6 @@ def best_compatible_pair(
 _GOAL_CODE_FOR = torch.tensor([3.0, 2.0])
 
 
-POLICY_FILE_LOADERS[".pt"] = GNNPolicy.from_checkpoint
+def load_gnn_policy(path: Path) -> GNNPolicy:
+    """The ``.pt`` policy file loader (registered in ``policies.base.POLICY_FILE_LOADERS``)."""
+    return GNNPolicy.from_checkpoint(path)

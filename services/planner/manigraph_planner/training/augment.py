@@ -42,12 +42,13 @@ these steps; each keeps what the expert decides (step 3 is the one exception, ar
    footprints still overlap; x/y noise teaches that goals need not stand in exact columns
    (a pyramid's do not).
 
-Each architecture has its recipe (:func:`augmentation_for`), chosen on validation episodes
+Each architecture has its recipe (:mod:`~manigraph_planner.training.recipes`), chosen on
+validation episodes
 (seeds 1000+, never the reported 0-99):
 
 * ``sage`` (mean over neighbours): every step.
 * ``gat`` (attention): every step but the open box with contents (see
-  :func:`augmentation_for`).
+  :mod:`~manigraph_planner.training.recipes`).
 * ``gated`` (sum over neighbours, GRU update): every step, with towers, finished stacks and
   free goals capped at 6 levels, so graphs stay under about 40 nodes instead of about 90.
   With translation and noise only it fitted every demonstration and generalized to almost
@@ -202,36 +203,3 @@ class Augmentation:
         sigma = torch.tensor([self.noise_xy, self.noise_xy, self.noise])
         x[:, 1:4] += torch.randn(x.shape[0], 3, generator=generator) * sigma
         return x
-
-
-#: Level cap of the structural steps for ``gated``: see the module docstring.
-GATED_MAX_LEVELS = 6
-
-
-def augmentation_for(architecture: str, copies: int | None = None) -> Augmentation:
-    """The default augmentation for ``architecture`` (the recipes are compared in the module
-    docstring); ``copies`` per sample (default: 16, or 8 for ``gcn``).
-
-    ``gat`` gets no open box with contents (step 4): it already finished box rearrangement
-    without it (validation, seeds 1000+: 1.00), and with it K = 40 stacking fell (training
-    seed 1: 1.00 without, 0.10 with; seeds 0 and 2 with it: 0.74, 0.00)."""
-    if architecture == "gcn":
-        translation_and_noise = Augmentation(copies=8 if copies is None else copies, noise_xy=0.004)
-        return replace(
-            translation_and_noise.without_structure(),
-            drop_covers_probability=translation_and_noise.drop_covers_probability,
-        )
-    default = Augmentation() if copies is None else Augmentation(copies=copies)
-    if architecture == "gated":
-        cap = GATED_MAX_LEVELS
-        return replace(default, max_levels=cap, max_free_levels=cap, max_finished_levels=cap)
-    if architecture == "gat":
-        return replace(default, open_box_contents_probability=0.0)
-    return default
-
-
-def resample_every_for(architecture: str) -> int:
-    """Epochs between fresh draws of augmented copies: every 10 where the structural steps
-    are on (they have many more scenes to show than one draw holds); never for ``gcn``,
-    whose translation-and-noise recipe was measured with one draw."""
-    return 0 if architecture == "gcn" else 10

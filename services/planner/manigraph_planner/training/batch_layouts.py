@@ -27,6 +27,7 @@ from manigraph_planner.gnn.selection import (
 )
 from manigraph_planner.training.dataset import Sample
 from manigraph_planner.training.padded_batch import PaddedBatch, size_groups
+from manigraph_shared.registry import Registry
 
 __all__ = ["BATCH_LAYOUTS", "BatchLayout", "PaddedLayout", "PygLayout", "pyg_batch"]
 
@@ -118,6 +119,6 @@ def pyg_batch(samples: list[Sample]) -> Batch:
 
 
 #: Batch layouts by name; :class:`~manigraph_planner.training.trainer.TrainConfig` names one.
-BATCH_LAYOUTS: dict[str, BatchLayout] = {
-    layout.name: layout for layout in (PaddedLayout(), PygLayout())
-}
+BATCH_LAYOUTS: Registry[BatchLayout] = Registry("batch_layout")
+for _layout in (PaddedLayout(), PygLayout()):
+    BATCH_LAYOUTS.add(_layout.name, _layout)

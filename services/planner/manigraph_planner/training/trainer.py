@@ -12,14 +12,12 @@ from typing import TextIO
 import torch
 
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
-from manigraph_planner.training.augment import (
-    Augmentation,
-    augmentation_for,
-    resample_every_for,
-)
+from manigraph_planner.training.augment import Augmentation
 from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
 from manigraph_planner.training.dataset import Demonstrations, Sample
 from manigraph_planner.training.padded_batch import PaddedBatch
+from manigraph_planner.training.recipes import augmentation_for, resample_every_for
+from manigraph_shared.errors import ConfigError
 
 
 @dataclass(frozen=True)
@@ -45,20 +43,28 @@ class TrainConfig:
     batch_layout: str = "padded"
 
     def __post_init__(self) -> None:
-        for name in ("epochs", "batch_size", "hidden_channels", "num_layers"):
+        for name in ("epochs", "batch_size"):
             if getattr(self, name) < 1:
-                raise ValueError(f"{name}: must be >= 1")
+                raise ConfigError(name, "must be >= 1")
+        self.model_config()  # the architecture and sizes, checked where a network is built
         if self.resample_every is None:
             object.__setattr__(self, "resample_every", resample_every_for(self.architecture))
         if self.resample_every < 0:
-            raise ValueError("resample_every: must be >= 0 epochs")
+            raise ConfigError("resample_every", "must be >= 0 epochs")
         if self.learning_rate <= 0:
-            raise ValueError("learning_rate: must be > 0")
-        if self.batch_layout not in BATCH_LAYOUTS:
-            layouts = ", ".join(sorted(BATCH_LAYOUTS))
-            raise ValueError(f"batch_layout: '{self.batch_layout}' is not one of {layouts}")
+            raise ConfigError("learning_rate", "must be > 0")
+        BATCH_LAYOUTS.check(self.batch_layout)
         if self.augmentation is None:
             object.__setattr__(self, "augmentation", augmentation_for(self.architecture))
+
+    def model_config(self) -> ModelConfig:
+        """The network this trains (``ConfigError`` naming a bad field)."""
+        return ModelConfig(
+            architecture=self.architecture,
+            hidden_channels=self.hidden_channels,
+            num_layers=self.num_layers,
+            feature_scale=self.feature_scale,
+        )
 
     def to_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -119,14 +125,7 @@ def _train(
     generator = torch.Generator().manual_seed(config.seed)
     assert config.augmentation is not None  # set in __post_init__
     samples = config.augmentation.apply(demos.samples, generator)
-    net = PolicyNet(
-        ModelConfig(
-            architecture=config.architecture,
-            hidden_channels=config.hidden_channels,
-            num_layers=config.num_layers,
-            feature_scale=config.feature_scale,
-        )
-    )
+    net = PolicyNet(config.model_config())
     optimiser = torch.optim.Adam(
         net.parameters(), lr=config.learning_rate, weight_decay=config.weight_decay
     )

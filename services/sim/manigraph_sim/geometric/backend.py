@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from manigraph_shared.errors import SkillError
@@ -13,7 +15,7 @@ from manigraph_shared.messages import (
     RobotFeedback,
     Scene,
 )
-from manigraph_sim.backend import EpisodeBackend, register_backend
+from manigraph_sim.backend import EpisodeBackend
 from manigraph_sim.geometric.world import GeometricWorld
 from manigraph_sim.manifest import GRIPPER
 from manigraph_sim.observation import observed_scene
@@ -21,8 +23,9 @@ from manigraph_sim.tasks.box_geometry import BoxGeometry
 from manigraph_sim.tasks.from_request import episode_layout
 
 
-@register_backend("geometric")
 class GeometricBackend(EpisodeBackend):
+    """Registered as ``geometric`` (options: ``manigraph_sim.backends.GeometricOptions``)."""
+
     abilities = frozenset({GRIPPER})
 
     def __init__(self, goal_tolerance: float = 0.01, boxes: BoxGeometry | None = None) -> None:
@@ -31,6 +34,15 @@ class GeometricBackend(EpisodeBackend):
         #: The box tasks' geometry (None: the default, the demonstrations').
         self.boxes = boxes
         self.world: GeometricWorld | None = None
+
+    @classmethod
+    def from_options(cls, options: Any) -> GeometricBackend:
+        boxes = None
+        if options.box_geometry == "physics":
+            from manigraph_sim.physics.box_layout import PHYSICS_BOXES
+
+            boxes = PHYSICS_BOXES
+        return cls(options.goal_tolerance, boxes)
 
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
         episode = episode_layout(request, self.boxes)

@@ -9,61 +9,10 @@ one (a cover) rests on the rim and closes the box; what is inside a closed box c
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from manigraph_shared.errors import SkillError
-
-#: Footprints must overlap by more than this (metres) to support or cover one another.
-CONTACT_MARGIN = 0.002
-
-
-@dataclass
-class Body:
-    id: str
-    category: str  # "block" | "cover"
-    size: np.ndarray  # full extents (x, y, z), metres
-    position: np.ndarray  # centre, metres
-
-    @property
-    def bottom(self) -> float:
-        return float(self.position[2] - self.size[2] / 2)
-
-    @property
-    def top(self) -> float:
-        return float(self.position[2] + self.size[2] / 2)
-
-
-@dataclass
-class Goal:
-    id: str
-    category: str  # "block" | "cover": which objects fill it
-    position: np.ndarray
-
-
-@dataclass
-class Container:
-    """A static open-top box standing on the table."""
-
-    id: str
-    centre: np.ndarray  # (x, y)
-    inner: np.ndarray  # inner extents (x, y), metres
-    wall: float
-    height: float  # rim height above the table
-
-    def fits_inside(self, position: np.ndarray, size: np.ndarray) -> bool:
-        gap = np.abs(position[:2] - self.centre) + size[:2] / 2 - self.inner / 2
-        return bool(np.all(gap <= CONTACT_MARGIN))
-
-    def touches(self, position: np.ndarray, size: np.ndarray) -> bool:
-        outer = self.inner + 2 * self.wall
-        gap = np.abs(position[:2] - self.centre) - (size[:2] + outer) / 2
-        return bool(np.all(gap < -CONTACT_MARGIN))
-
-    def holds_point(self, point: np.ndarray) -> bool:
-        inside = np.all(np.abs(point[:2] - self.centre) <= self.inner / 2)
-        return bool(inside and point[2] < self.height)
+from manigraph_sim.world_model import CONTACT_MARGIN, Body, Container, Goal
 
 
 def footprints_overlap(a_pos: np.ndarray, a_size: np.ndarray, b: Body) -> bool:

@@ -19,10 +19,11 @@ budget is spent.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from manigraph_shared.errors import ConfigError, SkillError
+from manigraph_shared.errors import SkillError
 from manigraph_shared.grasp_points import grasp_height
 from manigraph_shared.messages import (
     EpisodeEvent,
@@ -38,14 +39,14 @@ from manigraph_shared.messages import (
     SkillStatus,
 )
 from manigraph_sim.backend import EpisodeBackend, JointedArmBackend
-from manigraph_sim.geometric.world import Body, GeometricWorld
+from manigraph_sim.geometric.world import GeometricWorld
 from manigraph_sim.manifest import JOINTS
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig
 from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
-from manigraph_sim.tasks.base import Layout
 from manigraph_sim.tasks.from_request import episode_layout
+from manigraph_sim.world_model import Body, Layout
 
 #: A body whose grasp point (a block's centre, a cover's handle) is this close to the TCP
 #: while the gripper is closed is held.
@@ -55,7 +56,8 @@ START_TOLERANCE = 0.05
 
 
 class PhysicsBackend(EpisodeBackend, JointedArmBackend):
-    """Runs as fast as it can, or in real time with ``realtime=True``."""
+    """Runs as fast as it can, or in real time with ``realtime=True``. Registered as
+    ``physics`` (options: ``manigraph_sim.backends.PhysicsOptions``)."""
 
     abilities = frozenset({JOINTS})
 
@@ -66,8 +68,6 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         config: PhysicsConfig | None = None,
         video: VideoConfig | None = None,
     ) -> None:
-        if not 0 < goal_tolerance <= 0.1:
-            raise ConfigError("goal_tolerance", f"{goal_tolerance} must be in (0, 0.1] metres")
         super().__init__()
         self.goal_tolerance = goal_tolerance
         self.realtime = realtime
@@ -81,6 +81,11 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         #: Boxes seen open in this episode: their contents stay observed (partial observability).
         self.revealed: set[str] = set()
         self.physics_steps = 0
+
+    @classmethod
+    def from_options(cls, options: Any) -> PhysicsBackend:
+        video = VideoConfig(str(options.video)) if options.video else None
+        return cls(options.goal_tolerance, options.realtime, video=video)
 
     # --- episodes ---------------------------------------------------------------------------
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:

@@ -44,7 +44,8 @@ from manigraph_sim.physics.world import (
     box_walls,
 )
 from manigraph_sim.tasks import get_task
-from manigraph_sim.tasks.base import Layout, TaskParams
+from manigraph_sim.tasks.base import TaskParams
+from manigraph_sim.world_model import Layout
 
 
 class ManigraphEnv(BaseEnv):

@@ -21,7 +21,7 @@ from sapien import physx
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.grasp_points import COVER_HANDLE_SIZE, handle_offset
 from manigraph_shared.panda import ARM_JOINTS, FINGER_OPEN, HOME_Q, panda_urdf_path
-from manigraph_sim.geometric.world import Body, Container
+from manigraph_sim.world_model import Body, Container
 
 #: Where an episode starts: Franka's "ready" pose with the hand turned a quarter, TCP at
 #: (0.31, 0, 0.49) m, high and close to the base so it clears every stack of a layout.

@@ -3,42 +3,14 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
 import numpy as np
 
 from manigraph_shared.errors import TaskError
-from manigraph_sim.geometric.world import Body, Container, Goal
-
-if TYPE_CHECKING:
-    from manigraph_sim.tasks.box_geometry import BoxGeometry
-
-BLOCK_SIZE = 0.04
-#: Where stacks and boxes may be placed, robot frame, metres: in front of a Panda.
-WORKSPACE_X = (0.30, 0.70)
-WORKSPACE_Y = (-0.35, 0.35)
-
-
-@dataclass
-class Layout:
-    bodies: list[Body]
-    goals: list[Goal]
-    containers: list[Container] = field(default_factory=list)
-    #: Goals that may stay empty at the end (storage places for covers).
-    optional_goals: set[str] = field(default_factory=set)
-    partially_observable: bool = False
-
-    def required_goals(self) -> set[str]:
-        return {goal.id for goal in self.goals} - self.optional_goals
-
-    def validate(self) -> None:
-        names = [b.id for b in self.bodies] + [g.id for g in self.goals]
-        if len(names) != len(set(names)):
-            raise TaskError("layout: object and goal ids must be unique")
-        if not self.required_goals():
-            raise TaskError("layout: at least one goal must be required")
+from manigraph_shared.registry import Registry
+from manigraph_sim.tasks.box_geometry import BoxGeometry
+from manigraph_sim.world_model import BLOCK_SIZE, WORKSPACE_X, WORKSPACE_Y, Body, Goal, Layout
 
 
 @dataclass(frozen=True)
@@ -68,23 +40,15 @@ class Task(ABC):
         return 2 * goals + 4
 
 
-TASKS: dict[str, type[Task]] = {}
-
-
-def register_task(name: str) -> Callable[[type[Task]], type[Task]]:
-    def register(cls: type[Task]) -> type[Task]:
-        cls.name = name
-        TASKS[name] = cls
-        return cls
-
-    return register
+#: Tasks by name. A task takes no options of its own: its parameters (blocks, stacks, box
+#: geometry) come with each episode request, and :meth:`Task.validate` checks them.
+TASKS: Registry[type[Task]] = Registry("task")
+register_task = TASKS.register
 
 
 def get_task(name: str, params: TaskParams) -> Task:
-    cls = TASKS.get(name)
-    if cls is None:
-        raise TaskError(f"task: unknown task '{name}' (known: {', '.join(sorted(TASKS))})")
-    return cls(params)
+    """Task ``name`` with ``params``; ``ConfigError`` naming the known tasks if unknown."""
+    return TASKS[name](params)
 
 
 def stack_bodies(prefix: str, base: np.ndarray, count: int, first: int = 0) -> list[Body]:

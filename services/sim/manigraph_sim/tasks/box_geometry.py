@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from manigraph_shared.errors import TaskError
-from manigraph_sim.tasks.base import WORKSPACE_X, WORKSPACE_Y
+from manigraph_sim.world_model import WORKSPACE_X, WORKSPACE_Y
 
 
 @dataclass(frozen=True)

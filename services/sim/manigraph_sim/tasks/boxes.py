@@ -7,10 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from manigraph_shared.errors import TaskError
-from manigraph_sim.geometric.world import Body, Container, Goal
 from manigraph_sim.tasks.base import (
-    BLOCK_SIZE,
-    Layout,
     Task,
     register_task,
     sample_sites,
@@ -19,6 +16,7 @@ from manigraph_sim.tasks.base import (
     stack_goals,
 )
 from manigraph_sim.tasks.box_geometry import BoxGeometry
+from manigraph_sim.world_model import BLOCK_SIZE, Body, Container, Goal, Layout
 
 
 def footprints_apart(sites: Sequence[np.ndarray], side: float) -> bool:

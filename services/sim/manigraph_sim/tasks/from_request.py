@@ -8,9 +8,10 @@ import numpy as np
 
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest
-from manigraph_sim.tasks.base import Layout, Task, TaskParams, get_task
+from manigraph_sim.tasks.base import Task, TaskParams, get_task
 from manigraph_sim.tasks.box_geometry import BoxGeometry
 from manigraph_sim.tasks.task_file import FileTask, parse_task_file
+from manigraph_sim.world_model import Layout
 
 
 @dataclass(frozen=True)

@@ -5,15 +5,13 @@ from __future__ import annotations
 import numpy as np
 
 from manigraph_shared.errors import TaskError
-from manigraph_sim.geometric.world import Goal
 from manigraph_sim.tasks.base import (
-    BLOCK_SIZE,
-    Layout,
     Task,
     register_task,
     sample_sites,
     stack_bodies,
 )
+from manigraph_sim.world_model import BLOCK_SIZE, Goal, Layout
 
 #: Gap between neighbouring blocks of a pyramid row, metres.
 ROW_GAP = 0.004

@@ -6,14 +6,13 @@ import numpy as np
 
 from manigraph_shared.errors import TaskError
 from manigraph_sim.tasks.base import (
-    BLOCK_SIZE,
-    Layout,
     Task,
     register_task,
     sample_sites,
     stack_bodies,
     stack_goals,
 )
+from manigraph_sim.world_model import BLOCK_SIZE, Layout
 
 
 @register_task("stack")

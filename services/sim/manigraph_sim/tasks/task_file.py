@@ -38,8 +38,8 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from manigraph_shared.errors import TaskError
-from manigraph_sim.geometric.world import Body, Container, Goal
-from manigraph_sim.tasks.base import Layout, Task, TaskParams
+from manigraph_sim.tasks.base import Task, TaskParams
+from manigraph_sim.world_model import Body, Container, Goal, Layout
 
 Coordinate = Annotated[float, Field(ge=-5.0, le=5.0)]
 Extent = Annotated[float, Field(gt=0.0, le=2.0)]

@@ -1,6 +1,6 @@
 """Robot drivers: the swappable boundary between skills and a robot (sim or hardware)."""
 
-from manigraph_skills.drivers import bus_gripper, franka, panda_sim  # noqa: F401  (register)
-from manigraph_skills.drivers.base import DRIVERS, RobotDriver, create_driver, register_driver
+from manigraph_skills.drivers.base import Motion, RobotDriver
+from manigraph_skills.drivers.registry import DRIVERS, create_driver
 
-__all__ = ["DRIVERS", "RobotDriver", "create_driver", "register_driver"]
+__all__ = ["DRIVERS", "Motion", "RobotDriver", "create_driver"]

@@ -1,12 +1,16 @@
-"""What a skill needs from a robot: grasp an object at a pose, release it at another."""
+"""What a skill needs from a robot: grasp an object at a pose, release it at another.
+
+A driver implements :meth:`RobotDriver.pick` and :meth:`RobotDriver.place`, each taking one
+:class:`Motion`; what a motion says is declared once, there. Drivers are registered by name
+with their options in ``manigraph_skills.drivers.registry``.
+"""
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
-from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import Quaternion, Vector3
 
 
@@ -24,50 +28,36 @@ class Grasp:
 CENTRE_GRASP = Grasp()
 
 
+@dataclass(frozen=True)
+class Motion:
+    """One pick or one place of decision ``decision_id``: ``object_id`` is grasped with its
+    centre at ``position`` (a pick), or carried so its centre ends at ``position`` and
+    released (a place); ``orientation`` is the object's (pick) or the goal's (place)."""
+
+    decision_id: str
+    object_id: str
+    position: Vector3
+    orientation: Quaternion
+    grasp: Grasp = CENTRE_GRASP
+
+
 class RobotDriver(ABC):
     """Raises ``SkillError(reason)`` when the robot could not do what was asked."""
 
     name: str
 
-    @abstractmethod
-    def pick(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        """Grasp ``object_id`` whose centre is at ``position`` and lift it clear."""
+    @classmethod
+    def from_options(cls, bus: Any, options: Any) -> RobotDriver:
+        """The driver on ``bus`` configured by its registered options (or None: it has none)."""
+        return cls()
 
     @abstractmethod
-    def place(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        """Carry the held object so its centre is at ``position`` and release it."""
+    def pick(self, motion: Motion) -> None:
+        """Grasp the object and lift it clear."""
+
+    @abstractmethod
+    def place(self, motion: Motion) -> None:
+        """Carry the held object to the motion's position and release it."""
 
     def close(self) -> None:
         """Release the driver's resources."""
-
-
-DRIVERS: dict[str, Callable[..., RobotDriver]] = {}
-
-
-def register_driver(name: str) -> Callable[[type[RobotDriver]], type[RobotDriver]]:
-    def register(cls: type[RobotDriver]) -> type[RobotDriver]:
-        cls.name = name
-        DRIVERS[name] = cls
-        return cls
-
-    return register
-
-
-def create_driver(name: str, **options: object) -> RobotDriver:
-    if name not in DRIVERS:
-        raise ConfigError("driver", f"'{name}' is not one of {', '.join(sorted(DRIVERS))}")
-    return DRIVERS[name](**options)

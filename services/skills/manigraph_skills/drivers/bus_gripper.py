@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import threading
+from typing import Any
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import RobotCommand, RobotFeedback
-from manigraph_skills.drivers.base import register_driver
 from manigraph_skills.drivers.gripper import GripperDriver
 
 
@@ -47,7 +47,14 @@ class BusGripperTransport:
                 self._answers.pop(command.command_id, None)
 
 
-@register_driver("sim-gripper")
 class BusGripperDriver(GripperDriver):
+    """Registered as ``sim-gripper`` (options: ``registry.BusGripperOptions``)."""
+
+    name = "sim-gripper"
+
     def __init__(self, bus: Bus, timeout: float = 10.0) -> None:
         super().__init__(BusGripperTransport(bus, timeout))
+
+    @classmethod
+    def from_options(cls, bus: Bus, options: Any) -> BusGripperDriver:
+        return cls(bus, options.timeout)

@@ -6,36 +6,24 @@ move a robot. The swap to it (``--driver franka``, compose profile ``hardware``)
 
 from __future__ import annotations
 
+from typing import Any
+
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.messages import Quaternion, Vector3
-from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver, register_driver
+from manigraph_skills.drivers.base import Motion, RobotDriver
 
 
-@register_driver("franka")
 class FrankaDriver(RobotDriver):
-    def __init__(self, **_options: object) -> None:
+    name = "franka"
+
+    def __init__(self, **_options: Any) -> None:
         raise ConfigError(
             "driver",
             "the Franka hardware driver is not implemented yet; use --driver sim-gripper "
             "with the sim service",
         )
 
-    def pick(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
+    def pick(self, motion: Motion) -> None:
         raise NotImplementedError
 
-    def place(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
+    def place(self, motion: Motion) -> None:
         raise NotImplementedError

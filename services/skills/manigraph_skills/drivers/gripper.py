@@ -13,8 +13,8 @@ from collections.abc import Callable
 from typing import Protocol
 
 from manigraph_shared.errors import SkillError
-from manigraph_shared.messages import GripperOp, Quaternion, RobotCommand, RobotFeedback, Vector3
-from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver
+from manigraph_shared.messages import GripperOp, RobotCommand, RobotFeedback
+from manigraph_skills.drivers.base import Motion, RobotDriver
 
 
 class GripperTransport(Protocol):
@@ -29,47 +29,27 @@ class GripperDriver(RobotDriver):
         self.transport = transport
         self.clock = clock
 
-    def _send(
-        self,
-        op: GripperOp,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-    ) -> None:
+    def _send(self, op: GripperOp, motion: Motion) -> None:
+        """One command; the motion's grasp is ignored (the gripper is magic)."""
         feedback = self.transport.execute(
             RobotCommand(
-                command_id=command_id(decision_id, op),
-                decision_id=decision_id,
+                command_id=command_id(motion.decision_id, op),
+                decision_id=motion.decision_id,
                 op=op,
-                object_id=object_id,
-                position=position,
-                orientation=orientation,
+                object_id=motion.object_id,
+                position=motion.position,
+                orientation=motion.orientation,
                 stamp=self.clock(),
             )
         )
         if not feedback.ok:
             raise SkillError(feedback.reason or "driver_error", feedback.detail)
 
-    def pick(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        self._send(GripperOp.PICK, decision_id, object_id, position, orientation)
+    def pick(self, motion: Motion) -> None:
+        self._send(GripperOp.PICK, motion)
 
-    def place(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        self._send(GripperOp.PLACE, decision_id, object_id, position, orientation)
+    def place(self, motion: Motion) -> None:
+        self._send(GripperOp.PLACE, motion)
 
 
 def command_id(decision_id: str, op: GripperOp) -> str:

@@ -19,16 +19,15 @@ from typing import Protocol
 
 import numpy as np
 
-from manigraph_shared.errors import ConfigError, SkillError
+from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
     GripperTarget,
     JointTrajectoryCommand,
     JointTrajectoryPoint,
     JointTrajectoryResult,
-    Quaternion,
-    Vector3,
 )
-from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver
+from manigraph_skills.drivers.base import Motion, RobotDriver
+from manigraph_skills.drivers.registry import MotionOptions
 from manigraph_skills.motion import GraspPlanner, JointTrajectory, PandaModel, PlanConfig
 from manigraph_skills.motion.plan import UP, grasp_yaw
 
@@ -55,29 +54,20 @@ class PandaMotionDriver(RobotDriver):
     def __init__(
         self,
         transport: JointTransport,
+        options: MotionOptions | None = None,
         config: PlanConfig | None = None,
-        min_grasp_width: float = 0.005,
-        placement_tolerance: float = 0.02,
     ) -> None:
-        if not 0 <= min_grasp_width < 0.08:
-            raise ConfigError("driver.min_grasp_width", "must be in [0, 0.08) metres")
-        if placement_tolerance <= 0:
-            raise ConfigError("driver.placement_tolerance", "must be > 0 metres")
+        options = options or MotionOptions()
         self.transport = transport
         self.model = PandaModel()
         self.planner = GraspPlanner(self.model, config)
-        self.min_grasp_width = min_grasp_width
-        self.placement_tolerance = placement_tolerance
+        self.min_grasp_width = options.min_grasp_width
+        self.placement_tolerance = options.placement_tolerance
         self._ids = itertools.count()
 
-    def pick(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
+    def pick(self, motion: Motion) -> None:
+        decision_id, object_id, grasp = motion.decision_id, motion.object_id, motion.grasp
+        position, orientation = motion.position, motion.orientation
         target = np.array(position.as_tuple()) + grasp.height * UP
         yaw = (
             self.planner.config.hand_yaw
@@ -92,15 +82,9 @@ class PandaMotionDriver(RobotDriver):
                 f"fingers closed to {result.gripper_width * 1000:.1f} mm: {object_id} not held",
             )
 
-    def place(
-        self,
-        decision_id: str,
-        object_id: str,
-        position: Vector3,
-        orientation: Quaternion,
-        grasp: Grasp = CENTRE_GRASP,
-    ) -> None:
-        target = np.array(position.as_tuple())
+    def place(self, motion: Motion) -> None:
+        decision_id, object_id, grasp = motion.decision_id, motion.object_id, motion.grasp
+        target = np.array(motion.position.as_tuple())
         hand = target + grasp.height * UP
         # The object turned with the hand at the grasp; turn back so it lands square (a
         # block or a square cover looks the same after a quarter turn).

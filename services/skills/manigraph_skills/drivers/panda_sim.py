@@ -8,6 +8,7 @@ Franka driver reuses :class:`PandaMotionDriver` with a transport to the real arm
 from __future__ import annotations
 
 import threading
+from typing import Any
 
 import numpy as np
 
@@ -19,7 +20,6 @@ from manigraph_shared.messages import (
     JointTrajectoryResult,
     Scene,
 )
-from manigraph_skills.drivers.base import register_driver
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
 
@@ -97,7 +97,11 @@ class BusJointTransport:
             return None
 
 
-@register_driver("panda-sim")
 class PandaSimDriver(PandaMotionDriver):
-    def __init__(self, bus: Bus, timeout: float = 60.0) -> None:
-        super().__init__(BusJointTransport(bus, timeout))
+    """Registered as ``panda-sim`` (options: ``drivers.registry.PandaSimOptions``)."""
+
+    name = "panda-sim"
+
+    @classmethod
+    def from_options(cls, bus: Bus, options: Any) -> PandaSimDriver:
+        return cls(BusJointTransport(bus, options.timeout), options)

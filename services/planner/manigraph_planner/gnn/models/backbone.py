@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable
 
 from torch import Tensor, nn
 
 from manigraph_planner.gnn.models.complete_graph import message_passing_on_complete
+from manigraph_shared.registry import Registry
 
 __all__ = ["ARCHITECTURES", "Backbone", "ConvStack", "register_architecture"]
 
@@ -95,18 +95,8 @@ class ConvStack(Backbone):
         return x
 
 
-#: Backbone classes by architecture name; checkpoints name one of these.
-ARCHITECTURES: dict[str, type[Backbone]] = {}
-
-
-def register_architecture(name: str) -> Callable[[type[Backbone]], type[Backbone]]:
-    """Class decorator adding a :class:`Backbone` to :data:`ARCHITECTURES` under ``name``."""
-
-    def register(cls: type[Backbone]) -> type[Backbone]:
-        if name in ARCHITECTURES:
-            raise ValueError(f"architecture: '{name}' is already registered")
-        cls.name = name
-        ARCHITECTURES[name] = cls
-        return cls
-
-    return register
+#: Backbone classes by architecture name; checkpoints name one of these. An architecture
+#: takes no options of its own: its sizes are :class:`~.config.ModelConfig`'s, the same for all.
+ARCHITECTURES: Registry[type[Backbone]] = Registry("architecture")
+#: Class decorator adding a :class:`Backbone` to :data:`ARCHITECTURES` under a name.
+register_architecture = ARCHITECTURES.register

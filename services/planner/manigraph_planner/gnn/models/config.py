@@ -38,9 +38,7 @@ class ModelConfig:
     feature_scale: tuple[float, ...] = (1.0,) * FEATURE_SPEC.num_features
 
     def __post_init__(self) -> None:
-        if self.architecture not in ARCHITECTURES:
-            known = ", ".join(sorted(ARCHITECTURES))
-            raise ConfigError("architecture", f"'{self.architecture}' is not one of: {known}")
+        ARCHITECTURES.check(self.architecture)  # ConfigError naming the registered ones
         for name in ("hidden_channels", "num_layers", "in_channels"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 4096:

@@ -1,0 +1,79 @@
+"""The sim backends, registered by name with their options.
+
+This module imports neither a backend nor SAPIEN: ``manigraph sim --help`` (and ``manigraph
+up``, which forwards backend options) list every backend's flags from the options here, and a
+backend's module is imported only when it is created.
+
+Register a new backend with its options dataclass::
+
+    @dataclass(frozen=True)
+    class MyOptions(Options):
+        speed: float = option(1.0, help="...", within=Interval(0, 10, low_open=True))
+
+    BACKENDS.add_lazy("mine", "my_package.backend:MyBackend", options=MyOptions)
+
+``MyBackend.from_options(options)`` then builds it (:class:`~manigraph_sim.backend.SimBackend`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
+
+from manigraph_shared.options import Interval, Options, option
+from manigraph_shared.registry import Registry
+
+if TYPE_CHECKING:
+    from manigraph_sim.backend import SimBackend
+
+__all__ = ["BACKENDS", "GeometricOptions", "PhysicsOptions", "create_backend"]
+
+#: Metres from a goal's centre within which an object fills it.
+GOAL_TOLERANCE = Interval(0, 0.1, low_open=True)
+
+
+@dataclass(frozen=True)
+class GeometricOptions(Options):
+    goal_tolerance: float = option(
+        0.01, help="how close to a goal fills it", within=GOAL_TOLERANCE, unit="metres"
+    )
+    box_geometry: Literal["geometric", "physics"] | None = option(
+        None,
+        help="lay box tasks out with this geometry (unset: geometric; physics: the physics "
+        "world's roomier boxes, for comparing the two worlds)",
+    )
+
+
+@dataclass(frozen=True)
+class PhysicsOptions(Options):
+    goal_tolerance: float = option(
+        0.02, help="how close to a goal fills it", within=GOAL_TOLERANCE, unit="metres"
+    )
+    realtime: bool = option(False, help="simulate in real time, not flat out")
+    video: Path | None = option(
+        None,
+        help="render each episode to this .gif/.mp4 ({episode}, {seed} allowed; needs Vulkan, "
+        "see scripts/install-vulkan.sh)",
+    )
+
+
+BACKENDS: Registry[type[SimBackend]] = Registry("backend")
+BACKENDS.add_lazy(
+    "geometric",
+    "manigraph_sim.geometric.backend:GeometricBackend",
+    options=GeometricOptions,
+    help="the fast block world with a magic gripper",
+)
+BACKENDS.add_lazy(
+    "physics",
+    "manigraph_sim.physics.backend:PhysicsBackend",
+    options=PhysicsOptions,
+    help="SAPIEN with a Franka Panda that follows joint trajectories",
+)
+
+
+def create_backend(name: str, **values: Any) -> SimBackend:
+    """Backend ``name`` with ``values`` as its options (``ConfigError`` naming a bad one)."""
+    options = BACKENDS.options(name, values)
+    return BACKENDS[name].from_options(options)
