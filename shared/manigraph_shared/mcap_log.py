@@ -53,6 +53,26 @@ class McapLogWriter:
         self._last_flush = time.monotonic()
         self.messages_written = 0
 
+    def add_channel(
+        self,
+        topic: str,
+        message_encoding: str,
+        schema_name: str,
+        schema_encoding: str,
+        schema_data: bytes,
+    ) -> None:
+        """Declare a channel outside the contract (e.g. Foxglove's protobuf types) before its
+        first ``write``; contract keys need no declaration."""
+        if topic in self._channels:
+            return
+        if schema_name not in self._schemas:
+            self._schemas[schema_name] = self._writer.register_schema(
+                name=schema_name, encoding=schema_encoding, data=schema_data
+            )
+        self._channels[topic] = self._writer.register_channel(
+            topic=topic, message_encoding=message_encoding, schema_id=self._schemas[schema_name]
+        )
+
     def write(self, topic: str, data: bytes, log_time_ns: int) -> None:
         channel = self._channels.get(topic)
         if channel is None:
