@@ -34,6 +34,7 @@ from manigraph_shared.messages import message_type_for_key
 from manigraph_shared.messages.base import MAX_PAYLOAD_BYTES, PREFIX
 from manigraph_shared.service import Service, run_service
 from manigraph_tools.foxglove_bridge import SCENE_TOPIC, TF_TOPIC, Converted, FoxgloveBridge
+from manigraph_tools.foxglove_layout import layout_json
 
 MAX_PENDING = 4096
 RESEND_SECONDS = 1.0
@@ -138,10 +139,18 @@ def _view_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--port", type=int, default=DEFAULT_PORT, help=f"WebSocket port ({DEFAULT_PORT})"
     )
+    parser.add_argument(
+        "--print-layout",
+        action="store_true",
+        help="print a Foxglove layout for manigraph (3D scene, decision, why) and exit",
+    )
     add_bus_arguments(parser)
 
 
 def _view_run(args: argparse.Namespace) -> int:
+    if args.print_layout:
+        print(layout_json(), end="")
+        return 0
     if not 0 <= args.port <= 65535:
         raise ConfigError("port", f"{args.port} is not in 0..65535")
     return run_service(
