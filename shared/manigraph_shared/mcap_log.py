@@ -20,6 +20,7 @@ from mcap.writer import CompressionType, Writer
 
 from manigraph_shared.errors import LogError
 from manigraph_shared.messages import Message, key_matches, message_type_for_key
+from manigraph_shared.messages.base import PREFIX
 
 PROFILE = "manigraph"
 
@@ -154,4 +155,6 @@ def read_log(
 
 
 def decode_log(path: Path, topics: Iterable[str] = ()) -> list[Message]:
-    return [item.decode() for item in read_log(path, topics)]
+    """The contract's messages in ``path`` (by default every ``manigraph/**`` channel; other
+    channels, such as Foxglove's drawings, are not messages of the contract)."""
+    return [item.decode() for item in read_log(path, list(topics) or [f"{PREFIX}/**"])]
