@@ -8,9 +8,9 @@ A foxglove-sdk WebSocket server (``ws://127.0.0.1:8765`` by default) serves
 
 Connect with Foxglove (app or web): Open connection → Foxglove WebSocket → the URL. The Zenoh
 callback only queues samples (at most ``MAX_PENDING``; beyond that they are dropped and
-counted), and one thread converts and logs them, so a slow viewer never slows the bus. The
-latest scene and transforms are sent again every second, so a viewer that connects between
-two scenes sees the picture at once.
+counted; at most ``MAX_CHANNELS`` keys are served), and one thread converts and logs them, so
+a slow viewer never slows the bus. The latest scene and transforms are sent again every
+second, so a viewer that connects between two scenes sees the picture at once.
 """
 
 from __future__ import annotations
@@ -37,6 +37,8 @@ from manigraph_tools.foxglove_bridge import SCENE_TOPIC, TF_TOPIC, Converted, Fo
 from manigraph_tools.foxglove_layout import layout_json
 
 MAX_PENDING = 4096
+#: Keys served as channels; a publisher inventing keys cannot grow the view without bound.
+MAX_CHANNELS = 512
 RESEND_SECONDS = 1.0
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8765
@@ -99,14 +101,20 @@ class FoxgloveView(Service):
         if len(payload) > MAX_PAYLOAD_BYTES:
             self.samples_dropped += 1
             return
-        self._raw_channel(key).log(payload, log_time=time.time_ns())
+        channel = self._raw_channel(key)
+        if channel is None:
+            self.samples_dropped += 1
+            return
+        channel.log(payload, log_time=time.time_ns())
         for converted in self.bridge.convert(key, payload):
             self._last[converted.topic] = converted
             self._log(converted)
 
-    def _raw_channel(self, key: str) -> Channel:
+    def _raw_channel(self, key: str) -> Channel | None:
         channel = self._raw.get(key)
         if channel is None:
+            if len(self._raw) >= MAX_CHANNELS:
+                return None
             message_type = message_type_for_key(key)
             schema = (
                 Schema(
