@@ -36,6 +36,7 @@ bench: install  ## speed figures (not tests): medians and ratios
 	$(RUN) python bench/bench_roundtrip.py
 	$(RUN) python bench/bench_tls_roundtrip.py
 	$(RUN) python bench/bench_recorder.py
+	$(RUN) python bench/bench_foxglove.py
 	$(RUN) python bench/bench_policy_inference.py
 	$(RUN) python bench/bench_training.py
 	$(RUN) python bench/bench_eval.py

@@ -20,6 +20,7 @@ from mcap.writer import CompressionType, Writer
 
 from manigraph_shared.errors import LogError
 from manigraph_shared.messages import Message, key_matches, message_type_for_key
+from manigraph_shared.messages.base import PREFIX
 
 PROFILE = "manigraph"
 
@@ -52,6 +53,26 @@ class McapLogWriter:
         self._schemas: dict[str, int] = {}
         self._last_flush = time.monotonic()
         self.messages_written = 0
+
+    def add_channel(
+        self,
+        topic: str,
+        message_encoding: str,
+        schema_name: str,
+        schema_encoding: str,
+        schema_data: bytes,
+    ) -> None:
+        """Declare a channel outside the contract (e.g. Foxglove's protobuf types) before its
+        first ``write``; contract keys need no declaration."""
+        if topic in self._channels:
+            return
+        if schema_name not in self._schemas:
+            self._schemas[schema_name] = self._writer.register_schema(
+                name=schema_name, encoding=schema_encoding, data=schema_data
+            )
+        self._channels[topic] = self._writer.register_channel(
+            topic=topic, message_encoding=message_encoding, schema_id=self._schemas[schema_name]
+        )
 
     def write(self, topic: str, data: bytes, log_time_ns: int) -> None:
         channel = self._channels.get(topic)
@@ -134,4 +155,6 @@ def read_log(
 
 
 def decode_log(path: Path, topics: Iterable[str] = ()) -> list[Message]:
-    return [item.decode() for item in read_log(path, topics)]
+    """The contract's messages in ``path`` (by default every ``manigraph/**`` channel; other
+    channels, such as Foxglove's drawings, are not messages of the contract)."""
+    return [item.decode() for item in read_log(path, list(topics) or [f"{PREFIX}/**"])]

@@ -8,7 +8,7 @@ import pytest
 from mcap.reader import make_reader
 
 from manigraph_shared.errors import LogError
-from manigraph_shared.mcap_log import McapLogWriter, read_log
+from manigraph_shared.mcap_log import McapLogWriter, decode_log, read_log
 from manigraph_shared.messages import Action, ServiceStatus
 
 
@@ -46,6 +46,27 @@ def test_channels_carry_the_contract_schema(tmp_path: Path) -> None:
     messages = list(read_log(path))
     assert [m.log_time_ns for m in messages] == [1, 2, 3]
     assert messages[0].decode() == Action.decode(messages[0].data)
+
+
+def test_a_declared_foreign_channel_keeps_its_schema_and_stays_out_of_the_contract(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "log.mcap"
+    log = McapLogWriter(path)
+    log.add_channel("/drawing", "protobuf", "pkg.Drawing", "protobuf", b"descriptor")
+    decision = action(0)
+    log.write("/drawing", b"\x08\x01", 1)
+    log.write(Action.key, decision.encode(), 2)
+    log.close()
+    with path.open("rb") as stream:
+        ((schema, channel, message),) = make_reader(stream).iter_messages(topics=["/drawing"])
+    assert schema is not None and (schema.name, schema.encoding, schema.data) == (
+        "pkg.Drawing",
+        "protobuf",
+        b"descriptor",
+    )
+    assert (channel.message_encoding, message.data) == ("protobuf", b"\x08\x01")
+    assert decode_log(path) == [decision]  # the contract's messages only
 
 
 def test_topic_filters(tmp_path: Path) -> None:

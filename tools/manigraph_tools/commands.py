@@ -63,6 +63,11 @@ def _record_configure(parser: argparse.ArgumentParser) -> None:
         "-o", "--output", type=Path, default=Path("logs"), help="MCAP file or directory"
     )
     parser.add_argument("--flush-interval", type=float, default=0.1, help="seconds (default 0.1)")
+    parser.add_argument(
+        "--no-foxglove",
+        action="store_true",
+        help="only the JSON channels: no /foxglove/scene and /foxglove/tf",
+    )
     add_bus_arguments(parser)
 
 
@@ -70,7 +75,8 @@ record_command = Command(
     help="record every manigraph/** sample to MCAP (flushed every 100 ms)",
     configure=_record_configure,
     run=lambda args: run_service(
-        lambda bus: Recorder(bus, args.output, args.flush_interval), bus_config_from_args(args)
+        lambda bus: Recorder(bus, args.output, args.flush_interval, not args.no_foxglove),
+        bus_config_from_args(args),
     ),
 )
 

@@ -17,3 +17,5 @@ EXPLAIN_CLIENT = Manifest(
     summary="manigraph explain: why that decision",
     requests=(port(ExplainRequest),),
 )
+
+VIEW = Manifest(service="view", summary="manigraph view: Foxglove WebSocket", observes_all=True)

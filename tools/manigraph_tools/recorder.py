@@ -3,6 +3,10 @@
 The Zenoh callback only appends to a queue, so a slow disk never slows a publisher; a writer
 thread drains the queue and flushes at least every 100 ms, so ``kill -9`` loses at most the
 last 100 ms of samples.
+
+Beside the JSON channels (one per key, byte for byte what was on the bus), the writer thread
+also writes Foxglove's well-known types, ``/foxglove/scene`` and ``/foxglove/tf``
+(:mod:`manigraph_tools.foxglove_bridge`), so the log opens in Foxglove's 3D panel as it is.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from manigraph_shared.bus import ALIVE_PREFIX, Bus
 from manigraph_shared.mcap_log import McapLogWriter
 from manigraph_shared.messages.base import PREFIX
 from manigraph_shared.service import Service
+from manigraph_tools.foxglove_bridge import FOXGLOVE_SCHEMAS, FoxgloveBridge
 
 
 def resolve_output(output: Path) -> Path:
@@ -32,16 +37,22 @@ def resolve_output(output: Path) -> Path:
 class Recorder(Service):
     name = "recorder"
 
-    def __init__(self, bus: Bus, output: Path, flush_interval: float = 0.1) -> None:
+    def __init__(
+        self, bus: Bus, output: Path, flush_interval: float = 0.1, foxglove: bool = True
+    ) -> None:
         super().__init__(bus)
         self.path = resolve_output(output)
         self.flush_interval = flush_interval
+        self._foxglove = FoxgloveBridge() if foxglove else None
         self._samples: queue.SimpleQueue[tuple[str, bytes, int] | None] = queue.SimpleQueue()
         self._writer_thread = threading.Thread(target=self._write_loop, name="mcap-writer")
         self.samples_seen = 0
 
     def setup(self) -> None:
         self._log = McapLogWriter(self.path, self.flush_interval)
+        if self._foxglove is not None:
+            for topic, schema in FOXGLOVE_SCHEMAS.items():
+                self._log.add_channel(topic, "protobuf", schema.name, schema.encoding, schema.data)
         self._writer_thread.start()
         self.bus.subscribe_raw(f"{PREFIX}/**", self._enqueue)
         self.log.info("recording %s/** to %s", PREFIX, self.path)
@@ -63,6 +74,10 @@ class Recorder(Service):
             if item is None:
                 break
             self._log.write(*item)
+            if self._foxglove is not None:
+                key, data, log_time_ns = item
+                for converted in self._foxglove.convert(key, data):
+                    self._log.write(converted.topic, converted.message.encode(), log_time_ns)
         self._log.close()
 
     def teardown(self) -> None:

@@ -22,6 +22,7 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.errors import LogError
 from manigraph_shared.mcap_log import LoggedMessage, read_log
 from manigraph_shared.messages import Action, Delivery, key_matches
+from manigraph_shared.messages.base import PREFIX
 
 
 @dataclass
@@ -75,7 +76,10 @@ class Replayer:
         self.bus = bus
         self.speed = speed
         self.withhold = list(withhold)
-        self.messages = sorted(read_log(path, topics, exclude), key=lambda item: item.log_time_ns)
+        # Only the bus's own keys go back on the bus: the log's Foxglove channels
+        # (/foxglove/...) are drawings of them, not messages of the contract.
+        selected = read_log(path, list(topics) or [f"{PREFIX}/**"], exclude)
+        self.messages = sorted(selected, key=lambda item: item.log_time_ns)
         if not self.messages:
             raise LogError(f"{path} holds no messages matching the filter")
 

@@ -1,0 +1,117 @@
+"""`manigraph view` as a user runs it: a real router, the view process, a Foxglove WebSocket
+client speaking foxglove.websocket.v1."""
+
+from __future__ import annotations
+
+import base64
+import json
+import struct
+import time
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+from websockets.sync.client import ClientConnection, connect
+
+from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneGoal, SceneObject
+from manigraph_shared.messages import Vector3 as V
+from manigraph_tools.foxglove_bridge import SCENE_TOPIC
+from manigraph_tools.testing import Stack, free_port
+
+ProtobufDecoder = Callable[[str, bytes, bytes], dict[str, Any]]
+#: foxglove-sdk 0.30 names the Foxglove WebSocket protocol (foxglove.websocket.v1) so; the
+#: frames are those of foxglove.websocket.v1.
+SUBPROTOCOL = "foxglove.sdk.v1"
+MESSAGE_DATA = 0x01
+
+pytestmark = pytest.mark.integration
+
+
+def a_scene() -> Scene:
+    return Scene(
+        episode_id="view-1",
+        stamp=time.time(),
+        sequence=3,
+        objects=[
+            SceneObject(
+                id="block_0",
+                category=ObjectCategory.BLOCK,
+                position=V(x=0.42, y=-0.13, z=0.02),
+                size=V(x=0.04, y=0.04, z=0.04),
+            )
+        ],
+        goals=[
+            SceneGoal(id="goal_0", category=GoalCategory.BLOCK, position=V(x=0.3, y=0.2, z=0.02))
+        ],
+    )
+
+
+class FoxgloveClient:
+    """The client side of the protocol that the test needs: advertisements and data frames."""
+
+    def __init__(self, ws: ClientConnection, timeout: float = 20.0) -> None:
+        self.ws = ws
+        self.deadline = time.monotonic() + timeout
+        self.channels: dict[str, dict[str, Any]] = {}
+        self.data: dict[int, list[bytes]] = {}
+
+    def _read(self) -> None:
+        frame = self.ws.recv(timeout=max(0.1, self.deadline - time.monotonic()))
+        if isinstance(frame, str):
+            message = json.loads(frame)
+            if message["op"] == "advertise":
+                self.channels.update({c["topic"]: c for c in message["channels"]})
+        elif frame[0] == MESSAGE_DATA:
+            subscription, _log_time = struct.unpack_from("<IQ", frame, 1)
+            self.data.setdefault(subscription, []).append(frame[13:])
+
+    def channel(self, topic: str) -> dict[str, Any]:
+        while topic not in self.channels:
+            self._read()
+        return self.channels[topic]
+
+    def subscribe(self, subscription: int, topic: str) -> None:
+        channel_id = self.channel(topic)["id"]
+        subscriptions = [{"id": subscription, "channelId": channel_id}]
+        self.ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
+
+    def next_data(self, subscription: int) -> bytes:
+        while not self.data.get(subscription):
+            self._read()
+        return self.data[subscription].pop(0)
+
+
+def test_a_foxglove_client_receives_the_scene_as_a_scene_update(
+    running_stack: Stack, decode_protobuf: ProtobufDecoder
+) -> None:
+    port = free_port()
+    running_stack.start("router")
+    running_stack.start("view", "view", "--port", str(port))
+    scene = a_scene()
+    with running_stack.client() as bus:
+        running_stack.wait_alive(bus, "view")
+        with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL]) as ws:  # type: ignore[list-item]
+            assert ws.subprotocol == SUBPROTOCOL
+            client = FoxgloveClient(ws)
+            channel = client.channel(SCENE_TOPIC)
+            assert (channel["encoding"], channel["schemaName"]) == (
+                "protobuf",
+                "foxglove.SceneUpdate",
+            )
+            client.subscribe(7, SCENE_TOPIC)
+            bus.publish(scene)
+            schema = base64.b64decode(channel["schema"])
+            update = decode_protobuf(channel["schemaName"], schema, client.next_data(7))
+            entities = {entity["id"]: entity for entity in update["entities"]}
+            block = entities["object/block_0"]["cubes"][0]["pose"]["position"]
+            assert (block["x"], block["y"], block["z"]) == pytest.approx((0.42, -0.13, 0.02))
+            assert "goal/goal_0" in entities
+
+            # The contract's own channel: JSON with its JSON Schema, the bytes from the bus.
+            raw = client.channel(Scene.key)
+            assert (raw["encoding"], raw["schemaName"]) == ("json", "manigraph.Scene")
+            client.subscribe(8, Scene.key)
+            bus.publish(scene)
+            assert Scene.decode(client.next_data(8)) == scene
+    assert running_stack.stop("view") == 0
+    assert "served" in running_stack.log("view")
