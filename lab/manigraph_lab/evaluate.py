@@ -22,11 +22,13 @@ class EvalSpec:
     seed: int = 0
     noise: float = 0.0
     task_file: str | None = None  # TOML text of a user layout
+    task_file_name: str | None = None  # what episodes and the summary are named after
 
     def requests(self) -> list[EpisodeRequest]:
+        label = self.task_file_name or f"{self.task}-{self.blocks}"
         return [
             EpisodeRequest(
-                episode_id=f"eval-{self.task}-{self.blocks}-{self.seed + i}",
+                episode_id=f"eval-{label}-{self.seed + i}",
                 task="file" if self.task_file is not None else self.task,
                 blocks=self.blocks,
                 stacks=self.stacks,
@@ -50,7 +52,8 @@ def evaluate(
         if progress is not None and (index + 1) % max(1, spec.episodes // 10) == 0:
             rate = sum(r.success for r in records) / len(records)
             print(
-                f"  {spec.task} K={spec.blocks}: {index + 1}/{spec.episodes} episodes, "
+                f"  {spec.task_file_name or spec.task} K={spec.blocks}: "
+                f"{index + 1}/{spec.episodes} episodes, "
                 f"success so far {rate:.3f}",
                 file=progress,
                 flush=True,
@@ -76,6 +79,7 @@ def summarize(
     return {
         "policy": policy,
         "task": spec.task,
+        **({"task_file": spec.task_file_name} if spec.task_file is not None else {}),
         "blocks": spec.blocks,
         "stacks": spec.stacks,
         "noise": spec.noise,

@@ -36,7 +36,8 @@ def _emit_json(summary: dict[str, object], readable: bool = False) -> None:
     stderr."""
     if readable and "success_rate" in summary:
         print(
-            f"{summary.get('episodes')} episodes of {summary.get('task')}: "
+            f"{summary.get('episodes')} episodes of "
+            f"{summary.get('task_file') or summary.get('task')}: "
             f"success {summary['success_rate']:.3f}, "
             f"goals filled {summary.get('goals_filled_rate', float('nan')):.3f}",
             file=sys.stderr,
@@ -231,7 +232,7 @@ def _episode_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _plan(args: argparse.Namespace, episodes: int) -> EpisodePlan:
     options = options_from_args(EpisodeOptions, args)
-    return options.plan(episodes, run_id=f"{options.task}-{options.blocks}-{int(time.time())}")
+    return options.plan(episodes, run_id=f"{options.label()}-{int(time.time())}")
 
 
 def _run_configure(parser: argparse.ArgumentParser) -> None:

@@ -10,6 +10,13 @@ id = "block_0"
 category = "block"
 position = [0.50, -0.10, 0.02]      # centre, metres, robot frame
 size = [0.04, 0.04, 0.04]           # full extents, metres
+jitter = 0.01                       # metres: this object shifts by up to this in x, y, per seed
+
+[[objects]]
+id = "block_1"
+category = "block"
+positions = [[0.40, -0.20, 0.02], [0.60, -0.20, 0.02]]  # one of these, chosen per seed
+spare = true                        # belongs to no goal: the goals are filled without it
 
 [[goals]]                           # category: block | cover (what fills it)
 id = "goal_0"
@@ -24,6 +31,12 @@ inner = [0.14, 0.14]
 wall = 0.01
 height = 0.06
 ```
+
+An object gives ``position`` or ``positions`` (not both). An object listed directly above
+another one (same x, y within 1 mm, higher) rests on it and moves with it, so a tower jitters
+as one; its own ``jitter`` and ``positions`` are refused. Objects choosing among listed
+positions never take one another's place (a draw that cannot avoid it is refused, naming the
+object). Every required goal needs an object of its category that is not a spare.
 
 A syntax error names the line and column; a bad value names the field
 (``goals.0.position.2: ...``).
@@ -50,11 +63,31 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
 
 
+Position = tuple[Coordinate, Coordinate, Coordinate]
+
+
 class ObjectSpec(_Strict):
     id: Name
     category: Literal["block", "cover"]
-    position: tuple[Coordinate, Coordinate, Coordinate]
+    position: Position | None = None
+    positions: list[Position] | None = Field(None, min_length=1, max_length=64)
     size: tuple[Extent, Extent, Extent] = (0.04, 0.04, 0.04)
+    jitter: float = Field(0.0, ge=0.0, le=0.2, description="metres, uniform in x and y")
+    spare: bool = False
+
+    @model_validator(mode="after")
+    def _one_position(self) -> ObjectSpec:
+        if (self.position is None) == (self.positions is None):
+            raise ValueError("position: give either position or positions (a list), not both")
+        return self
+
+    @property
+    def anchor(self) -> Position:
+        """Where the object stands without randomization (its first listed position)."""
+        if self.position is not None:
+            return self.position
+        assert self.positions is not None
+        return self.positions[0]
 
 
 class GoalSpec(_Strict):
@@ -88,7 +121,41 @@ class TaskFile(_Strict):
             raise ValueError(f"id: used twice: {', '.join(duplicates)}")
         if all(goal.optional for goal in self.goals):
             raise ValueError("goals: at least one goal must not be optional")
+        for category in ("block", "cover"):
+            required = sum(g.category == category and not g.optional for g in self.goals)
+            usable = sum(o.category == category and not o.spare for o in self.objects)
+            if usable < required:
+                raise ValueError(
+                    f"objects: {required} required {category} goal(s) but only {usable} "
+                    f"{category}(s) that are not spares"
+                )
+        for index, item in enumerate(self.objects):
+            base = self.support_of(index)
+            if base is not None and (item.jitter > 0 or item.positions is not None):
+                raise ValueError(
+                    f"objects.{index}: rests on {self.objects[base].id} and moves with it; "
+                    "give it neither jitter nor positions"
+                )
         return self
+
+    def support_of(self, index: int) -> int | None:
+        """The object that object ``index`` rests on (same x, y within 1 mm, the highest one
+        below it), or None when it stands on the table."""
+        x, y, z = self.objects[index].anchor
+        below = [
+            (other.anchor[2], j)
+            for j, other in enumerate(self.objects)
+            if j != index
+            and abs(other.anchor[0] - x) < 1e-3
+            and abs(other.anchor[1] - y) < 1e-3
+            and other.anchor[2] < z
+        ]
+        return max(below)[1] if below else None
+
+    @property
+    def blocks(self) -> int:
+        """Blocks in the file, spares included."""
+        return sum(o.category == "block" for o in self.objects)
 
 
 def parse_task_file(text: str) -> TaskFile:
@@ -110,7 +177,9 @@ def parse_task_file(text: str) -> TaskFile:
 class FileTask(Task):
     """A layout from a task file.
 
-    **Randomizations**: the whole layout moves by up to ``randomize_xy`` in x and y, seeded.
+    **Randomizations** (all seeded by the episode seed): each object stands at one of its
+    listed ``positions`` (no two on the same one) and moves by up to its ``jitter`` in x and y;
+    objects resting on it move with it; then the whole layout moves by up to ``randomize_xy``.
 
     **Success Conditions**: every goal not marked ``optional`` holds an object of its category.
     """
@@ -119,14 +188,14 @@ class FileTask(Task):
 
     def __init__(self, spec: TaskFile) -> None:
         self.spec = spec
-        super().__init__(TaskParams(blocks=sum(o.category == "block" for o in spec.objects)))
+        super().__init__(TaskParams(blocks=spec.blocks))
 
     def layout(self, rng: np.random.Generator) -> Layout:
         r = self.spec.randomize_xy
         shift = np.array([*rng.uniform(-r, r, 2), 0.0]) if r > 0 else np.zeros(3)
         bodies = [
-            Body(o.id, o.category, np.array(o.size), np.array(o.position) + shift)
-            for o in self.spec.objects
+            Body(o.id, o.category, np.array(o.size), position + shift)
+            for o, position in zip(self.spec.objects, self._positions(rng), strict=True)
         ]
         goals = [Goal(g.id, g.category, np.array(g.position) + shift) for g in self.spec.goals]
         containers = [
@@ -135,3 +204,35 @@ class FileTask(Task):
         ]
         optional = {g.id for g in self.spec.goals if g.optional}
         return Layout(bodies, goals, containers, optional, self.spec.partially_observable)
+
+    def _positions(self, rng: np.random.Generator) -> list[np.ndarray]:
+        """Each object's drawn position before the whole-layout shift: its listed choice (none
+        taken twice, nor where a fixed object stands) plus its jitter; objects resting on
+        another move with it."""
+        objects = self.spec.objects
+        offsets = [np.zeros(3) for _ in objects]
+        taken = [np.array(o.anchor) for o in objects if o.positions is None]
+        for index, item in enumerate(objects):
+            if self.spec.support_of(index) is not None:
+                continue
+            if item.positions is not None:
+                free = [
+                    np.array(p)
+                    for p in item.positions
+                    if all(np.abs(np.array(p) - t).max() > 1e-3 for t in taken)
+                ]
+                if not free:
+                    raise TaskError(
+                        f"task file: objects.{index}.positions: every listed position is taken "
+                        "by another object in this draw; list more"
+                    )
+                choice = free[int(rng.integers(len(free)))]
+                taken.append(choice)
+                offsets[index] = choice - np.array(item.anchor)
+            if item.jitter > 0:
+                offsets[index][:2] += rng.uniform(-item.jitter, item.jitter, 2)
+        return [np.array(o.anchor) + self._offset(i, offsets) for i, o in enumerate(objects)]
+
+    def _offset(self, index: int, offsets: list[np.ndarray]) -> np.ndarray:
+        base = self.spec.support_of(index)
+        return offsets[index] if base is None else self._offset(base, offsets)
