@@ -4,10 +4,27 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import StrEnum
 
 from manigraph_shared.errors import ConfigError
 
-__all__ = ["ExplainerConfig"]
+__all__ = ["ExplainerConfig", "Objective"]
+
+
+class Objective(StrEnum):
+    """What the masks are fitted to keep (see :mod:`manigraph_planner.explain.masks`)."""
+
+    #: the chosen pair's log-likelihood under the whole object and goal distributions, every
+    #: edge a candidate (the paper's Eq. red_mi as cross-entropy)
+    DISTRIBUTION = "distribution"
+    #: the chosen object's and goal's logit margins over their runners-up, kept on the
+    #: explanation and lost on its complement; only edges incident to the chosen object or
+    #: goal are candidates
+    PAIR = "pair"
+    #: the ``pair`` objective with every edge in the masked graph (budgeted), so what the
+    #: choice needs beyond the chosen nodes' own edges stays as context; only edges incident
+    #: to the chosen object or goal are shown
+    PAIR_CONTEXT = "pair-context"
 
 
 @dataclass(frozen=True)
@@ -26,6 +43,10 @@ class ExplainerConfig:
             :math:`\sigma(3) \approx 0.95`, i.e. from the policy's own graph, so the budget
             penalty removes what the choice does not need.
         seed: seed of the mask initialisation; the same seed gives the same explanation.
+        objective: :class:`Objective`; ``pair-context`` (the default) measured more faithful than
+            ``distribution`` (docs/explainer-faithfulness.md).
+        complement_weight: :math:`\gamma`, weight of the ``pair`` objective's term that the
+            choice be lost without the explanation (fidelity+).
 
     Raises:
         ConfigError: naming the offending field.
@@ -39,8 +60,17 @@ class ExplainerConfig:
     entropy_weight: float = 0.1
     initial_edge_logit: float = 3.0
     seed: int = 0
+    objective: Objective = Objective.PAIR_CONTEXT
+    complement_weight: float = 1.0
 
     def __post_init__(self) -> None:
+        try:
+            object.__setattr__(self, "objective", Objective(self.objective))
+        except ValueError:
+            allowed = ", ".join(o.value for o in Objective)
+            raise ConfigError(
+                "objective", f"must be one of {allowed}, got {self.objective!r}"
+            ) from None
         for name, low in (("steps", 1), ("edge_budget", 1), ("feature_budget", 1), ("seed", 0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
@@ -49,7 +79,7 @@ class ExplainerConfig:
             raise ConfigError("steps", f"must be <= 10000, got {self.steps}")
         if self.edge_budget > 64:
             raise ConfigError("edge_budget", f"must be <= 64, got {self.edge_budget}")
-        for name in ("learning_rate", "budget_weight", "entropy_weight"):
+        for name in ("learning_rate", "budget_weight", "entropy_weight", "complement_weight"):
             value = getattr(self, name)
             if not isinstance(value, int | float) or not math.isfinite(value) or value < 0:
                 raise ConfigError(name, f"must be a finite number >= 0, got {value!r}")
