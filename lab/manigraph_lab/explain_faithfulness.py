@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TextIO
 
 from manigraph_lab.episode_loop import run_episode
-from manigraph_planner.explain.config import ExplainerConfig, Objective
+from manigraph_planner.explain.config import ExplainerConfig
 from manigraph_planner.explain.faithfulness import Faithfulness, faithfulness
 from manigraph_planner.explain.masks import MaskExplainer
 from manigraph_planner.gnn.features import scene_to_graph
