@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from manigraph_shared.cli import Command
@@ -48,7 +49,7 @@ def _run(args: argparse.Namespace) -> int:
         raise ConfigError(str(exc).split(":")[0], str(exc)) from None
     torch.set_num_threads(2)
     demos = load_demonstrations(args.demos)
-    net, metrics = train(demos, config)
+    net, metrics = train(demos, config, progress=sys.stderr)  # a bar on a terminal only
     output = args.output or default_output(args.arch, args.seed)
     output.parent.mkdir(parents=True, exist_ok=True)
     save_checkpoint(
