@@ -40,7 +40,7 @@ demos_command = Command(
 def _eval_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--policy", default="expert", help="policy name or checkpoint file")
     parser.add_argument("--task", default="stack")
-    parser.add_argument("--task-file", type=Path, help="a TOML layout of your own (see README)")
+    parser.add_argument("--task-file", type=Path, help="your own TOML layout (docs/running.md)")
     parser.add_argument("--blocks", type=int, default=4)
     parser.add_argument("--stacks", type=int, default=1)
     parser.add_argument("--episodes", type=int, default=100)

@@ -210,7 +210,7 @@ keys_command = Command(
 def _episode_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("episodes")
     group.add_argument("--task", default="stack", help="task name (default: stack)")
-    group.add_argument("--task-file", type=Path, help="a TOML layout of your own (see README)")
+    group.add_argument("--task-file", type=Path, help="your own TOML layout (docs/running.md)")
     group.add_argument("--blocks", type=int, default=4, help="blocks per stack K (default 4)")
     group.add_argument("--stacks", type=int, default=1, help="number of stacks s (default 1)")
     group.add_argument("--episodes", type=int, default=None, help="run N episodes, then exit")

@@ -1,4 +1,5 @@
-"""The README's key table and field tables, generated from the message declarations."""
+"""The contract's key table and field tables (README.md, docs/contract.md), generated from the
+message declarations."""
 
 from __future__ import annotations
 
