@@ -18,7 +18,7 @@ class Terminal(io.StringIO):
 
 
 def work(stream: io.StringIO | None, **options: object) -> None:
-    with Progress(10, "work", unit="step", stream=stream, **options) as bar:  # type: ignore[arg-type]
+    with Progress(10, "work", unit="step", stream=stream, **options) as bar:
         for _ in range(10):
             bar.status("loss 0.5")
             bar.update()
