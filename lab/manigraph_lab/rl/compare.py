@@ -16,6 +16,7 @@ from __future__ import annotations
 import io
 import json
 import statistics
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
@@ -138,6 +139,7 @@ def evaluate_baseline(
         if cached.get("episodes") == episodes:
             return dict(cached["per_k"])
     per_k: dict[str, dict[str, float]] = {}
+    started = time.perf_counter()
     for stage in baseline.stages(store.settings):
         if not stage.evaluate_on:
             continue
@@ -145,7 +147,10 @@ def evaluate_baseline(
         policy = baseline.policy(load_model(store.model(baseline.name, seed, stage), env), env)
         for k in stage.evaluate_on:
             per_k[str(k)] = _score(policy, k, episodes)
-    path.write_text(json.dumps({"episodes": episodes, "per_k": per_k}, indent=2))
+    seconds = round(time.perf_counter() - started, 2)
+    path.write_text(
+        json.dumps({"episodes": episodes, "seconds": seconds, "per_k": per_k}, indent=2)
+    )
     return per_k
 
 

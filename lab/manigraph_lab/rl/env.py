@@ -178,6 +178,27 @@ class StackEnv(gymnasium.Env[dict[str, np.ndarray], np.int64]):
         self._goals = max(len(self.backend.required), 1)
         return self._observe(), {"blocks": k, "episode_seed": int(episode_seed)}
 
+    @property
+    def scene(self) -> Scene | None:
+        """The ``Scene`` the latest observation was made from (None before ``reset``)."""
+        return self._scene
+
+    def action_of(self, object_id: str, goal_id: str) -> int:
+        """The action index that moves ``object_id`` to ``goal_id`` in the latest observation
+        (e.g. to replay the expert's decisions).
+
+        Raises:
+            ConfigError: either id is not a node of the latest observation.
+        """
+        if self._graph is None:
+            raise RuntimeError("action_of() before reset()")
+        if object_id not in self._graph.object_ids:
+            raise ConfigError("object_id", f"'{object_id}' is not an observed object")
+        if goal_id not in self._graph.goal_ids:
+            raise ConfigError("goal_id", f"'{goal_id}' is not an observed goal")
+        o, g = self._graph.object_ids.index(object_id), self._graph.goal_ids.index(goal_id)
+        return o * self.layout.max_goals + g
+
     def action_masks(self) -> np.ndarray:
         """Allowed actions: real, category-compatible (object, goal) pairs."""
         return self._mask.copy()
