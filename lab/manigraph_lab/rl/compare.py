@@ -13,6 +13,7 @@ where it stopped:
 
 from __future__ import annotations
 
+import hashlib
 import io
 import json
 import statistics
@@ -80,6 +81,11 @@ class RunStore:
     def record(self, baseline: str, seed: int, stage: Stage) -> Path:
         return self.folder(baseline, seed) / f"{stage.name}.json"
 
+    def digest(self, baseline: str, seed: int, stage: Stage) -> str:
+        """Identifies a saved stage model, so evaluations of an older one are not reused."""
+        data = self.model(baseline, seed, stage).read_bytes()
+        return hashlib.sha256(data).hexdigest()[:16]
+
     def finished(self, baseline: str, seed: int, stage: Stage) -> dict[str, Any] | None:
         """The stage's record if it finished with these settings; raises if it finished with
         others (the saved models would not be the ones asked for)."""
@@ -134,9 +140,14 @@ def evaluate_baseline(
     from manigraph_lab.rl.baselines import load_model
 
     path = store.folder(baseline.name, seed) / "eval.json"
+    models = {
+        stage.name: store.digest(baseline.name, seed, stage)
+        for stage in baseline.stages(store.settings)
+        if stage.evaluate_on
+    }
     if path.is_file():
         cached: dict[str, Any] = json.loads(path.read_text())
-        if cached.get("episodes") == episodes:
+        if cached.get("episodes") == episodes and cached.get("models") == models:
             return dict(cached["per_k"])
     per_k: dict[str, dict[str, float]] = {}
     started = time.perf_counter()
@@ -149,7 +160,10 @@ def evaluate_baseline(
             per_k[str(k)] = _score(policy, k, episodes)
     seconds = round(time.perf_counter() - started, 2)
     path.write_text(
-        json.dumps({"episodes": episodes, "seconds": seconds, "per_k": per_k}, indent=2)
+        json.dumps(
+            {"episodes": episodes, "models": models, "seconds": seconds, "per_k": per_k},
+            indent=2,
+        )
     )
     return per_k
 
@@ -161,15 +175,20 @@ def evaluate_checkpoint(
     from manigraph_planner.policies import load_policy
 
     path = out / "il" / f"{checkpoint.stem}.json"
+    digest = hashlib.sha256(checkpoint.read_bytes()).hexdigest()[:16]
     if path.is_file():
         cached: dict[str, Any] = json.loads(path.read_text())
-        if cached.get("episodes") == episodes and set(cached["per_k"]) >= {str(k) for k in blocks}:
-            return dict(cached["per_k"])
+        same = (cached.get("episodes"), cached.get("digest")) == (episodes, digest)
+        if same and set(cached["per_k"]) >= {str(k) for k in blocks}:
+            return {str(k): cached["per_k"][str(k)] for k in blocks}
     policy = load_policy(str(checkpoint))
     per_k = {str(k): _score(policy, k, episodes) for k in blocks}
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(
-        json.dumps({"checkpoint": str(checkpoint), "episodes": episodes, "per_k": per_k}, indent=2)
+        json.dumps(
+            {"checkpoint": str(checkpoint), "digest": digest, "episodes": episodes, "per_k": per_k},
+            indent=2,
+        )
     )
     return per_k
 

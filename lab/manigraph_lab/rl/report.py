@@ -157,13 +157,19 @@ def explain_top_features(spec: CompareSpec, store: RunStore) -> dict[str, Any] |
     )
     if "rl-gnn-seq" not in spec.baselines or stage is None:
         return None
+    seed = spec.seeds[0]
     path = spec.out / "explain.json"
-    key = {"decisions": spec.explain_decisions, "blocks": spec.explain_blocks}
+    key = {
+        "decisions": spec.explain_decisions,
+        "blocks": spec.explain_blocks,
+        "seed": seed,
+        "model": store.digest(baseline.name, seed, stage),
+        "il_checkpoints": [str(c) for c in spec.il_checkpoints],
+    }
     if path.is_file():
         cached: dict[str, Any] = json.loads(path.read_text())
-        if {k: cached.get(k) for k in key} == key and cached.get("seed") == spec.seeds[0]:
+        if {k: cached.get(k) for k in key} == key:
             return cached
-    seed = spec.seeds[0]
     env = baseline.make_env(stage, spec.settings)
     model = load_model(store.model(baseline.name, seed, stage), env)
     policies = {f"RL-GNN-Seq (seed {seed}, stage {stage.name})": baseline.policy(model, env)}
@@ -179,7 +185,7 @@ def explain_top_features(spec: CompareSpec, store: RunStore) -> dict[str, Any] |
         cell["top2"] = cell_text(cell)
         cell["success_rate"] = successes / max(episodes, 1)
         cells[name] = cell
-    result = {**key, "seed": seed, "policies": cells}
+    result = {**key, "policies": cells}
     path.write_text(json.dumps(result, indent=2) + "\n")
     return result
 
