@@ -116,7 +116,7 @@ def plot(spec: CompareSpec, results: dict[str, Any], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    figure, axes = plt.subplots(figsize=(7, 4))
+    figure, axes = plt.subplots(figsize=(9, 4))
     for method, row in results["methods"].items():
         ks = sorted(int(k) for k in row["mean"])
         means = [row["mean"][str(k)] for k in ks]
@@ -137,7 +137,7 @@ def plot(spec: CompareSpec, results: dict[str, Any], path: Path) -> None:
         f"{len(spec.seeds)} seeds"
     )
     axes.grid(alpha=0.3)
-    axes.legend(fontsize=8, loc="lower left")
+    axes.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     plt.close(figure)
