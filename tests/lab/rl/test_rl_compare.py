@@ -98,3 +98,18 @@ def test_command_is_registered_and_validates() -> None:
         CompareSpec(baselines=("rl-transformer",))
     with pytest.raises(ConfigError, match="seeds"):
         CompareSpec(seeds=(1, 1))
+
+
+def test_an_evaluation_is_reused_only_for_the_same_model_files(tmp_path: Path) -> None:
+    store = RunStore(tmp_path, TINY)
+    gnn = BASELINES["rl-gnn"]
+    train_baseline(gnn, 0, store, lambda: [])
+    fresh = compare.evaluate_baseline(gnn, 0, store, episodes=1)
+    path = store.folder("rl-gnn", 0) / "eval.json"
+    saved = json.loads(path.read_text())
+    saved["per_k"]["2"]["success_rate"] = 0.5  # marks a cached answer
+    path.write_text(json.dumps(saved))
+    assert compare.evaluate_baseline(gnn, 0, store, episodes=1)["2"]["success_rate"] == 0.5
+    saved["models"]["part2"] = "an older model"
+    path.write_text(json.dumps(saved))
+    assert compare.evaluate_baseline(gnn, 0, store, episodes=1) == fresh
