@@ -76,11 +76,7 @@ def markdown_table(spec: CompareSpec, results: dict[str, Any]) -> str:
                 cells.append(f"{row['mean'][k]:.2f}")
             else:
                 cells.append(f"{row['mean'][k]:.2f} ± {row['std'][k]:.2f}")
-        paper = (
-            PAPER["il" if row["kind"] == "il" else method]
-            if method in PAPER or (row["kind"] == "il")
-            else ""
-        )
+        paper = PAPER.get("il" if row["kind"] == "il" else method, "")
         lines.append(f"| {title(method)} | " + " | ".join(cells) + f" | {paper} |")
     explain = results.get("explain")
     if explain:
