@@ -280,7 +280,7 @@ def train_stage(
     seconds = time.perf_counter() - started
     output.parent.mkdir(parents=True, exist_ok=True)
     model.save(output)
-    returns = [float(info["r"]) for info in model.ep_info_buffer]
+    returns = [float(info["r"]) for info in model.ep_info_buffer or []]
     record: dict[str, Any] = {
         "baseline": baseline.name,
         "seed": seed,

@@ -142,7 +142,7 @@ class StackEnv(gymnasium.Env[dict[str, np.ndarray], np.int64]):
             raise ConfigError("max_blocks", f"must be >= the largest K {max(ks)}, got {slots}")
         self.blocks = ks
         self.layout = SlotLayout(slots, slots)
-        self.observation_space = self.layout.observation_space()
+        self.observation_space = self.layout.observation_space()  # type: ignore[assignment]
         self.action_space = spaces.Discrete(self.layout.num_actions)
         self.backend = GeometricBackend()
         self._clock = 0.0

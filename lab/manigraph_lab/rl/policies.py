@@ -62,7 +62,7 @@ class GraphFeatures(BaseFeaturesExtractor):
         super().__init__(observation_space, self.max_objects**2 + hidden_channels)
         self.net = PolicyNet(ModelConfig(architecture, hidden_channels, num_layers))
 
-    def forward(self, observations: dict[str, Tensor]) -> Tensor:  # type: ignore[override]
+    def forward(self, observations: dict[str, Tensor]) -> Tensor:
         x, mask = observations["nodes"], observations["node_mask"] > 0.5
         hidden = self.net.backbone.forward_complete(x * self.net.feature_scale, mask)
         logits = self.net.head(hidden).squeeze(-1)
@@ -99,7 +99,7 @@ class GraphActorCriticPolicy(MaskableMultiInputActorCriticPolicy):
         self._build_mlp_extractor()
         actions = int(self.action_space.n)  # type: ignore[attr-defined]
         self.action_net = _Columns(0, actions)
-        self.value_net = nn.Sequential(
+        self.value_net = nn.Sequential(  # type: ignore[assignment]
             _Columns(actions, self.features_dim), nn.Linear(self.features_dim - actions, 1)
         )
         self.optimizer = self.optimizer_class(
