@@ -38,11 +38,11 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-from manigraph_lab.episode_loop import _pick_and_place
+from manigraph_lab.episode_loop import StepClock, in_process_skill
 from manigraph_planner.gnn.features import FEATURE_SPEC, GraphState, scene_to_graph
 from manigraph_planner.policies.base import Decision
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.messages import EpisodeRequest, Scene
+from manigraph_shared.messages import EpisodeRequest, Scene, SkillState
 from manigraph_sim.geometric.backend import GeometricBackend
 
 __all__ = ["TRAIN_SEED_BASE", "SlotLayout", "StackEnv"]
@@ -145,7 +145,8 @@ class StackEnv(gymnasium.Env[dict[str, np.ndarray], np.int64]):
         self.observation_space = self.layout.observation_space()  # type: ignore[assignment]
         self.action_space = spaces.Discrete(self.layout.num_actions)
         self.backend = GeometricBackend()
-        self._clock = 0.0
+        self._clock = StepClock()
+        self._skill = in_process_skill(self.backend, self._clock)
         self._steps = 0
         self._filled = 0
         self._goals = 1
@@ -171,8 +172,8 @@ class StackEnv(gymnasium.Env[dict[str, np.ndarray], np.int64]):
             blocks=k,
             seed=int(episode_seed),
         )
-        self._clock = 0.0
-        self.backend.reset(request, self._clock)
+        self._clock.now = 0.0
+        self.backend.reset(request, self._clock())
         self._steps = 0
         self._filled = self.backend.required_filled()
         self._goals = max(len(self.backend.required), 1)
@@ -210,12 +211,13 @@ class StackEnv(gymnasium.Env[dict[str, np.ndarray], np.int64]):
             raise RuntimeError("step() before reset()")
         index = int(action)
         self._steps += 1
-        self._clock += 1.0
+        self._clock.now += 1.0
         if 0 <= index < self.layout.num_actions and self._mask[index]:
             o, g = self.layout.pair(index)
             decision = Decision(self._graph.object_ids[o], self._graph.goal_ids[g])
-            message = decision.to_action(self._scene, self._steps - 1, "rl", self._clock)
-            ok, reason = _pick_and_place(self.backend, self._scene, message, self._clock)
+            message = decision.to_action(self._scene, self._steps - 1, "rl", self._clock())
+            status = self._skill.execute(message, self._scene, self.backend.skill_finished)
+            ok, reason = status.state is SkillState.SUCCEEDED, status.reason
         else:
             ok, reason = False, "masked_action"
         filled = self.backend.required_filled()
@@ -233,7 +235,7 @@ class StackEnv(gymnasium.Env[dict[str, np.ndarray], np.int64]):
         return self._observe(), float(reward), terminated, truncated, info
 
     def _observe(self) -> dict[str, np.ndarray]:
-        scene = self.backend.scene(self._clock)
+        scene = self.backend.scene(self._clock())
         assert scene is not None
         self._scene = scene
         self._graph = scene_to_graph(scene)
