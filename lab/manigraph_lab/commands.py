@@ -1,9 +1,12 @@
-"""The lab's subcommands: ``demos`` and ``eval`` (training lives with the planner)."""
+"""The lab's subcommands: ``demos``, ``eval``, ``suite`` and ``select`` (training lives with the
+planner). Long work shows a progress bar on stderr when stderr is a terminal (and ``eval``
+not given ``--json``); piped or redirected, only results are printed."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,7 +33,7 @@ def _demos_run(args: argparse.Namespace) -> int:
     from manigraph_planner.policies import load_policy
 
     protocol = DemoProtocol(tuple(args.tasks), tuple(args.blocks), args.trajectories, args.seed)
-    summary = record_demos(load_policy("expert"), protocol, args.output)
+    summary = record_demos(load_policy("expert"), protocol, args.output, sys.stderr)
     print(json.dumps(summary))
     return 0
 
@@ -84,7 +87,8 @@ def _eval_run(args: argparse.Namespace) -> int:
         task_file,
         episodes.label() if task_file is not None else None,
     )
-    summary = evaluate(load_policy(options.policy), spec)
+    progress = None if episodes.json else sys.stderr
+    summary = evaluate(load_policy(options.policy), spec, progress)
     if episodes.json:
         print(json.dumps(summary))
     else:
@@ -115,7 +119,15 @@ def _suite_run(args: argparse.Namespace) -> int:
     from manigraph_lab.suite import run_suite
 
     torch.set_num_threads(2)
-    run_suite(args.out, args.archs, args.seeds, args.episodes, args.curve_episodes, args.epochs)
+    run_suite(
+        args.out,
+        args.archs,
+        args.seeds,
+        args.episodes,
+        args.curve_episodes,
+        args.epochs,
+        progress=sys.stderr,
+    )
     print((args.out / "generalization.md").read_text())
     return 0
 
@@ -140,7 +152,9 @@ def _select_run(args: argparse.Namespace) -> int:
     from manigraph_lab.selection import select_checkpoint
 
     torch.set_num_threads(2)
-    chosen, table = select_checkpoint(args.checkpoints, args.output, args.episodes)
+    chosen, table = select_checkpoint(
+        args.checkpoints, args.output, args.episodes, progress=sys.stderr
+    )
     if args.table is not None:
         args.table.parent.mkdir(parents=True, exist_ok=True)
         args.table.write_text(table)

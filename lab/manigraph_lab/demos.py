@@ -8,7 +8,6 @@ user's own runs are training data too.
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
@@ -17,6 +16,7 @@ from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.mcap_log import McapLogWriter
 from manigraph_shared.messages import EpisodeRequest
+from manigraph_shared.progress import Progress
 
 
 @dataclass(frozen=True)
@@ -42,29 +42,30 @@ class DemoProtocol:
 
 
 def record_demos(
-    expert: Policy, protocol: DemoProtocol, path: Path, progress: TextIO = sys.stderr
+    expert: Policy, protocol: DemoProtocol, path: Path, progress: TextIO | None = None
 ) -> dict[str, object]:
+    """Record ``protocol``'s episodes to ``path``; ``progress``: stream for a bar (drawn on a
+    terminal only) and for a note on each episode the expert failed."""
     log = McapLogWriter(path)
     steps = successes = 0
     time_ns = 0
+    requests = protocol.requests()
+    bar = Progress(len(requests), "demos", unit="episode", stream=progress)
     try:
-        for request in protocol.requests():
+        for request in requests:
             record = run_episode(expert, request)
+            bar.update()
             if not record.success:
-                print(f"  skipped {request.episode_id}: the expert failed", file=progress)
+                bar.note(f"  skipped {request.episode_id}: the expert failed")
                 continue
             successes += 1
             for message in [record.start, *_interleave(record), record.end]:
                 time_ns += 1_000_000
                 log.write(message.key_for(), message.encode(), time_ns)
             steps += len(record.steps)
-            print(
-                f"  {request.episode_id}: {request.task} K={request.blocks}, "
-                f"{len(record.steps)} steps",
-                file=progress,
-                flush=True,
-            )
+            bar.status(f"{steps} decisions")
     finally:
+        bar.close()
         log.close()
     return {"file": str(path), "trajectories": successes, "decisions": steps}
 

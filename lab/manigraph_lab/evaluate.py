@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import statistics
-import sys
 import time
 from dataclasses import dataclass
 from typing import TextIO
@@ -11,6 +10,7 @@ from typing import TextIO
 from manigraph_lab.episode_loop import EpisodeRecord, run_episode
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.messages import EpisodeRequest
+from manigraph_shared.progress import Progress
 
 
 @dataclass(frozen=True)
@@ -39,32 +39,26 @@ class EvalSpec:
         ]
 
 
-def evaluate(
-    policy: Policy, spec: EvalSpec, progress: TextIO | None = sys.stderr
-) -> dict[str, object]:
+def evaluate(policy: Policy, spec: EvalSpec, progress: TextIO | None = None) -> dict[str, object]:
+    """Play ``spec``'s episodes; ``progress``: stream for a bar, drawn only on a terminal."""
     records: list[EpisodeRecord] = []
     started = time.perf_counter()
     decisions = 0
-    for index, request in enumerate(spec.requests()):
-        record = run_episode(policy, request, noise=spec.noise)
-        records.append(record)
-        decisions += len(record.steps)
-        if progress is not None and (index + 1) % max(1, spec.episodes // 10) == 0:
-            rate = sum(r.success for r in records) / len(records)
-            print(
-                f"  {spec.task_file_name or spec.task} K={spec.blocks}: "
-                f"{index + 1}/{spec.episodes} episodes, "
-                f"success so far {rate:.3f}",
-                file=progress,
-                flush=True,
-            )
+    label = f"eval {policy.name} {spec.task_file_name or spec.task} K={spec.blocks}"
+    with Progress(spec.episodes, label, unit="episode", stream=progress) as bar:
+        for request in spec.requests():
+            record = run_episode(policy, request, noise=spec.noise)
+            records.append(record)
+            decisions += len(record.steps)
+            bar.status(f"success {sum(r.success for r in records) / len(records):.3f}")
+            bar.update()
     seconds = time.perf_counter() - started
     return summarize(policy.name, spec, records, seconds, decisions)
 
 
-def success_rate(policy: Policy, spec: EvalSpec) -> float:
-    """The fraction of ``spec``'s episodes that ``policy`` finishes, quietly."""
-    return float(evaluate(policy, spec, progress=None)["success_rate"])  # type: ignore[arg-type]
+def success_rate(policy: Policy, spec: EvalSpec, progress: TextIO | None = None) -> float:
+    """The fraction of ``spec``'s episodes that ``policy`` finishes."""
+    return float(evaluate(policy, spec, progress)["success_rate"])  # type: ignore[arg-type]
 
 
 def summarize(

@@ -159,7 +159,7 @@ def _study_run(args: argparse.Namespace) -> int:
         seed=args.seed,
         demo_tasks=tuple(args.demo_tasks),
     )
-    table = run_study(spec, args.out)
+    table = run_study(spec, args.out, progress=sys.stderr)  # bars on a terminal only
     print(table)
     return 0
 

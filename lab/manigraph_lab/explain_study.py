@@ -10,7 +10,6 @@ feature most often ranked first and the feature most often ranked second (so a c
 from __future__ import annotations
 
 import json
-import sys
 from collections import Counter
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -21,6 +20,7 @@ from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import EpisodeRequest, Explanation
+from manigraph_shared.progress import Progress
 
 __all__ = ["StudySpec", "collect_explanations", "edges_touch_object", "run_study"]
 
@@ -68,16 +68,19 @@ def collect_explanations(
     stacks: int = 3,
     seed: int = 0,
     explain_seed: int = 0,
+    progress: TextIO | None = None,
 ) -> tuple[list[Explanation], int, int]:
     """Run seeded episodes until ``count`` decisions are made; explain each one.
 
     Returns the explanations, the number of episodes and how many of them succeeded.
+    ``progress``: stream for a bar over the decisions, drawn only on a terminal.
     """
     from manigraph_planner.explain import SceneExplainer
 
     explainer = SceneExplainer(policy)
     explanations: list[Explanation] = []
     episodes = successes = 0
+    bar = Progress(count, f"explain {policy.name}", unit="decision", stream=progress)
     while len(explanations) < count:
         request = EpisodeRequest(
             episode_id=f"explain-{task}-{blocks}x{stacks}-{seed + episodes}",
@@ -101,6 +104,8 @@ def collect_explanations(
                     explain_seed,
                 )
             )
+            bar.update()
+    bar.close()
     return explanations, episodes, successes
 
 
@@ -139,9 +144,10 @@ def cell_text(cell: dict[str, object]) -> str:
     return ", ".join(names)
 
 
-def run_study(spec: StudySpec, out: Path, progress: TextIO = sys.stderr) -> str:
+def run_study(spec: StudySpec, out: Path, progress: TextIO | None = None) -> str:
     """Fill every cell, write ``table.md`` and ``explanations.json`` under ``out``; return the
-    Markdown table."""
+    Markdown table. ``progress``: stream for bars (drawn on a terminal only) and for one line
+    per cell."""
     from manigraph_planner.policies import load_policy
     from manigraph_planner.policies.gnn import GNNPolicy
     from manigraph_planner.training.dataset import load_demonstrations
@@ -149,16 +155,25 @@ def run_study(spec: StudySpec, out: Path, progress: TextIO = sys.stderr) -> str:
 
     out.mkdir(parents=True, exist_ok=True)
     cells: dict[str, dict[str, object]] = {}
+    work = len(spec.trajectories) * len(spec.archs)
+    bar = Progress(work, "explain-study", unit="cell", stream=progress)
     for size in spec.trajectories:
         demo_log = out / f"demos-{size}.mcap"
         protocol = DemoProtocol(spec.demo_tasks, spec.demo_blocks, size, spec.seed)
         record_demos(load_policy("expert"), protocol, demo_log, progress=progress)
         demos = load_demonstrations([demo_log])
         for arch in spec.archs:
+            bar.status(f"{arch}, {size} trajectories")
             config = TrainConfig(architecture=arch, seed=spec.seed, epochs=spec.epochs)
             net, metrics = train(demos, config, progress=progress)
             explanations, episodes, successes = collect_explanations(
-                GNNPolicy(net), spec.decisions, spec.task, spec.blocks, spec.stacks, spec.seed
+                GNNPolicy(net),
+                spec.decisions,
+                spec.task,
+                spec.blocks,
+                spec.stacks,
+                spec.seed,
+                progress=progress,
             )
             cell = summarise(explanations)
             cell.update(
@@ -167,7 +182,9 @@ def run_study(spec: StudySpec, out: Path, progress: TextIO = sys.stderr) -> str:
                 demo_accuracy=metrics["demo_accuracy"],
             )
             cells[f"{arch}/{size}"] = cell
-            print(f"  {arch}, {size} trajectories: {cell_text(cell)}", file=progress, flush=True)
+            bar.note(f"  {arch}, {size} trajectories: {cell_text(cell)}")
+            bar.update()
+    bar.close()
     table = markdown_table(spec, cells)
     (out / "table.md").write_text(table + "\n")
     (out / "explanations.json").write_text(

@@ -16,13 +16,13 @@ one artifact of it, chosen knowing the kinds of tasks it will be tested on (not 
 from __future__ import annotations
 
 import statistics
-import sys
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TextIO
 
 from manigraph_lab.evaluate import success_rate
 from manigraph_lab.suite import Cell, cells
+from manigraph_shared.progress import Progress
 
 #: First episode seed of validation episodes.
 VALIDATION_SEED = 1000
@@ -44,19 +44,24 @@ def validation_cells(episodes: int, seed: int = VALIDATION_SEED) -> list[Cell]:
 
 
 def score(
-    checkpoints: list[Path], table: list[Cell], progress: TextIO | None = sys.stderr
+    checkpoints: list[Path], table: list[Cell], progress: TextIO | None = None
 ) -> list[Candidate]:
+    """Every candidate's success per cell; ``progress``: stream for bars (on a terminal only)
+    and for one line per cell."""
     from manigraph_planner.policies import load_policy
 
     candidates = []
+    bar = Progress(len(checkpoints) * len(table), "select", unit="cell", stream=progress)
     for path in checkpoints:
         policy = load_policy(str(path))
         scores = {}
         for cell in table:
-            scores[cell.label] = success_rate(policy, cell.spec)
-            if progress is not None:
-                print(f"  {path.name}: {cell.label}: {scores[cell.label]:.3f}", file=progress)
+            bar.status(path.name)
+            scores[cell.label] = success_rate(policy, cell.spec, progress)
+            bar.note(f"  {path.name}: {cell.label}: {scores[cell.label]:.3f}")
+            bar.update()
         candidates.append(Candidate(path, scores))
+    bar.close()
     return candidates
 
 
@@ -86,7 +91,7 @@ def select_checkpoint(
     output: Path,
     episodes: int = 30,
     seed: int = VALIDATION_SEED,
-    progress: TextIO | None = sys.stderr,
+    progress: TextIO | None = None,
 ) -> tuple[Candidate, str]:
     """Score ``checkpoints`` on validation episodes, write the best to ``output`` (its
     metrics extended with the selection) and return it with the Markdown table."""

@@ -14,13 +14,14 @@ from __future__ import annotations
 
 import json
 import statistics
-import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TextIO
 
 from manigraph_lab.demos import DemoProtocol, record_demos
 from manigraph_lab.evaluate import EvalSpec, success_rate
 from manigraph_planner.policies import load_policy
+from manigraph_shared.progress import Progress
 
 
 @dataclass(frozen=True)
@@ -52,7 +53,9 @@ def cells(episodes: int) -> list[Cell]:
 CURVE_K = (2, 3, 4, 6, 9, 12, 16, 20, 25, 30, 35, 40)
 
 
-def checkpoint_for(out: Path, demos: Path, arch: str, seed: int, epochs: int) -> Path:
+def checkpoint_for(
+    out: Path, demos: Path, arch: str, seed: int, epochs: int, progress: TextIO | None = None
+) -> Path:
     path = out / "checkpoints" / f"{arch}-seed{seed}.pt"
     if path.exists():
         return path
@@ -62,7 +65,7 @@ def checkpoint_for(out: Path, demos: Path, arch: str, seed: int, epochs: int) ->
 
     data = load_demonstrations([demos])
     config = TrainConfig(architecture=arch, seed=seed, epochs=epochs)
-    net, metrics = train(data, config)
+    net, metrics = train(data, config, progress)
     path.parent.mkdir(parents=True, exist_ok=True)
     return save_checkpoint(
         path, net, training_config=config.to_dict(), data_hash=data.data_hash, metrics=metrics
@@ -70,27 +73,44 @@ def checkpoint_for(out: Path, demos: Path, arch: str, seed: int, epochs: int) ->
 
 
 def run_suite(
-    out: Path, archs: list[str], seeds: list[int], episodes: int, curve_episodes: int, epochs: int
+    out: Path,
+    archs: list[str],
+    seeds: list[int],
+    episodes: int,
+    curve_episodes: int,
+    epochs: int,
+    progress: TextIO | None = None,
 ) -> dict[str, object]:
+    """Fill the table and the curve; ``progress``: stream for bars (drawn on a terminal only)
+    and for one line per cell."""
     out.mkdir(parents=True, exist_ok=True)
     demos = out / "demos.mcap"
     if not demos.exists():
-        record_demos(load_policy("expert"), DemoProtocol(), demos)
+        record_demos(load_policy("expert"), DemoProtocol(), demos, progress)
     table = cells(episodes)
     results: dict[str, dict[str, list[float]]] = {}
     curves: dict[str, dict[int, list[float]]] = {}
+    # One unit per checkpoint trained or loaded, per table cell and per point of the curve.
+    work = len(archs) * len(seeds) * (1 + len(table) + len(CURVE_K))
+    bar = Progress(work, "suite", unit="step", stream=progress)
     for arch in archs:
         results[arch] = {cell.label: [] for cell in table}
         curves[arch] = {k: [] for k in CURVE_K}
         for seed in seeds:
-            policy = load_policy(str(checkpoint_for(out, demos, arch, seed, epochs)))
+            bar.status(f"{arch} seed {seed}")
+            checkpoint = checkpoint_for(out, demos, arch, seed, epochs, progress)
+            policy = load_policy(str(checkpoint))
+            bar.update()
             for cell in table:
-                rate = success_rate(policy, cell.spec)
+                rate = success_rate(policy, cell.spec, progress)
                 results[arch][cell.label].append(rate)
-                print(f"{arch} seed {seed}: {cell.label}: {rate:.3f}", file=sys.stderr, flush=True)
+                bar.note(f"{arch} seed {seed}: {cell.label}: {rate:.3f}")
+                bar.update()
             for k in CURVE_K:
                 spec = EvalSpec("stack", k, episodes=curve_episodes, seed=10_000)
-                curves[arch][k].append(success_rate(policy, spec))
+                curves[arch][k].append(success_rate(policy, spec, progress))
+                bar.update()
+    bar.close()
     (out / "generalization.md").write_text(markdown(table, results, seeds, episodes))
     plot(curves, out / "success_vs_k.png", len(seeds), curve_episodes)
     summary = {

@@ -184,7 +184,16 @@ def _convert(kind: Any, value: Any) -> Any:
 
 
 def option_fields(config: type[Any]) -> list[OptionField]:
-    """The fields of the options dataclass ``config``, types resolved."""
+    """The fields of the options dataclass ``config``, types resolved (once per class)."""
+    if config not in _FIELDS:
+        _FIELDS[config] = tuple(_resolve_fields(config))
+    return list(_FIELDS[config])
+
+
+_FIELDS: dict[type[Any], tuple[OptionField, ...]] = {}
+
+
+def _resolve_fields(config: type[Any]) -> list[OptionField]:
     if not dataclasses.is_dataclass(config):
         raise TypeError(f"{config!r} is not a dataclass")
     hints = typing.get_type_hints(config)

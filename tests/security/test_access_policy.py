@@ -16,7 +16,7 @@ from manigraph_shared.messages import (
     Scene,
 )
 from manigraph_shared.messages.base import Delivery
-from manigraph_tools.access import GRANTS, access_control, policy_table
+from manigraph_tools.access import GRANTS, access_control
 from manigraph_tools.certs import IDENTITIES
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "security.md"
@@ -81,12 +81,3 @@ def test_the_policy_denies_by_default_and_names_only_known_identities() -> None:
     assert {name for grant in GRANTS for name in grant.identities} <= set(IDENTITIES)
     subjects = config["subjects"]
     assert all(s["cert_common_names"] == [s["id"]] for s in subjects)  # type: ignore[attr-defined]
-
-
-def test_docs_hold_the_table_the_router_enforces() -> None:
-    text = DOC.read_text()
-    start = text.index("<!-- policy-table:start -->\n") + len("<!-- policy-table:start -->\n")
-    end = text.index("<!-- policy-table:end -->")
-    assert text[start:end].strip() == policy_table(), (
-        "docs/security.md is stale: paste `manigraph certs --policy markdown`"
-    )

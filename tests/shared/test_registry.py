@@ -196,3 +196,12 @@ def test_single_options_class_flags_round_trip() -> None:
     with pytest.raises(ConfigError, match="blocks: must be in \\[1, 100\\], got 0"):
         options_from_args(EpisodeOptions, parser.parse_args(["--blocks", "0"]))
     assert option_argv(EpisodeOptions, {"blocks": 6, "episodes": None}) == ["--blocks", "6"]
+
+
+def test_intervals_read_as_written() -> None:
+    assert str(Interval(0, 0.1, low_open=True)) == "(0, 0.1]"
+    assert str(Interval(0, 0.08, high_open=True)) == "[0, 0.08)"
+    assert Interval(1, None).describe() == ">= 1"
+    assert Interval(0, None, low_open=True).describe() == "> 0"
+    assert 0.1 in Interval(0, 0.1, low_open=True) and 0 not in Interval(0, 0.1, low_open=True)
+    assert float("nan") not in Interval(None, None) and True not in Interval(0, 1)

@@ -241,9 +241,10 @@ def _run_configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _run_run(args: argparse.Namespace) -> int:
+    plan = _plan(args, args.episodes or 1)  # a bad option stops here, before any waiting
     with Bus.open(bus_config_from_args(args, wait_seconds=30.0)) as bus:
         _wait_services(bus, ["sim", "planner", "skills"])
-        summary = run_episodes(bus, _plan(args, args.episodes or 1))
+        summary = run_episodes(bus, plan)
     _emit_json(summary, readable=not args.json)
     return 0
 

@@ -1,5 +1,5 @@
-"""The docs' generated blocks: the key and field tables from the message declarations, and
-the flow diagram from the services' manifests."""
+"""The docs' generated blocks (README.md, docs/contract.md): the key and field tables from the
+message declarations, and the flow diagram from the services' manifests."""
 
 from __future__ import annotations
 
@@ -84,3 +84,8 @@ def _describe(info: FieldInfo) -> str:
 def flow_diagram() -> str:
     """Who sends what to whom, from every installed package's manifest (Mermaid)."""
     return mermaid_flow(load_manifests().values())
+
+
+def flow_block() -> str:
+    """The flow diagram as a fenced Mermaid block, as the docs show it."""
+    return f"```mermaid\n{flow_diagram()}\n```"

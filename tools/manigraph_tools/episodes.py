@@ -31,7 +31,7 @@ class EpisodeOptions(Options):
     (``add_option_arguments(parser, EpisodeOptions)``)."""
 
     task: str = option("stack", help="task name")
-    task_file: Path | None = option(None, help="a TOML layout of your own (see README)")
+    task_file: Path | None = option(None, help="your own TOML layout (docs/running.md)")
     blocks: int = option(4, help="blocks per stack K", within=AT_LEAST_ONE)
     stacks: int = option(1, help="number of stacks s", within=AT_LEAST_ONE)
     episodes: int | None = option(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -46,7 +47,7 @@ def _run(args: argparse.Namespace) -> int:
         config = replace(config, augmentation=augmentation_for(args.arch, copies=args.copies))
     torch.set_num_threads(2)
     demos = load_demonstrations(args.demos)
-    net, metrics = train(demos, config)
+    net, metrics = train(demos, config, progress=sys.stderr)  # a bar on a terminal only
     output = args.output or default_output(args.arch, args.seed)
     output.parent.mkdir(parents=True, exist_ok=True)
     save_checkpoint(

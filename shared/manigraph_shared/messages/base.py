@@ -6,7 +6,7 @@ declaration come:
 
 * ``encode`` / ``decode`` — JSON on the wire, validated on the way in;
 * ``mcap_schema`` — the JSON Schema written into every MCAP channel carrying the type;
-* the README's key table (``manigraph keys --markdown``).
+* the key and field tables of README.md and docs/contract.md (``manigraph keys --fields``).
 
 Decoding never raises anything but :class:`~manigraph_shared.errors.MessageError`, whose
 ``problems`` name every offending field.

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import random
-import sys
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TextIO
@@ -18,6 +18,10 @@ from manigraph_planner.training.dataset import Demonstrations, Sample
 from manigraph_planner.training.padded_batch import PaddedBatch
 from manigraph_planner.training.recipes import augmentation_for, resample_every_for
 from manigraph_shared.errors import ConfigError
+from manigraph_shared.progress import Progress
+
+#: Called after every epoch with the epoch (from 1) and its mean training loss.
+EpochCallback = Callable[[int, float], None]
 
 
 @dataclass(frozen=True)
@@ -101,9 +105,16 @@ def accuracy(net: PolicyNet, samples: list[Sample], batch_layout: str = "padded"
 
 
 def train(
-    demos: Demonstrations, config: TrainConfig, progress: TextIO | None = sys.stderr
+    demos: Demonstrations,
+    config: TrainConfig,
+    progress: TextIO | None = None,
+    on_epoch: EpochCallback | None = None,
 ) -> tuple[PolicyNet, dict[str, object]]:
     """Train a policy on ``demos``; returns it with metrics (loss, accuracy, seconds).
+
+    ``progress``: the stream for a progress bar (epochs, loss, ETA), drawn only if it is a
+    terminal (:class:`~manigraph_shared.progress.Progress`); ``on_epoch`` sees every epoch's
+    loss.
 
     Denormal floats are flushed to zero while it runs (:func:`torch.set_flush_denormal`,
     turned off again at the end): as a policy trains, attention weights and gradients decay
@@ -112,13 +123,19 @@ def train(
     """
     torch.set_flush_denormal(True)
     try:
-        return _train(demos, config, progress)
+        with Progress(
+            config.epochs,
+            f"train {config.architecture} seed {config.seed}",
+            unit="epoch",
+            stream=progress,
+        ) as bar:
+            return _train(demos, config, bar, on_epoch)
     finally:
         torch.set_flush_denormal(False)
 
 
 def _train(
-    demos: Demonstrations, config: TrainConfig, progress: TextIO | None
+    demos: Demonstrations, config: TrainConfig, bar: Progress, on_epoch: EpochCallback | None
 ) -> tuple[PolicyNet, dict[str, object]]:
     torch.manual_seed(config.seed)
     random.seed(config.seed)
@@ -149,13 +166,10 @@ def _train(
             total += loss.item()
         schedule.step()
         loss_value = total / batches_per_epoch
-        if progress is not None and (epoch % max(1, config.epochs // 10) == 0 or epoch == 1):
-            print(
-                f"  {config.architecture} seed {config.seed}: epoch {epoch}/{config.epochs} "
-                f"loss {loss_value:.4f} ({time.perf_counter() - started:.0f} s)",
-                file=progress,
-                flush=True,
-            )
+        bar.status(f"loss {loss_value:.4f}")
+        bar.update()
+        if on_epoch is not None:
+            on_epoch(epoch, loss_value)
     metrics: dict[str, object] = {
         "final_loss": round(loss_value, 6),
         "demo_accuracy": round(accuracy(net, demos.samples, config.batch_layout), 4),

@@ -1,0 +1,56 @@
+"""The lab's commands show progress on a terminal and keep ``--json`` output clean."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import pytest
+
+from manigraph_shared.cli import main
+
+
+class Terminal(io.StringIO):
+    """A stream that says it is a TTY, as stderr does in a terminal."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+@pytest.mark.parametrize("json_flag", [False, True])
+def test_eval_draws_a_bar_on_a_terminal_unless_given_json(
+    json_flag: bool, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    stderr = Terminal()
+    monkeypatch.setattr("sys.stderr", stderr)
+    argv = ["eval", "--task", "stack", "--blocks", "3", "--episodes", "2"]
+    assert main(argv + (["--json"] if json_flag else [])) == 0
+    out = capsys.readouterr().out
+    if json_flag:
+        assert stderr.getvalue() == ""
+        assert out.strip().startswith("{")
+    else:
+        assert "eval expert stack K=3" in stderr.getvalue() and "2/2" in stderr.getvalue()
+        assert "success_rate" in out
+
+
+def test_demos_and_train_draw_bars_on_a_terminal_and_nothing_in_a_pipe(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    demos, checkpoint = tmp_path / "demos.mcap", tmp_path / "gcn.pt"
+    demos_argv = ["demos", "-o", str(demos), "--trajectories", "2", "--blocks", "3"]
+    train_argv = ["train", str(demos), "--arch", "gcn", "--epochs", "2", "-o", str(checkpoint)]
+
+    assert main(demos_argv) == 0 and main(train_argv) == 0  # stderr captured: not a TTY
+    captured = capsys.readouterr()
+    assert captured.err == ""
+    assert [line[0] for line in captured.out.splitlines()] == ["{", "{"]  # one JSON line each
+
+    stderr = Terminal()
+    monkeypatch.setattr("sys.stderr", stderr)
+    assert main(demos_argv) == 0 and main(train_argv) == 0
+    bars = stderr.getvalue()
+    assert "demos:" in bars and "2/2 [" in bars
+    assert "train gcn seed 0:" in bars and "loss " in bars
