@@ -7,12 +7,13 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_lab import episode_loop
 from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.decisions import DecisionMaker
 from manigraph_planner.policies import load_policy
 from manigraph_planner.policies.base import Decision, Policy
 from manigraph_planner.policies.gnn import GNNPolicy
-from manigraph_planner.recovery import ProgressMonitor
+from manigraph_planner.recovery import ProgressMonitor, Verdict
 from manigraph_shared.messages import (
     Action,
     EpisodeRequest,
@@ -165,3 +166,34 @@ def test_actions_carry_rank_and_recovery_and_old_logs_still_decode() -> None:
     del fields["rank"], fields["recovery"]
     old = Action.decode(json.dumps(fields).encode())
     assert (old.rank, old.recovery) == (0, None)
+
+
+class NeverPassOver(ProgressMonitor):
+    def verdict(self, scene: Scene) -> Verdict:
+        return Verdict()
+
+
+@pytest.mark.parametrize(("task", "blocks", "stacks"), [("pyramid", 10, 1), ("box-pack", 3, 1)])
+def test_episodes_that_succeed_without_recovery_take_the_same_decisions_with_it(
+    task: str, blocks: int, stacks: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    policy = load_policy(str(REPO / "checkpoints" / "gat.pt"))
+    requests = [
+        EpisodeRequest(episode_id="e", task=task, blocks=blocks, stacks=stacks, seed=seed)
+        for seed in range(770011, 770017)
+    ]
+    with_recovery = [run_episode(policy, r) for r in requests]
+    monkeypatch.setattr(
+        episode_loop,
+        "DecisionMaker",
+        lambda policy, clock: DecisionMaker(policy, clock, NeverPassOver()),
+    )
+    without = [run_episode(policy, r) for r in requests]
+    assert any(r.success for r in without)
+    for a, b in zip(without, with_recovery, strict=True):
+        if a.success:
+            assert b.success
+            assert [s.action.model_dump(exclude={"stamp"}) for s in a.steps] == [
+                s.action.model_dump(exclude={"stamp"}) for s in b.steps
+            ]
+    assert sum(r.success for r in with_recovery) >= sum(r.success for r in without)
