@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TextIO
 
 from manigraph_lab.episode_loop import run_episode
-from manigraph_planner.explain.config import ExplainerConfig
+from manigraph_planner.explain.config import ExplainerConfig, Objective
 from manigraph_planner.explain.faithfulness import Faithfulness, faithfulness
 from manigraph_planner.explain.masks import MaskExplainer
 from manigraph_planner.gnn.features import scene_to_graph
@@ -47,6 +47,16 @@ class Cell:
     hard_fid_minus: float
     top_edge_touches: float
     ms_per_explanation: float
+
+
+#: The explainer before issue #18: the whole-distribution objective at Adam step 0.1.
+TODAY = ExplainerConfig(objective=Objective.DISTRIBUTION, learning_rate=0.1)
+
+
+def config_for(objective: str) -> ExplainerConfig:
+    """``distribution`` is the explainer as it was (:data:`TODAY`); any other objective runs
+    with the default settings."""
+    return TODAY if objective == Objective.DISTRIBUTION else ExplainerConfig(objective=objective)  # type: ignore[arg-type]
 
 
 def decisions_of(
@@ -102,7 +112,7 @@ def run(
             policy = GNNPolicy.from_checkpoint(path)
             decisions = decisions_of(policy, count, task, blocks, stacks)
             for objective in objectives:
-                scores, ms = measure(policy, decisions, ExplainerConfig(objective=objective))
+                scores, ms = measure(policy, decisions, config_for(objective))
                 n = max(len(scores), 1)
                 cell = Cell(
                     task=label,

@@ -34,7 +34,9 @@ class ExplainerConfig:
     Args:
         steps: Adam steps of the mask optimisation. The default keeps a K = 9 stacking scene
             (18 nodes, 306 edges) well under 250 ms on one CPU thread.
-        learning_rate: Adam step size on the mask logits.
+        learning_rate: Adam step size on the mask logits (0.1 before the ``pair-context``
+            objective; at 0.1 it left gated's soft explanation without the choice in a quarter
+            of 3-stack decisions, at 0.2 in none of 25, at the same 40 steps).
         edge_budget: :math:`c_E`, the most edges the explanation keeps (:math:`|E_S| \le c_E`).
         feature_budget: :math:`c_F`, the most features it keeps (:math:`\sum_j F_j \le c_F`).
         budget_weight: :math:`\lambda`, weight of the penalty on mask mass over a budget.
@@ -53,7 +55,7 @@ class ExplainerConfig:
     """
 
     steps: int = 40
-    learning_rate: float = 0.1
+    learning_rate: float = 0.2
     edge_budget: int = 3
     feature_budget: int = 2
     budget_weight: float = 0.2
