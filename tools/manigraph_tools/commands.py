@@ -158,6 +158,13 @@ def _doctor_configure(parser: argparse.ArgumentParser) -> None:
         help=f"services that must be alive (default: {' '.join(doctor.DEFAULT_STACK)})",
     )
     parser.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for answers")
+    parser.add_argument(
+        "--stall-seconds",
+        type=float,
+        default=doctor.DEFAULT_STALL_SECONDS,
+        help="an alive service without a heartbeat for this long is STALLED "
+        f"(default {doctor.DEFAULT_STALL_SECONDS:g}; 0: liveliness only)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     add_bus_arguments(parser)
 
@@ -168,19 +175,20 @@ def _doctor_run(args: argparse.Namespace) -> int:
         bus = Bus.open(config)
     except Exception as exc:  # no router at all: everything is missing
         print(f"cannot reach the bus ({config.describe()}): {exc}", file=sys.stderr)
-        names, missing = list(args.expect), list(args.expect)
+        health = doctor.Health(list(args.expect), list(args.expect))
     else:
         with bus:
-            names, missing = doctor.check(bus, args.expect, args.timeout)
+            health = doctor.check(bus, args.expect, args.timeout, args.stall_seconds)
     if args.json:
-        _emit_json({"alive": [n for n in names if n not in missing], "missing": missing})
+        _emit_json(health.as_json())
     else:
-        print(doctor.table(names, missing, args.expect))
-    return 1 if missing else 0
+        print(doctor.table(health, args.expect))
+    return 1 if doctor.unhealthy(health, args.expect) else 0
 
 
 doctor_command = Command(
-    help="list which services are alive and which are missing (exit 1 if any is missing)",
+    help="list which services are alive, missing or stalled (exit 1 if any expected one is "
+    "missing or stalled)",
     configure=_doctor_configure,
     run=_doctor_run,
 )
