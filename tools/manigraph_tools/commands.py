@@ -13,7 +13,7 @@ from pathlib import Path
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.errors import ConfigError, ManigraphError
 from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
 from manigraph_shared.service import run_service
@@ -349,6 +349,7 @@ def _up_run(args: argparse.Namespace) -> int:
     try:
         for spec in specs:
             supervisor.start(spec)
+        supervisor.watch()  # a dead service is restarted; a dead router stops the stack
         with Bus.open(
             bus_config_from_args(
                 argparse.Namespace(connect=[endpoint], no_multicast_scouting=True),
@@ -360,14 +361,19 @@ def _up_run(args: argparse.Namespace) -> int:
             if args.episodes is None:
                 print("Ctrl-C stops every service", file=sys.stderr, flush=True)
                 while True:
-                    supervisor.raise_if_dead()
+                    supervisor.raise_if_failed()
                     time.sleep(0.5)
             summary = run_episodes(bus, _plan(args, args.episodes))
     except KeyboardInterrupt:
-        print("stopping the stack", file=sys.stderr)
+        if supervisor.failure is None:
+            print("stopping the stack", file=sys.stderr)
     finally:
         supervisor.stop()
+    if supervisor.failure is not None:
+        raise ManigraphError(f"the stack stopped: {supervisor.failure}")
     if summary is not None:
+        if any(supervisor.restarts.values()):
+            summary["restarts"] = {k: v for k, v in supervisor.restarts.items() if v}
         _emit_json(summary, readable=not args.json)
     return 0
 
