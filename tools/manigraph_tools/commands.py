@@ -14,12 +14,12 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError, ManigraphError
-from manigraph_shared.mcap_log import LoggedMessage
+from manigraph_shared.mcap_log import LoggedMessage, recover_log
 from manigraph_shared.messages import Action
 from manigraph_shared.service import run_service
 from manigraph_tools import contract_doc, doctor
 from manigraph_tools.episodes import EpisodePlan, read_task_file, run_episodes
-from manigraph_tools.recorder import Recorder
+from manigraph_tools.recorder import DEFAULT_MAX_BYTES, DEFAULT_MAX_SECONDS, Recorder
 from manigraph_tools.replay import ActionCheck, Replayer, recorded_actions
 from manigraph_tools.router import run_router
 from manigraph_tools.supervisor import ProcessSpec, Supervisor
@@ -57,15 +57,45 @@ def _record_configure(parser: argparse.ArgumentParser) -> None:
         "-o", "--output", type=Path, default=Path("logs"), help="MCAP file or directory"
     )
     parser.add_argument("--flush-interval", type=float, default=0.1, help="seconds (default 0.1)")
+    parser.add_argument(
+        "--max-bytes",
+        type=int,
+        default=DEFAULT_MAX_BYTES,
+        help=f"start a new file past this size (default {DEFAULT_MAX_BYTES >> 20} MiB)",
+    )
+    parser.add_argument(
+        "--max-seconds",
+        type=float,
+        default=DEFAULT_MAX_SECONDS,
+        help=f"start a new file after this long (default {DEFAULT_MAX_SECONDS:g} s)",
+    )
+    parser.add_argument(
+        "--recover",
+        type=Path,
+        metavar="FILE",
+        help="finalise FILE, left unfinished by a killed recorder, in place; then exit",
+    )
     add_bus_arguments(parser)
 
 
+def _record_run(args: argparse.Namespace) -> int:
+    if args.recover is not None:
+        kept = recover_log(args.recover)
+        print(f"{args.recover}: finalised with {kept} messages", file=sys.stderr)
+        return 0
+    return run_service(
+        lambda bus: Recorder(
+            bus, args.output, args.flush_interval, args.max_bytes, args.max_seconds
+        ),
+        bus_config_from_args(args),
+    )
+
+
 record_command = Command(
-    help="record every manigraph/** sample to MCAP (flushed every 100 ms)",
+    help="record every manigraph/** sample to MCAP (flushed every 100 ms, rotated by size "
+    "and age); --recover finalises a killed recorder's file",
     configure=_record_configure,
-    run=lambda args: run_service(
-        lambda bus: Recorder(bus, args.output, args.flush_interval), bus_config_from_args(args)
-    ),
+    run=_record_run,
 )
 
 
