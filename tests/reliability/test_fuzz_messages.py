@@ -50,7 +50,7 @@ def test_hostile_json_is_rejected_with_a_message_error(
 
 
 @pytest.mark.parametrize("cls", TYPES, ids=lambda c: c.__name__)
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data())
 def test_valid_messages_round_trip(cls: type[Message], data: st.DataObject) -> None:
     message = data.draw(valid_messages(cls))
