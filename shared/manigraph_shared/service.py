@@ -155,7 +155,7 @@ class Service:
         activity = self.messages_in + self.messages_rejected + self._inbox.coalesced
         if activity - self._activity_at_trim >= TRIM_AFTER_MESSAGES and not len(self._inbox):
             self._activity_at_trim = activity
-            _malloc_trim()
+            malloc_trim()
 
     # --- life cycle -------------------------------------------------------------------------
     def run(self) -> None:
@@ -198,7 +198,8 @@ class Service:
             self.report_error(exc)
 
 
-def _malloc_trim() -> None:
+def malloc_trim() -> None:
+    """Hand the heap's free memory back to the OS (glibc only; elsewhere nothing)."""
     if _LIBC is not None:
         _LIBC.malloc_trim(0)
 

@@ -27,7 +27,7 @@ from manigraph_shared.bus import ALIVE_PREFIX, Bus
 from manigraph_shared.errors import ManigraphError
 from manigraph_shared.mcap_log import McapLogWriter, is_finalised, recover_log
 from manigraph_shared.messages.base import PREFIX
-from manigraph_shared.service import Service
+from manigraph_shared.service import TRIM_AFTER_MESSAGES, Service, malloc_trim
 
 DEFAULT_MAX_BYTES = 256 * 1024 * 1024
 DEFAULT_MAX_SECONDS = 3600.0
@@ -50,7 +50,7 @@ def is_directory(output: Path) -> bool:
 
 class Recorder(Service):
     name = "recorder"
-    tick_period = 1.0  # report dropped samples
+    tick_period = 1.0  # report dropped samples, trim the heap after bursts
 
     def __init__(
         self,
@@ -79,6 +79,7 @@ class Recorder(Service):
         self.samples_seen = 0
         self.samples_dropped = 0
         self._drops_reported = 0
+        self._seen_at_trim = 0
         self.messages_written = 0
 
     def setup(self) -> None:
@@ -154,6 +155,9 @@ class Recorder(Service):
             )
 
     def tick(self) -> None:
+        if self.samples_seen - self._seen_at_trim >= TRIM_AFTER_MESSAGES:
+            self._seen_at_trim = self.samples_seen  # after a burst: give freed heap back
+            malloc_trim()
         dropped = self.samples_dropped
         if dropped > self._drops_reported:
             self._drops_reported = dropped
