@@ -48,6 +48,7 @@ from manigraph_tools.flood import concrete_key, flood_scenes, fuzz_stack
 from manigraph_tools.fuzzing import message_types
 
 RSS_TOLERANCE = 0.20
+REPO = Path(__file__).resolve().parents[1]
 
 
 @dataclass
@@ -269,7 +270,9 @@ def main() -> None:
     parser.add_argument("--flood-seconds", type=float, default=30.0)
     parser.add_argument("--flood-rate", type=float, default=10_000.0, help="scenes per second")
     parser.add_argument("--settle", type=float, default=60.0, help="seconds before RSS readings")
-    parser.add_argument("--policy", default="checkpoints/sage.pt", help="the planner's policy")
+    parser.add_argument(
+        "--policy", default=str(REPO / "checkpoints" / "sage.pt"), help="the planner's policy"
+    )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="also write the rows here")
     args = parser.parse_args()

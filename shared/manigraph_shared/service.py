@@ -198,6 +198,19 @@ class Service:
             self.report_error(exc)
 
 
+#: glibc's ``M_ARENA_MAX`` (mallopt): at most this many malloc arenas per process. glibc
+#: otherwise gives each of Zenoh's many threads its own arena (up to 8 per core), and memory
+#: freed after a flood stays stranded in them.
+MALLOC_ARENAS = 2
+_M_ARENA_MAX = -8
+
+
+def limit_malloc_arenas(arenas: int = MALLOC_ARENAS) -> None:
+    """Cap glibc's malloc arenas (before the bus starts its threads); no-op elsewhere."""
+    if _LIBC is not None and hasattr(_LIBC, "mallopt"):
+        _LIBC.mallopt(_M_ARENA_MAX, arenas)
+
+
 def malloc_trim() -> None:
     """Hand the heap's free memory back to the OS (glibc only; elsewhere nothing)."""
     if _LIBC is not None:
@@ -218,6 +231,7 @@ _LIBC = _load_libc()
 
 def run_service(factory: Callable[[Bus], Service], bus_config: BusConfig) -> int:
     """Open the bus, run the service until SIGINT/SIGTERM, then close everything."""
+    limit_malloc_arenas()
     bus = Bus.open(bus_config)
     service = factory(bus)
 

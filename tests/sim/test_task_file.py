@@ -158,3 +158,15 @@ def test_an_impossible_layout_is_refused_by_the_sim_reset() -> None:
     )
     with pytest.raises(TaskError, match="green overlaps"):
         GeometricBackend().reset(request, 0.0)
+
+
+def test_a_file_with_thousands_of_problems_names_ten_and_counts_the_rest() -> None:
+    blocks = "".join(
+        f'[[objects]]\nid = "b{i}"\ncategory = "block"\nposition = [0.5, 0.0, 0.02]\n'
+        for i in range(20)
+    )
+    text = blocks + '[[goals]]\nid = "g"\ncategory = "block"\nposition = [0.4, 0.2, 0.02]\n'
+    with pytest.raises(TaskError) as caught:
+        parse_task_file(text)
+    message = str(caught.value)
+    assert message.count("overlaps") == 10 and message.endswith("and 180 more")
