@@ -3,10 +3,11 @@ with per-service RSS and the counters of their ``ServiceStatus`` heartbeats.
 
 Before any reading, every key of the contract gets a few 200 KB payloads: the first message
 a Zenoh session receives that needs reassembly (larger than a 64 KB batch) grows its receive
-buffers once by ~40 MiB — in the router too, which runs no manigraph code — and they stay at
-that size (measured: the same +40 MiB after 20 and after 1,000 such payloads). A real stack
-gets there with its first long joint trajectory; the soak's baselines start from there, so
-what they show is growth caused by the load.
+buffers once by ~20-40 MiB — in the router too, which runs no manigraph code — and they stay
+at that size (measured: the same +40 MiB after 20 and after 1,000 such payloads; queries
+grow their own once more). A real stack gets there with its first long joint trajectory or
+big reset; the soak's baselines start from there, so what they show is growth caused by the
+load.
 """
 
 from __future__ import annotations
@@ -69,8 +70,11 @@ def soak_stack(tmp: Path, policy: str = "expert", record: bool = True) -> Iterat
             running.wait_alive(bus, "router", *names, timeout=180)
             soak = SoakStack(running, bus, log)
             for cls in message_types():  # grow Zenoh's reassembly buffers once (see above)
-                if cls.delivery is not Delivery.QUERY:
-                    for _ in range(5):
-                        bus.put_raw(concrete_key(cls), os.urandom(200_000), cls.delivery)
+                for _ in range(5):
+                    junk = os.urandom(200_000)
+                    if cls.delivery is Delivery.QUERY:
+                        list(bus.session.get(concrete_key(cls), payload=junk, timeout=10.0))
+                    else:
+                        bus.put_raw(concrete_key(cls), junk, cls.delivery)
             time.sleep(1.5)  # first heartbeats
             yield soak
