@@ -4,6 +4,13 @@ Service logic lives in plain classes that take and return messages; a :class:`Se
 wires them to the bus. All handlers of one service run on one thread, in arrival order, so the
 logic needs no locks. A payload that fails validation is logged, counted and reported as an
 error ``ServiceStatus`` (so it also lands in the MCAP log) and the service keeps running.
+
+The bus is a trust boundary, so nothing a sender does can make a service hold unbounded work:
+the inbox holds at most ``inbox_capacity`` messages and a message arriving at a full inbox is
+dropped (newest dropped, so what is queued keeps its order) and counted as
+``<Type>:inbox_full``. A valid message a service will not act on (a scene of another episode, an
+action while stopped) is refused with :meth:`Service.reject`. Every refusal, malformed or not,
+is counted by ``<Type>:<reason>`` and published with every heartbeat (``ServiceStatus.rejections``).
 """
 
 from __future__ import annotations
@@ -18,11 +25,51 @@ from typing import Any, ClassVar, TypeVar
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
-from manigraph_shared.errors import ManigraphError
+from manigraph_shared.errors import ManigraphError, MessageError
 from manigraph_shared.messages import Message, ServiceState, ServiceStatus
+from manigraph_shared.messages.status import MAX_REJECTION_KINDS
 
 M = TypeVar("M", bound=Message)
 HEARTBEAT_SECONDS = 1.0
+#: Messages waiting for the service thread; more are dropped and counted.
+INBOX_CAPACITY = 1024
+#: A refusal is logged at most this often per ``<Type>:<reason>`` (all are counted).
+REJECTION_LOG_SECONDS = 1.0
+
+
+class Rejections:
+    """Thread-safe counters of refused messages by ``<Type>:<reason>``."""
+
+    def __init__(self) -> None:
+        self._counts: dict[str, int] = {}
+        self._logged: dict[str, float] = {}
+        self._lock = threading.Lock()
+
+    def add(self, kind: str) -> bool:
+        """Count one refusal; True when it is time to log this kind again."""
+        now = time.monotonic()
+        with self._lock:
+            if kind not in self._counts and len(self._counts) >= MAX_REJECTION_KINDS - 1:
+                kind = "other"
+            self._counts[kind] = self._counts.get(kind, 0) + 1
+            if now - self._logged.get(kind, -REJECTION_LOG_SECONDS) >= REJECTION_LOG_SECONDS:
+                self._logged[kind] = now
+                return True
+            return False
+
+    def snapshot(self) -> dict[str, int]:
+        with self._lock:
+            return dict(self._counts)
+
+    @property
+    def total(self) -> int:
+        with self._lock:
+            return sum(self._counts.values())
+
+
+def type_label(message_type: str) -> str:
+    """``manigraph.Scene`` -> ``Scene``."""
+    return message_type.rsplit(".", 1)[-1]
 
 
 class Service:
@@ -32,14 +79,23 @@ class Service:
     #: How often ``tick`` runs; ``None``: never.
     tick_period: ClassVar[float | None] = None
 
+    #: Messages the inbox holds before it drops new ones.
+    inbox_capacity: ClassVar[int] = INBOX_CAPACITY
+
     def __init__(self, bus: Bus) -> None:
         self.bus = bus
         self.log = logging.getLogger(f"manigraph.{self.name}")
-        self._inbox: queue.SimpleQueue[tuple[Callable[[Any], None], Any]] = queue.SimpleQueue()
+        self._inbox: queue.Queue[tuple[Callable[[Any], None], Any]] = queue.Queue(
+            self.inbox_capacity
+        )
         self.messages_in = 0
-        self.messages_rejected = 0
+        self.rejections = Rejections()
         self.last_error = ""
         self.stop_event = threading.Event()
+
+    @property
+    def messages_rejected(self) -> int:
+        return self.rejections.total
 
     # --- wiring -----------------------------------------------------------------------------
     def on(
@@ -48,12 +104,26 @@ class Service:
         """Run ``handler`` on the service thread for every valid ``message_type`` sample."""
 
         def enqueue(message: M) -> None:
-            self._inbox.put((handler, message))
+            if not self.call_soon(handler, message):
+                self.reject(message, "inbox_full", f"{self.inbox_capacity} messages waiting")
 
         self.bus.subscribe(message_type, enqueue, on_error=self._rejected, key=key)
 
-    def call_soon(self, handler: Callable[[Any], None], argument: Any = None) -> None:
-        self._inbox.put((handler, argument))
+    def call_soon(self, handler: Callable[[Any], None], argument: Any = None) -> bool:
+        """Run ``handler(argument)`` on the service thread; False if the inbox is full."""
+        try:
+            self._inbox.put_nowait((handler, argument))
+        except queue.Full:
+            return False
+        return True
+
+    def reject(self, message: Message | str, reason: str, detail: str = "") -> None:
+        """Refuse a valid ``message`` (or a message type's name): count it by type and
+        ``reason``, log it now and then. Safe from any thread; never blocks."""
+        name = message if isinstance(message, str) else type(message).type_name()
+        kind = f"{type_label(name)}:{reason}"
+        if self.rejections.add(kind):
+            self.log.warning("refused %s%s", kind, f" ({detail})" if detail else "")
 
     def setup(self) -> None:
         """Declare subscriptions, queryables and publishers."""
@@ -78,14 +148,16 @@ class Service:
                 detail=detail[:2048],
                 messages_in=self.messages_in,
                 messages_rejected=self.messages_rejected,
+                rejections=self.rejections.snapshot(),
                 stamp=time.time(),
             )
         )
 
     def _rejected(self, error: ManigraphError) -> None:
-        # Zenoh thread: count here, report on the service thread.
-        self.messages_rejected += 1
-        self._inbox.put((self.report_error, error))
+        # Zenoh thread: count here, report on the service thread (if it has room).
+        name = error.message_type if isinstance(error, MessageError) else "handler"
+        self.rejections.add(f"{type_label(name)}:invalid")
+        self.call_soon(self.report_error, error)
 
     # --- life cycle -------------------------------------------------------------------------
     def run(self) -> None:

@@ -49,6 +49,12 @@ class RecordingArm(RobotDriver):
     ) -> None:
         self.calls.append(("place", object_id, position.as_tuple()))
 
+    def stop(self) -> None:
+        self.calls.append(("stop", "", (0.0, 0.0, 0.0)))
+
+    def resume(self) -> None:
+        self.calls.append(("resume", "", (0.0, 0.0, 0.0)))
+
 
 def scene(goal_x: float = 0.4) -> Scene:
     return Scene(

@@ -217,6 +217,12 @@ def _episode_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--seed", type=int, default=0, help="seed of the first episode")
     group.add_argument("--timeout", type=float, default=120.0, help="seconds per episode")
     group.add_argument(
+        "--stall-timeout",
+        type=float,
+        default=30.0,
+        help="fail an episode after this many seconds without a decision or skill status",
+    )
+    group.add_argument(
         "--json", action="store_true", help="print only the JSON summary (stdout, one line)"
     )
 
@@ -231,6 +237,7 @@ def _plan(args: argparse.Namespace, episodes: int) -> EpisodePlan:
         episodes=episodes,
         seed=args.seed,
         timeout=args.timeout,
+        stall_timeout=args.stall_timeout,
         run_id=f"{args.task}-{args.blocks}-{int(time.time())}",
     )
 

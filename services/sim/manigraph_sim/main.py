@@ -35,6 +35,12 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         help="geometric backend: lay box tasks out with this geometry (default geometric; "
         "physics: the physics world's roomier boxes, for comparing the two worlds)",
     )
+    parser.add_argument(
+        "--workspace",
+        default=None,
+        help="geometric backend: box the gripper may reach, xmin,xmax,ymin,ymax,zmin,zmax in "
+        "metres (default: the skills' default); commands outside are refused",
+    )
     add_bus_arguments(parser)
 
 
@@ -69,6 +75,12 @@ def _run(args: argparse.Namespace) -> int:
 
         if args.box_geometry == "physics":
             options["boxes"] = PHYSICS_BOXES
+    if args.workspace is not None:
+        if args.backend != "geometric":
+            raise ConfigError("workspace", "only the geometric backend takes Cartesian commands")
+        from manigraph_shared.workspace import Workspace
+
+        options["workspace"] = Workspace.parse(args.workspace)
     backend = create_backend(args.backend, **options)
     return run_service(
         lambda bus: SimService(bus, backend, args.publish_hz), bus_config_from_args(args)

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 from manigraph_shared.bus import Bus
+from manigraph_shared.errors import BusError
 from manigraph_shared.messages import (
+    EmergencyStop,
     EpisodeEvent,
     EpisodeRequest,
     JointTrajectoryCommand,
@@ -28,12 +31,27 @@ class SimService(Service):
         self.tick_period = 1.0 / publish_hz
 
     def setup(self) -> None:
+        # The emergency stop acts in the Zenoh thread that delivers it: the service thread may
+        # be busy moving the arm, and the motion must stop now, not after it.
+        estop = getattr(self.backend, "emergency_stop", None)
+        if estop is not None:
+            self.bus.subscribe(
+                EmergencyStop, lambda message: self._on_estop(estop, message), self._rejected
+            )
         # Resets arrive on a Zenoh thread; hand them to the service thread and wait.
         self.bus.serve(EpisodeRequest, self._reset_from_query)
         self.on(RobotCommand, self._execute)
         self.on(SkillStatus, self._on_skill_status)
         if hasattr(self.backend, "execute_trajectory"):  # a backend with a jointed arm
             self.on(JointTrajectoryCommand, self._execute_trajectory)
+
+    def _on_estop(self, estop: Callable[[bool], None], message: EmergencyStop) -> None:
+        estop(message.engaged)
+        self.log.warning(
+            "emergency stop %s: %s",
+            "engaged" if message.engaged else "released",
+            message.reason or "(no reason)",
+        )
 
     def _reset_from_query(self, request: EpisodeRequest) -> EpisodeEvent:
         import queue
@@ -46,7 +64,8 @@ class SimService(Service):
             except BaseException as exc:  # handed back to the querier as an error reply
                 answer.put(exc)
 
-        self.call_soon(reset)
+        if not self.call_soon(reset):
+            raise BusError("sim busy: its inbox is full, try the reset again")
         result = answer.get(timeout=30)
         if isinstance(result, BaseException):
             raise result

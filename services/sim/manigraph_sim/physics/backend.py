@@ -25,6 +25,7 @@ import numpy as np
 from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_shared.grasp_points import grasp_height
 from manigraph_shared.messages import (
+    REFUSAL_REASONS,
     EpisodeEvent,
     EpisodeRequest,
     GripperTarget,
@@ -173,6 +174,8 @@ class PhysicsBackend(EpisodeBackend):
     ) -> JointTrajectoryResult:
         """Follow ``command`` with the PD drives."""
         try:
+            if self.halted.is_set():
+                raise SkillError("stopped", "emergency stop engaged")
             if self.world is None or self.ended:
                 raise SkillError("no_episode", "no episode is running")
             if tuple(command.joint_names) != ARM_JOINTS:
@@ -185,7 +188,11 @@ class PhysicsBackend(EpisodeBackend):
             times = np.array([p.time_from_start for p in command.points])
             positions = np.array([p.positions for p in command.points])
             closed = [p.gripper is GripperTarget.CLOSED for p in command.points]
-            self.physics_steps += self.world.follow(times, positions, closed, self.realtime)
+            self.physics_steps += self.world.follow(
+                times, positions, closed, self.realtime, halt=self.halted.is_set
+            )
+            if self.halted.is_set():
+                raise SkillError("stopped", "emergency stop during the trajectory")
         except SkillError as exc:
             return self._result(command, stamp, exc.reason, exc.detail)
         return self._result(command, stamp)
@@ -209,6 +216,8 @@ class PhysicsBackend(EpisodeBackend):
         budget: a skill that fails before moving (no IK solution) still ends the episode
         once the budget is spent, instead of leaving it running forever."""
         if self.request is None or self.ended or not status.state.terminal:
+            return
+        if status.reason in REFUSAL_REASONS:  # refused before any motion: not a step
             return
         if status.decision_id.startswith(f"{self.request.episode_id}:"):
             self.steps += 1

@@ -32,3 +32,9 @@ class InProcessTransport:
         if scene is None:
             return None
         return np.array(scene.object(object_id).position.as_tuple())
+
+    def stop(self) -> None:
+        self.backend.emergency_stop(True)
+
+    def resume(self) -> None:
+        self.backend.emergency_stop(False)

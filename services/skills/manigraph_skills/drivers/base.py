@@ -25,7 +25,12 @@ CENTRE_GRASP = Grasp()
 
 
 class RobotDriver(ABC):
-    """Raises ``SkillError(reason)`` when the robot could not do what was asked."""
+    """Raises ``SkillError(reason)`` when the robot could not do what was asked.
+
+    :meth:`stop` is the emergency stop: it is called from another thread while ``pick`` or
+    ``place`` may be running, must return at once, and makes the running call (and every call
+    until :meth:`resume`) raise ``SkillError("stopped")``.
+    """
 
     name: str
 
@@ -50,6 +55,14 @@ class RobotDriver(ABC):
         grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         """Carry the held object so its centre is at ``position`` and release it."""
+
+    @abstractmethod
+    def stop(self) -> None:
+        """Halt now (emergency stop): abort the motion under way, refuse new ones."""
+
+    @abstractmethod
+    def resume(self) -> None:
+        """Accept motions again after :meth:`stop`."""
 
     def close(self) -> None:
         """Release the driver's resources."""

@@ -8,6 +8,7 @@ import time
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import SkillError
+from manigraph_shared.ids import derived_id
 from manigraph_shared.messages import GripperOp, Quaternion, RobotCommand, RobotFeedback, Vector3
 from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver, register_driver
 
@@ -23,7 +24,17 @@ class BusGripperDriver(RobotDriver):
         self._waiting: dict[str, threading.Event] = {}
         self._answers: dict[str, RobotFeedback] = {}
         self._lock = threading.Lock()
+        self._stopped = threading.Event()
         bus.subscribe(RobotFeedback, self._on_feedback)
+
+    def stop(self) -> None:
+        self._stopped.set()
+        with self._lock:
+            for event in self._waiting.values():
+                event.set()  # wake the waiting skill: it sees the stop and gives up
+
+    def resume(self) -> None:
+        self._stopped.clear()
 
     def _on_feedback(self, feedback: RobotFeedback) -> None:
         with self._lock:
@@ -40,7 +51,9 @@ class BusGripperDriver(RobotDriver):
         position: Vector3,
         orientation: Quaternion,
     ) -> None:
-        command_id = f"{decision_id}.{next(self._ids)}"
+        if self._stopped.is_set():
+            raise SkillError("stopped", "emergency stop engaged")
+        command_id = derived_id(decision_id, ".", str(next(self._ids)))
         event = threading.Event()
         with self._lock:
             self._waiting[command_id] = event
@@ -58,10 +71,13 @@ class BusGripperDriver(RobotDriver):
             )
             if not event.wait(self.timeout):
                 raise SkillError("driver_timeout", f"no answer to {op} within {self.timeout} s")
+            if self._stopped.is_set():
+                raise SkillError("stopped", f"emergency stop during {op}")
             feedback = self._answers.pop(command_id)
         finally:
             with self._lock:
                 self._waiting.pop(command_id, None)
+                self._answers.pop(command_id, None)
         if not feedback.ok:
             raise SkillError(feedback.reason or "driver_error", feedback.detail)
 

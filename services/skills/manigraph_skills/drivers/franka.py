@@ -39,3 +39,9 @@ class FrankaDriver(RobotDriver):
         grasp: Grasp = CENTRE_GRASP,
     ) -> None:
         raise NotImplementedError
+
+    def stop(self) -> None:
+        raise NotImplementedError
+
+    def resume(self) -> None:
+        raise NotImplementedError

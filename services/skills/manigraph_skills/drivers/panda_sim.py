@@ -36,6 +36,7 @@ class BusJointTransport:
         #: Stamp of the newest joint knowledge; a sample older than it is stale.
         self._known_at = -1.0
         self._scene: Scene | None = None
+        self._stopped = False
         bus.subscribe(JointTrajectoryResult, self._on_result)
         bus.subscribe(JointState, self._on_state)
         bus.subscribe(Scene, self._on_scene)
@@ -61,20 +62,34 @@ class BusJointTransport:
             self._scene = scene
             self._lock.notify_all()
 
+    def stop(self) -> None:
+        with self._lock:
+            self._stopped = True
+            self._lock.notify_all()
+
+    def resume(self) -> None:
+        with self._lock:
+            self._stopped = False
+
     def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
         with self._lock:
+            if self._stopped:
+                raise SkillError("stopped", "emergency stop engaged")
             self._waiting.add(command.command_id)
         try:
             self.bus.publish(command)
             with self._lock:
                 if not self._lock.wait_for(
-                    lambda: command.command_id in self._results, self.timeout
+                    lambda: command.command_id in self._results or self._stopped, self.timeout
                 ):
                     raise SkillError("driver_timeout", f"no result within {self.timeout} s")
+                if self._stopped:  # the sim halts the arm itself on the same stop message
+                    raise SkillError("stopped", "emergency stop during a trajectory")
                 return self._results.pop(command.command_id)
         finally:
             with self._lock:
                 self._waiting.discard(command.command_id)
+                self._results.pop(command.command_id, None)
 
     def joint_positions(self) -> np.ndarray:
         with self._lock:
