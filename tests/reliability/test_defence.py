@@ -195,6 +195,7 @@ def test_robot_commands_outside_the_workspace_are_refused(running_stack: Stack) 
     with running_stack.client() as bus:
         running_stack.wait_alive(bus, "sim", timeout=STARTUP)
         scenes, feedback = Inbox(bus, Scene), Inbox(bus, RobotFeedback)
+        statuses = Inbox(bus, ServiceStatus)
         time.sleep(0.3)
         reset(bus, "far-away")
         real = scene_of(scenes, "far-away")
@@ -223,3 +224,4 @@ def test_robot_commands_outside_the_workspace_are_refused(running_stack: Stack) 
         time.sleep(0.2)
         after = scenes.wait(lambda s: s.episode_id == "far-away" and s.stamp > time.time() - 0.1)
         assert all(abs(o.position.x) < 1.0 for o in after.objects)
+        assert rejections(statuses, "sim", "RobotCommand:outside_workspace") == 3

@@ -18,6 +18,12 @@ from manigraph_shared.messages import (
 from manigraph_shared.service import Service
 from manigraph_sim.backend import SimBackend
 
+#: Failures that refuse a command outright (counted as rejections in the status), as opposed
+#: to a motion that was tried and failed.
+REFUSED = frozenset(
+    {"outside_workspace", "unknown_object", "no_episode", "stopped", "bad_joints", "unsupported"}
+)
+
 
 class SimService(Service):
     """Publishes ``Scene`` at ``publish_hz`` and right after every change, resets episodes on
@@ -89,6 +95,8 @@ class SimService(Service):
         feedback = self.backend.execute(command, time.time())
         if not feedback.ok:
             self.log.info("%s %s failed: %s", command.op, command.object_id, feedback.reason)
+            if feedback.reason in REFUSED:
+                self.reject(command, feedback.reason, command.command_id)
         self._publish_scene()
         self.bus.publish(feedback)
         self._publish_end()
@@ -110,6 +118,8 @@ class SimService(Service):
         result = self.backend.execute_trajectory(command, time.time())  # type: ignore[attr-defined]
         if not result.ok:
             self.log.info("trajectory %s failed: %s", command.command_id, result.reason)
+            if result.reason in REFUSED:
+                self.reject(command, result.reason, command.command_id)
         self._publish_scene()
         self.bus.publish(result)
         self._publish_end()
