@@ -45,11 +45,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--samples", type=int, default=10)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--log-dir", type=Path, help="keep the services' logs here")
     args = parser.parse_args()
     rng = random.Random(args.seed)
     latencies: list[float] = []
     halted = 0
-    with tempfile.TemporaryDirectory() as logs, stack(Path(logs)) as running:
+    with tempfile.TemporaryDirectory() as logs, stack(args.log_dir or Path(logs)) as running:
         running.start("router")
         running.start("sim", "sim", "--backend", "physics", "--realtime")
         running.start("skills", "skills", "--driver", "panda-sim")
@@ -98,6 +99,7 @@ def main() -> None:
                     print(f"sample {sample}: the skill ended before the stop ({status.state})")
                 else:
                     latencies.append((arrived - sent) * 1000)
+                    print(f"sample {sample}: {latencies[-1]:.1f} ms", flush=True)
                     time.sleep(0.2)  # let the sim report the halted arm
                     before = np.array(joints[-1].positions)
                     time.sleep(0.3)

@@ -59,6 +59,12 @@ class ScriptedArm:
     def object_position(self, object_id: str, after: float) -> np.ndarray | None:
         return self.rests
 
+    def stop(self) -> None:
+        self.stopped = True
+
+    def resume(self) -> None:
+        self.stopped = False
+
 
 def test_a_pick_and_place_sends_pick_carry_and_release_motions() -> None:
     arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=np.array(GOAL.as_tuple()))
@@ -119,3 +125,26 @@ def test_the_driver_is_registered_and_validates_its_settings() -> None:
     assert "panda-sim" in DRIVERS
     with pytest.raises(ConfigError, match="placement_tolerance"):
         PandaMotionDriver(ScriptedArm(widths=[]), placement_tolerance=0.0)
+
+
+def test_after_an_emergency_stop_nothing_is_sent_until_resume() -> None:
+    arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=np.array(GOAL.as_tuple()))
+    driver = PandaMotionDriver(arm)
+    driver.stop()
+    assert arm.stopped
+    with pytest.raises(SkillError) as stopped:
+        driver.pick("e:0", "block_0", BLOCK, Quaternion())
+    assert stopped.value.reason == "stopped" and arm.sent == []
+    driver.resume()
+    driver.pick("e:0", "block_0", BLOCK, Quaternion())
+    assert len(arm.sent) == 1 and not arm.stopped
+
+
+def test_command_ids_of_a_64_character_decision_stay_valid() -> None:
+    arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=np.array(GOAL.as_tuple()))
+    driver = PandaMotionDriver(arm)
+    decision = "d" * 64
+    driver.pick(decision, "block_0", BLOCK, Quaternion())
+    driver.place(decision, "block_0", GOAL, Quaternion())
+    ids = [command.command_id for command in arm.sent]
+    assert len(set(ids)) == 3 and all(len(i) <= 64 for i in ids)

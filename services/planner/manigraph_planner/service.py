@@ -32,7 +32,7 @@ class PlannerService(Service):
     A decision whose skill never reports is given up after ``decision_timeout`` seconds
     (``skill_timeout``), or at once when the skills service's liveliness token goes
     (``skills_lost``); either is logged and published as an error status. While the emergency
-    stop is engaged the planner decides nothing.
+    stop is engaged, or the skills service is gone, the planner decides nothing.
 
     Args:
         bus: the process's bus.
@@ -82,6 +82,8 @@ class PlannerService(Service):
         reason = self.gate.check(scene)
         if reason is not None:
             self.reject(scene, reason, f"{scene.episode_id} #{scene.sequence}")
+            return
+        if not self.skills_alive:  # nobody would execute it; decide once skills is back
             return
         self._act(self.decisions.on_scene(scene))
 

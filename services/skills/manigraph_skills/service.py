@@ -87,6 +87,7 @@ class SkillsService(Service):
         self.scenes.update(scene)
 
     def _on_action(self, action: Action) -> None:
+        self.messages_in += 1
         newest = self.scenes.newest_sequence(action.episode_id)
         if self.stopped.is_set():
             self._refuse(action, "stopped", f"emergency stop engaged: {self.stop_reason}")
