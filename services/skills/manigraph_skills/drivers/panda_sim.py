@@ -14,11 +14,13 @@ import numpy as np
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
+    EpisodeEvent,
     JointState,
     JointTrajectoryCommand,
     JointTrajectoryResult,
     Scene,
 )
+from manigraph_shared.scene_gate import SceneGate
 from manigraph_skills.drivers.base import register_driver
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
@@ -37,8 +39,12 @@ class BusJointTransport:
         self._known_at = -1.0
         self._scene: Scene | None = None
         self._stopped = False
+        #: Scenes check placements, so a forged one must not land here either (the service
+        #: counts the refusals: it sees the same scenes through its own gate).
+        self._gate = SceneGate()
         bus.subscribe(JointTrajectoryResult, self._on_result)
         bus.subscribe(JointState, self._on_state)
+        bus.subscribe(EpisodeEvent, self._gate.on_episode)
         bus.subscribe(Scene, self._on_scene)
 
     def _on_result(self, result: JointTrajectoryResult) -> None:
@@ -58,6 +64,8 @@ class BusJointTransport:
                 self._lock.notify_all()
 
     def _on_scene(self, scene: Scene) -> None:
+        if self._gate.check(scene) is not None:
+            return
         with self._lock:
             self._scene = scene
             self._lock.notify_all()
