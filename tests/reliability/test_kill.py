@@ -67,8 +67,9 @@ def run_and_kill(stack: Stack, victim: str) -> tuple[dict, float, str]:
 
 @pytest.mark.parametrize("victim", ["skills", "sim"])
 def test_kill_9_mid_episode_fails_that_episode_only(running_stack: Stack, victim: str) -> None:
-    summary, _killed_at, stderr = run_and_kill(running_stack, victim)
+    summary, killed_at, stderr = run_and_kill(running_stack, victim)
     results = summary["results"]
+    print(f"{victim} killed; run ended {time.monotonic() - killed_at:.1f} s later:", results)
     assert summary["episodes"] == EPISODES, stderr[-3000:]
     failed = [r for r in results if not r["success"]]
     assert len(failed) == 1, results
