@@ -121,6 +121,12 @@ class ServiceWatch:
         with self._changed:
             return list(dict.fromkeys(self._lost))
 
+    def lost_within(self, seconds: float) -> list[str]:
+        """The services lost since :meth:`mark`, waiting up to ``seconds`` for one."""
+        with self._changed:
+            self._changed.wait_for(lambda: bool(self._lost), seconds)
+            return list(dict.fromkeys(self._lost))
+
     def wait_all_alive(self, timeout: float) -> list[str]:
         """Wait until every service is alive; returns the missing ones after ``timeout``."""
         with self._changed:
@@ -222,7 +228,8 @@ def _run_one(
     except RequestRefused:  # the request itself was refused (a bad task file): abort
         raise
     except BusError as exc:
-        return failed(f"reset_failed: {exc}"[:256])
+        lost = watch.lost_within(0.5)  # killed while it answered? Its token goes too: say so
+        return failed(f"service_lost: {', '.join(lost)}" if lost else f"reset_failed: {exc}"[:256])
     deadline = started + plan.timeout
     while True:
         lost = watch.lost()

@@ -13,7 +13,10 @@ Nothing a sender does can block the threads that receive messages:
 * the worker waits at most ``scene_wait`` seconds for the scene an action was decided on;
 * ``EmergencyStop`` is acted on in the Zenoh thread that delivers it: the driver is stopped,
   the skill under way fails with reason ``stopped``, queued actions are refused, and so is
-  every action until the stop is released.
+  every action until the stop is released;
+* when the robot's process (``robot_service``, the sim) goes away, the skill under way fails
+  at once with reason ``robot_lost`` instead of waiting out the driver's timeout, so the
+  next episode finds skills free.
 """
 
 from __future__ import annotations
@@ -58,6 +61,7 @@ class SkillsService(Service):
         workspace: Workspace,
         queue_capacity: int = QUEUE_CAPACITY,
         scene_wait: float = SCENE_WAIT,
+        robot_service: str = "sim",
     ) -> None:
         super().__init__(bus)
         self.driver: RobotDriver = driver_factory(bus)
@@ -65,6 +69,7 @@ class SkillsService(Service):
         self.gate = SceneGate()
         self.scenes = SceneCache()
         self.scene_wait = scene_wait
+        self.robot_service = robot_service
         self.stopped = threading.Event()
         self.stop_reason = ""
         self._actions: queue.Queue[Action] = queue.Queue(queue_capacity)
@@ -75,6 +80,7 @@ class SkillsService(Service):
         self.bus.subscribe(Scene, self._on_scene, on_error=self._rejected)
         self.bus.subscribe(EmergencyStop, self._on_estop, on_error=self._rejected)
         self.bus.subscribe(Action, self._on_action, on_error=self._rejected)
+        self.bus.watch_alive(self._on_liveliness)
         self._worker.start()
         self.log.info("driver '%s'", self.driver.name)
 
@@ -117,6 +123,11 @@ class SkillsService(Service):
             self.stopped.clear()
             self.log.warning("emergency stop released: %s", message.reason or "(no reason)")
         self.call_soon(lambda _: self.publish_status(ServiceState.OK, self._detail()))
+
+    def _on_liveliness(self, service: str, alive: bool) -> None:
+        if service == self.robot_service and not alive:
+            self.log.warning("the robot (%s) went away: the skill under way fails", service)
+            self.driver.abort("robot_lost")
 
     def _refuse(self, action: Action, reason: str, detail: str) -> None:
         self.reject(action, reason, f"{action.decision_id}: {detail}")

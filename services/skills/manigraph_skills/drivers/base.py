@@ -64,6 +64,10 @@ class RobotDriver(ABC):
     def resume(self) -> None:
         """Accept motions again after :meth:`stop`."""
 
+    def abort(self, reason: str) -> None:
+        """The robot went away (its process died): fail the motion under way now with
+        ``reason`` instead of waiting for an answer that cannot come. Not sticky."""
+
     def close(self) -> None:
         """Release the driver's resources."""
 

@@ -25,6 +25,7 @@ class BusGripperDriver(RobotDriver):
         self._answers: dict[str, RobotFeedback] = {}
         self._lock = threading.Lock()
         self._stopped = threading.Event()
+        self._aborted: dict[str, str] = {}
         bus.subscribe(RobotFeedback, self._on_feedback)
 
     def stop(self) -> None:
@@ -35,6 +36,12 @@ class BusGripperDriver(RobotDriver):
 
     def resume(self) -> None:
         self._stopped.clear()
+
+    def abort(self, reason: str) -> None:
+        with self._lock:
+            for command_id, event in self._waiting.items():
+                self._aborted[command_id] = reason
+                event.set()
 
     def _on_feedback(self, feedback: RobotFeedback) -> None:
         with self._lock:
@@ -73,11 +80,14 @@ class BusGripperDriver(RobotDriver):
                 raise SkillError("driver_timeout", f"no answer to {op} within {self.timeout} s")
             if self._stopped.is_set():
                 raise SkillError("stopped", f"emergency stop during {op}")
+            if command_id in self._aborted:
+                raise SkillError(self._aborted[command_id], f"the robot went away during {op}")
             feedback = self._answers.pop(command_id)
         finally:
             with self._lock:
                 self._waiting.pop(command_id, None)
                 self._answers.pop(command_id, None)
+                self._aborted.pop(command_id, None)
         if not feedback.ok:
             raise SkillError(feedback.reason or "driver_error", feedback.detail)
 

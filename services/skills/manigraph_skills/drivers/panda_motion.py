@@ -57,6 +57,10 @@ class JointTransport(Protocol):
         """Accept trajectories again."""
         ...
 
+    def abort(self, reason: str) -> None:
+        """The robot went away: make a running ``execute`` raise ``SkillError(reason)``."""
+        ...
+
 
 class PandaMotionDriver(RobotDriver):
     name = "panda-motion"
@@ -137,6 +141,11 @@ class PandaMotionDriver(RobotDriver):
     def resume(self) -> None:
         self._stopped = False
         self.transport.resume()
+
+    def abort(self, reason: str) -> None:
+        abort = getattr(self.transport, "abort", None)
+        if abort is not None:
+            abort(reason)
 
     # --- pieces -----------------------------------------------------------------------------
     def _open(self, decision_id: str) -> None:

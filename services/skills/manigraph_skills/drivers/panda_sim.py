@@ -39,6 +39,7 @@ class BusJointTransport:
         self._known_at = -1.0
         self._scene: Scene | None = None
         self._stopped = False
+        self._aborted: dict[str, str] = {}
         #: Scenes check placements, so a forged one must not land here either (the service
         #: counts the refusals: it sees the same scenes through its own gate).
         self._gate = SceneGate()
@@ -79,6 +80,12 @@ class BusJointTransport:
         with self._lock:
             self._stopped = False
 
+    def abort(self, reason: str) -> None:
+        with self._lock:
+            for command_id in self._waiting:
+                self._aborted[command_id] = reason
+            self._lock.notify_all()
+
     def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
         with self._lock:
             if self._stopped:
@@ -88,16 +95,26 @@ class BusJointTransport:
             self.bus.publish(command)
             with self._lock:
                 if not self._lock.wait_for(
-                    lambda: command.command_id in self._results or self._stopped, self.timeout
+                    lambda: (
+                        command.command_id in self._results
+                        or self._stopped
+                        or command.command_id in self._aborted
+                    ),
+                    self.timeout,
                 ):
                     raise SkillError("driver_timeout", f"no result within {self.timeout} s")
                 if self._stopped:  # the sim halts the arm itself on the same stop message
                     raise SkillError("stopped", "emergency stop during a trajectory")
+                if command.command_id in self._aborted:
+                    raise SkillError(
+                        self._aborted[command.command_id], "the robot went away mid-trajectory"
+                    )
                 return self._results.pop(command.command_id)
         finally:
             with self._lock:
                 self._waiting.discard(command.command_id)
                 self._results.pop(command.command_id, None)
+                self._aborted.pop(command.command_id, None)
 
     def joint_positions(self) -> np.ndarray:
         with self._lock:
