@@ -14,7 +14,10 @@ heap back to the OS (``malloc_trim``), so its RSS returns to where it was.
 The service thread publishes a ``ServiceStatus`` heartbeat every ``HEARTBEAT_SECONDS``: a
 service whose liveliness token is there but whose heartbeats stop is *stalled* (a handler that
 never returns), and ``manigraph doctor`` reports it so.
-"""
+
+A valid message a service will not act on (a scene of another episode, an action while
+stopped) is refused with :meth:`Service.reject`. Every refusal, malformed or not, is counted
+by ``<Type>:<reason>`` and published with every heartbeat (``ServiceStatus.rejections``)."""
 
 from __future__ import annotations
 
@@ -30,9 +33,10 @@ from typing import Any, ClassVar, TypeVar
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
-from manigraph_shared.errors import ManigraphError
+from manigraph_shared.errors import ManigraphError, MessageError
 from manigraph_shared.inbox import DEFAULT_CAPACITY, Inbox
 from manigraph_shared.messages import Delivery, Message, ServiceState, ServiceStatus
+from manigraph_shared.messages.status import MAX_REJECTION_KINDS
 
 M = TypeVar("M", bound=Message)
 HEARTBEAT_SECONDS = 1.0
@@ -43,6 +47,44 @@ REJECTION_REPORTS_PER_SECOND = 10.0
 REJECTION_BURST = 20
 #: Messages handled or rejected since the last trim that make a heap trim worthwhile.
 TRIM_AFTER_MESSAGES = 1000
+
+#: A refusal is logged at most this often per ``<Type>:<reason>`` (all are counted).
+REJECTION_LOG_SECONDS = 1.0
+
+
+class Rejections:
+    """Thread-safe counters of refused messages by ``<Type>:<reason>``."""
+
+    def __init__(self) -> None:
+        self._counts: dict[str, int] = {}
+        self._logged: dict[str, float] = {}
+        self._lock = threading.Lock()
+
+    def add(self, kind: str) -> bool:
+        """Count one refusal; True when it is time to log this kind again."""
+        now = time.monotonic()
+        with self._lock:
+            if kind not in self._counts and len(self._counts) >= MAX_REJECTION_KINDS - 1:
+                kind = "other"
+            self._counts[kind] = self._counts.get(kind, 0) + 1
+            if now - self._logged.get(kind, -REJECTION_LOG_SECONDS) >= REJECTION_LOG_SECONDS:
+                self._logged[kind] = now
+                return True
+            return False
+
+    def snapshot(self) -> dict[str, int]:
+        with self._lock:
+            return dict(self._counts)
+
+    @property
+    def total(self) -> int:
+        with self._lock:
+            return sum(self._counts.values())
+
+
+def type_label(message_type: str) -> str:
+    """``manigraph.Scene`` -> ``Scene``."""
+    return message_type.rsplit(".", 1)[-1]
 
 
 class Service:
@@ -57,16 +99,20 @@ class Service:
         self.log = logging.getLogger(f"manigraph.{self.name}")
         self._inbox = Inbox(INBOX_CAPACITY)
         self.messages_in = 0
-        self.messages_rejected = 0
+        self.rejections = Rejections()
         self.last_error = ""
         self.stop_event = threading.Event()
-        self._rejections: deque[ManigraphError] = deque()
+        self._errors_to_report: deque[ManigraphError] = deque()
         self._rejections_unreported = 0
         self._rejection_lock = threading.Lock()
         self._report_tokens = float(REJECTION_BURST)
         self._tokens_at = time.monotonic()
         self._dropped_reported = 0
         self._activity_at_trim = 0
+
+    @property
+    def messages_rejected(self) -> int:
+        return self.rejections.total
 
     # --- wiring -----------------------------------------------------------------------------
     def on(
@@ -87,9 +133,19 @@ class Service:
 
         self.bus.subscribe(message_type, enqueue, on_error=self._rejected, key=key)
 
-    def call_soon(self, handler: Callable[[Any], None], argument: Any = None) -> None:
-        """Run ``handler(argument)`` on the service thread (never dropped)."""
+    def call_soon(self, handler: Callable[[Any], None], argument: Any = None) -> bool:
+        """Run ``handler(argument)`` on the service thread: the service's own work, never
+        dropped (so always True)."""
         self._inbox.put_unbounded(handler, argument)
+        return True
+
+    def reject(self, message: Message | str, reason: str, detail: str = "") -> None:
+        """Refuse a valid ``message`` (or a message type's name): count it by type and
+        ``reason``, log it now and then. Safe from any thread; never blocks."""
+        name = message if isinstance(message, str) else type(message).type_name()
+        kind = f"{type_label(name)}:{reason}"
+        if self.rejections.add(kind):
+            self.log.warning("refused %s%s", kind, f" ({detail})" if detail else "")
 
     def setup(self) -> None:
         """Declare subscriptions, queryables and publishers."""
@@ -114,16 +170,18 @@ class Service:
                 detail=detail[:2048],
                 messages_in=self.messages_in,
                 messages_rejected=self.messages_rejected,
+                rejections=self.rejections.snapshot(),
                 stamp=time.time(),
             )
         )
 
     def _rejected(self, error: ManigraphError) -> None:
         # Zenoh thread: count here, report on the service thread (bounded, see run).
+        name = error.message_type if isinstance(error, MessageError) else "handler"
+        self.rejections.add(f"{type_label(name)}:invalid")
         with self._rejection_lock:
-            self.messages_rejected += 1
-            if len(self._rejections) < REJECTION_BURST:
-                self._rejections.append(error)
+            if len(self._errors_to_report) < REJECTION_BURST:
+                self._errors_to_report.append(error)
             else:
                 self._rejections_unreported += 1
 
@@ -136,9 +194,9 @@ class Service:
         self._tokens_at = now
         while self._report_tokens >= 1.0:
             with self._rejection_lock:
-                if not self._rejections:
+                if not self._errors_to_report:
                     break
-                error = self._rejections.popleft()
+                error = self._errors_to_report.popleft()
                 unreported, self._rejections_unreported = self._rejections_unreported, 0
             self._report_tokens -= 1.0
             suffix = f" (and {unreported} more rejected, not reported one by one)"

@@ -27,3 +27,9 @@ class FrankaDriver(RobotDriver):
 
     def place(self, motion: Motion) -> None:
         raise NotImplementedError
+
+    def stop(self) -> None:
+        raise NotImplementedError
+
+    def resume(self) -> None:
+        raise NotImplementedError

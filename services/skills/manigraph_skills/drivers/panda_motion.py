@@ -20,6 +20,7 @@ from typing import Protocol
 import numpy as np
 
 from manigraph_shared.errors import SkillError
+from manigraph_shared.ids import derived_id
 from manigraph_shared.messages import (
     GripperTarget,
     JointTrajectoryCommand,
@@ -47,6 +48,18 @@ class JointTransport(Protocol):
         """Where ``object_id`` is, observed after time ``after``; None if unknown."""
         ...
 
+    def stop(self) -> None:
+        """Emergency stop: make a running ``execute`` return or raise at once."""
+        ...
+
+    def resume(self) -> None:
+        """Accept trajectories again."""
+        ...
+
+    def abort(self, reason: str) -> None:
+        """The robot went away: make a running ``execute`` raise ``SkillError(reason)``."""
+        ...
+
 
 class PandaMotionDriver(RobotDriver):
     name = "panda-motion"
@@ -64,6 +77,7 @@ class PandaMotionDriver(RobotDriver):
         self.min_grasp_width = options.min_grasp_width
         self.placement_tolerance = options.placement_tolerance
         self._ids = itertools.count()
+        self._stopped = False
 
     def pick(self, motion: Motion) -> None:
         decision_id, object_id, grasp = motion.decision_id, motion.object_id, motion.grasp
@@ -104,6 +118,19 @@ class PandaMotionDriver(RobotDriver):
                     "placement_missed", f"{object_id} rests {miss * 1000:.0f} mm from its goal"
                 )
 
+    def stop(self) -> None:
+        self._stopped = True
+        self.transport.stop()
+
+    def resume(self) -> None:
+        self._stopped = False
+        self.transport.resume()
+
+    def abort(self, reason: str) -> None:
+        abort = getattr(self.transport, "abort", None)
+        if abort is not None:
+            abort(reason)
+
     # --- pieces -----------------------------------------------------------------------------
     def _open(self, decision_id: str) -> None:
         """After a lost grasp: open and back off, so the next attempt starts clean."""
@@ -113,6 +140,8 @@ class PandaMotionDriver(RobotDriver):
         self, decision_id: str, plan: Callable[[np.ndarray], JointTrajectory]
     ) -> JointTrajectoryResult:
         """Plan from the arm's joints and execute; plan once more if the arm was elsewhere."""
+        if self._stopped:
+            raise SkillError("stopped", "emergency stop engaged")
         q = self.transport.joint_positions()
         for _attempt in range(2):
             trajectory = plan(q)  # raises SkillError('no_ik_solution') before any motion
@@ -126,7 +155,7 @@ class PandaMotionDriver(RobotDriver):
 
     def _command(self, decision_id: str, trajectory: JointTrajectory) -> JointTrajectoryCommand:
         return JointTrajectoryCommand(
-            command_id=f"{decision_id}.{next(self._ids)}",
+            command_id=derived_id(decision_id, ".", str(next(self._ids))),
             decision_id=decision_id,
             joint_names=list(self.model.joint_names),
             points=[
