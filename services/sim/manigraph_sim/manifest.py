@@ -2,6 +2,7 @@
 
 from manigraph_shared.manifest import Manifest, port
 from manigraph_shared.messages import (
+    EmergencyStop,
     EpisodeEvent,
     EpisodeRequest,
     JointState,
@@ -22,6 +23,7 @@ MANIFEST = Manifest(
     service="sim",
     summary="geometric or physics world",
     consumes=(
+        port(EmergencyStop),
         port(RobotCommand, GRIPPER),
         port(JointTrajectoryCommand, JOINTS),
         port(SkillStatus),
