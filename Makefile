@@ -44,7 +44,7 @@ bench: install  ## speed figures (not tests): medians and ratios
 	$(RUN) python bench/bench_ik.py
 	$(RUN) python bench/bench_physics.py
 
-soak: install  ## long reliability soak (~1 h): fuzz every key, floods, explain bomb, then 3 episodes
+soak: install  ## reliability soak (~30 min): 100k fuzzed payloads per key, floods, explain bomb, then 3 episodes
 	$(RUN) python bench/soak.py
 	$(RUN) python bench/soak_flood.py
 

@@ -67,7 +67,11 @@ def lost_window_ms(tmp: Path, run: int) -> float:
         with log.open("rb") as stream:  # the standard reader, summary and all
             reader = make_reader(stream)
             assert reader.get_summary() is not None
-            kept = {Action.decode(m.data).scene_sequence for _, _, m in reader.iter_messages()}
+            kept = {
+                Action.decode(m.data).scene_sequence
+                for _, channel, m in reader.iter_messages()
+                if channel.topic == Action.key
+            }
     lost = [at for step, at in published.items() if at < killed_at and step not in kept]
     return 1000 * (killed_at - min(lost)) if lost else 0.0
 

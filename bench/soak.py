@@ -159,7 +159,12 @@ class Soak:
                 )
                 kind = "no answer"
                 for reply in replies:
-                    kind = "explanation" if reply.ok is not None else "error reply"
+                    if reply.ok is not None:
+                        kind = "explanation"
+                    else:
+                        text = reply.err.payload.to_string() if reply.err is not None else ""
+                        # zenoh answers a query nobody replied to in time with "Timeout"
+                        kind = "timed out" if "timeout" in text.lower() else "error reply"
                     break
                 answers.append((time.perf_counter() - started, kind))
 
@@ -170,12 +175,12 @@ class Soak:
                 thread.join()
             slowest = max(t for t, _ in answers)
             kinds = collections.Counter(k for _, k in answers)
-            held = "no answer" not in kinds and slowest <= deadline
+            held = not ({"no answer", "timed out"} & set(kinds)) and slowest < deadline
             counts = (
                 f"3 x {len(request) // 1024} KiB requests; answers: {dict(kinds)}; "
                 f"slowest {slowest:.1f} s"
             )
-            return counts, "-", held, ""
+            return counts, "-", held, "" if held else f"no explanation within {deadline:g} s"
 
         return run
 

@@ -130,13 +130,29 @@ class EpisodePlan:
 
 
 def read_task_file(path: Path | None) -> str | None:
-    """The text of a ``--task-file`` (validated later, by the sim), or None without one."""
+    """The text of a ``--task-file`` (its layout is validated later, by the sim), or None
+    without one. A file too long to travel in a reset request is refused here."""
     if path is None:
         return None
     try:
-        return path.read_text()
-    except OSError as exc:
-        raise ConfigError("task-file", f"cannot read {path}: {exc.strerror}") from None
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
+        raise ConfigError("task-file", f"cannot read {path}: {why}") from None
+    limit = _task_file_limit()
+    if len(text) > limit:
+        raise ConfigError(
+            "task-file", f"{path} has {len(text):,} characters; a task file holds at most {limit:,}"
+        )
+    return text
+
+
+def _task_file_limit() -> int:
+    """``EpisodeRequest.task_file``'s max_length, from the contract itself."""
+    for constraint in EpisodeRequest.model_fields["task_file"].metadata:
+        if hasattr(constraint, "max_length"):
+            return int(constraint.max_length)
+    raise AssertionError("EpisodeRequest.task_file lost its max_length")
 
 
 class ServiceWatch:

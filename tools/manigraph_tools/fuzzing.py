@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from typing import Any
+from typing import Any, cast
 
 from hypothesis import strategies as st
 
@@ -61,7 +61,8 @@ def valid_messages(cls: type[Message]) -> st.SearchStrategy[Message]:
         except MessageError:
             return None
 
-    return valid_objects(cls).map(build).filter(lambda m: m is not None)  # type: ignore[return-value]
+    built = valid_objects(cls).map(build).filter(lambda m: m is not None)
+    return cast("st.SearchStrategy[Message]", built)
 
 
 def _from_schema(schema: dict[str, Any], defs: dict[str, Any]) -> st.SearchStrategy[Any]:
