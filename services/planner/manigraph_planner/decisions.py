@@ -65,6 +65,7 @@ class DecisionMaker:
     def __init__(
         self,
         policy: Policy,
+        *,
         clock: Callable[[], float] = time.time,
         decision_timeout: float = 30.0,
     ) -> None:

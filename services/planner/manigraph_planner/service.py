@@ -53,7 +53,7 @@ class PlannerService(Service):
         decision_timeout: float = 30.0,
     ) -> None:
         super().__init__(bus)
-        self.decisions = DecisionMaker(policy, decision_timeout)
+        self.decisions = DecisionMaker(policy, decision_timeout=decision_timeout)
         self.gate = SceneGate()
         self.skills_alive = True
         self.explain = ExplainHandler(policy, self.decisions.history)
