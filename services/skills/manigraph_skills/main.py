@@ -17,10 +17,16 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="reachable box xmin,xmax,ymin,ymax,zmin,zmax in metres (robot frame)",
     )
+    parser.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="plan, validate and log every trajectory, move nothing (driver franka)",
+    )
     add_bus_arguments(parser)
 
 
 def _run(args: argparse.Namespace) -> int:
+    from manigraph_shared.errors import ConfigError
     from manigraph_shared.service import run_service
     from manigraph_skills.drivers import DRIVERS, create_driver
     from manigraph_skills.service import SkillsService
@@ -29,8 +35,16 @@ def _run(args: argparse.Namespace) -> int:
     workspace = Workspace.parse(args.workspace) if args.workspace else Workspace()
     if args.driver not in DRIVERS:
         create_driver(args.driver)  # raises the ConfigError naming the choices
+    options: dict[str, object] = {}
+    if args.dry_run:
+        if not DRIVERS[args.driver].supports_dry_run:  # type: ignore[attr-defined]
+            dry = sorted(n for n, d in DRIVERS.items() if getattr(d, "supports_dry_run", False))
+            raise ConfigError("dry_run", f"driver '{args.driver}' has none (only {', '.join(dry)})")
+        options["dry_run"] = True
     return run_service(
-        lambda bus: SkillsService(bus, lambda b: create_driver(args.driver, bus=b), workspace),
+        lambda bus: SkillsService(
+            bus, lambda b: create_driver(args.driver, bus=b, **options), workspace
+        ),
         bus_config_from_args(args),
     )
 

@@ -28,6 +28,8 @@ class RobotDriver(ABC):
     """Raises ``SkillError(reason)`` when the robot could not do what was asked."""
 
     name: str
+    #: Takes ``dry_run=True``: plans and validates, moves nothing (``manigraph skills --dry-run``).
+    supports_dry_run: bool = False
 
     @abstractmethod
     def pick(
