@@ -24,6 +24,7 @@ from manigraph_shared.panda import ARM_JOINTS
 from manigraph_skills.drivers import DRIVERS
 from manigraph_skills.drivers.franka import FrankaDriver
 from manigraph_skills.drivers.franka_config import FrankaConfig
+from manigraph_skills.workspace import Workspace
 from manigraph_tools.testing import free_port
 
 franky = pytest.importorskip("franky")
@@ -171,11 +172,11 @@ def test_a_trajectory_over_the_velocity_limit_is_refused_naming_the_joint() -> N
 
 
 def test_a_target_outside_the_workspace_is_refused_before_any_motion() -> None:
-    franka = driver()
+    franka = driver(workspace=Workspace(x=(0.15, 0.45), y=(-0.6, 0.6), z=(0.01, 0.8)))
     with pytest.raises(SkillError) as caught:
-        franka.pick("e:0", "block_0", Vector3(x=0.5, y=0.1, z=0.005), Quaternion())
+        franka.pick("e:0", "block_0", BLOCK, Quaternion())  # at x = 0.5
     assert caught.value.reason == "limit_exceeded"
-    assert "TCP z" in caught.value.detail
+    assert "TCP x" in caught.value.detail
     assert FakeRobot.last is not None and "move" not in FakeRobot.last.calls
 
 

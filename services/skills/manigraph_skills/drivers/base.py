@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import Quaternion, Vector3
+from manigraph_skills.obstacles import Obstacle
 
 
 @dataclass(frozen=True)
@@ -18,6 +19,8 @@ class Grasp:
     height: float = 0.0  # TCP above the object's centre, metres (a cover: at its handle)
     turn: float = 0.0  # hand yaw added to the driver's default, radians
     carry_z: float = 0.0  # lowest TCP height for carrying the object across, metres
+    #: What the arm must not touch on the way (a driver that plans arm motion checks it).
+    obstacles: tuple[Obstacle, ...] = ()
 
 
 #: A block's grasp at its centre, the driver's default yaw and carry heights.

@@ -4,6 +4,9 @@ trajectories to the robot. The robot end (sim or hardware) is a ``JointTransport
 Checks, each reported as a ``SkillError`` reason:
 
 * ``no_ik_solution``: a waypoint cannot be reached (nothing is sent to the robot);
+* ``collision``: an arm link would touch the table or an obstacle of the grasp
+  (``Grasp.obstacles``) on every re-plan: higher across the table and the hand turned a
+  quarter (``motion.collision``); nothing is sent to the robot;
 * ``grasp_slipped``: after closing and lifting (or after the transfer) the fingers closed to
   less than ``min_grasp_width``, so nothing is between them;
 * ``placement_missed``: after release the object's centre is more than
@@ -13,6 +16,7 @@ Checks, each reported as a ``SkillError`` reason:
 from __future__ import annotations
 
 import itertools
+import logging
 import time
 from collections.abc import Callable
 from typing import Protocol
@@ -30,7 +34,17 @@ from manigraph_shared.messages import (
 )
 from manigraph_skills.drivers.base import CENTRE_GRASP, Grasp, RobotDriver
 from manigraph_skills.motion import GraspPlanner, JointTrajectory, PandaModel, PlanConfig
+from manigraph_skills.motion.collision import ArmCollisionModel, Contact
 from manigraph_skills.motion.plan import UP, grasp_yaw
+from manigraph_skills.obstacles import Obstacle
+
+log = logging.getLogger("manigraph.skills.motion")
+
+#: Raised carry heights tried after the planned one collides, metres above the planner's
+#: ceiling (``PlanConfig.max_carry_z``); each is tried with the hand as chosen, then turned
+#: a quarter (a block or a square cover is held the same either way).
+EXTRA_CARRY = (0.0, 0.10)
+QUARTER = np.pi / 2
 
 
 class JointTransport(Protocol):
@@ -58,6 +72,7 @@ class PandaMotionDriver(RobotDriver):
         config: PlanConfig | None = None,
         min_grasp_width: float = 0.005,
         placement_tolerance: float = 0.02,
+        check_collisions: bool = True,
     ) -> None:
         if not 0 <= min_grasp_width < 0.08:
             raise ConfigError("driver.min_grasp_width", "must be in [0, 0.08) metres")
@@ -66,6 +81,7 @@ class PandaMotionDriver(RobotDriver):
         self.transport = transport
         self.model = PandaModel()
         self.planner = GraspPlanner(self.model, config)
+        self.collision = ArmCollisionModel(self.model) if check_collisions else None
         self.min_grasp_width = min_grasp_width
         self.placement_tolerance = placement_tolerance
         self._ids = itertools.count()
@@ -84,9 +100,14 @@ class PandaMotionDriver(RobotDriver):
             + grasp.turn
             + grasp_yaw((orientation.x, orientation.y, orientation.z, orientation.w))
         )
-        result = self._run(decision_id, lambda q: self.planner.pick(q, target, yaw))
+        result = self._run(
+            decision_id,
+            self._avoiding(
+                lambda q, turn, carry: self.planner.pick(q, target, yaw + turn, carry), grasp
+            ),
+        )
         if result.gripper_width < self.min_grasp_width:
-            self._open(decision_id)
+            self._open(decision_id, grasp.obstacles)
             raise SkillError(
                 "grasp_slipped",
                 f"fingers closed to {result.gripper_width * 1000:.1f} mm: {object_id} not held",
@@ -106,12 +127,15 @@ class PandaMotionDriver(RobotDriver):
         # block or a square cover looks the same after a quarter turn).
         yaw = self.planner.config.hand_yaw + grasp.turn
         carry = self._run(
-            decision_id, lambda q: self.planner.place(q, hand, yaw, carry_z=grasp.carry_z)
+            decision_id,
+            self._avoiding(
+                lambda q, turn, carry_z: self.planner.place(q, hand, yaw + turn, carry_z), grasp
+            ),
         )
         if carry.gripper_width < self.min_grasp_width:
-            self._open(decision_id)
+            self._open(decision_id, grasp.obstacles)
             raise SkillError("grasp_slipped", f"{object_id} was lost during the transfer")
-        released = self._run(decision_id, self.planner.release)
+        released = self._run(decision_id, self._checked(self.planner.release, grasp.obstacles))
         seen = self.transport.object_position(object_id, after=released.stamp)
         if seen is not None:
             miss = float(np.linalg.norm(seen - target))
@@ -121,9 +145,61 @@ class PandaMotionDriver(RobotDriver):
                 )
 
     # --- pieces -----------------------------------------------------------------------------
-    def _open(self, decision_id: str) -> None:
+    def _open(self, decision_id: str, obstacles: tuple[Obstacle, ...]) -> None:
         """After a lost grasp: open and back off, so the next attempt starts clean."""
-        self._run(decision_id, self.planner.release)
+        self._run(decision_id, self._checked(self.planner.release, obstacles))
+
+    def _avoiding(
+        self, make: Callable[[np.ndarray, float, float], JointTrajectory], grasp: Grasp
+    ) -> Callable[[np.ndarray], JointTrajectory]:
+        """``make(q, turn, carry_z)`` as planned; if an arm link would touch something,
+        re-planned higher and with the hand turned, until one is clear."""
+        ceiling = max(grasp.carry_z, self.planner.config.max_carry_z)
+        options = [(0.0, grasp.carry_z), (QUARTER, grasp.carry_z)]
+        options += [(turn, ceiling + extra) for extra in EXTRA_CARRY for turn in (0.0, QUARTER)]
+
+        def plan(q: np.ndarray) -> JointTrajectory:
+            contact = None
+            failure: SkillError | None = None
+            for turn, carry in options:
+                try:
+                    trajectory = make(q, turn, carry)
+                except SkillError as exc:  # e.g. no IK solution this high or turned
+                    failure = failure or exc
+                    continue
+                found = self._contact(trajectory, grasp.obstacles)
+                if found is None:
+                    if contact is not None:
+                        log.info(
+                            "re-planned around %s: carry %.2f m, turn %.2f", contact, carry, turn
+                        )
+                    return trajectory
+                contact = contact or found
+            if contact is not None:
+                raise SkillError("collision", f"{contact} (and on every re-plan)")
+            assert failure is not None
+            raise failure
+
+        return plan
+
+    def _checked(
+        self, make: Callable[[np.ndarray], JointTrajectory], obstacles: tuple[Obstacle, ...]
+    ) -> Callable[[np.ndarray], JointTrajectory]:
+        def plan(q: np.ndarray) -> JointTrajectory:
+            trajectory = make(q)
+            found = self._contact(trajectory, obstacles)
+            if found is not None:
+                raise SkillError("collision", str(found))
+            return trajectory
+
+        return plan
+
+    def _contact(
+        self, trajectory: JointTrajectory, obstacles: tuple[Obstacle, ...]
+    ) -> Contact | None:
+        if self.collision is None:
+            return None
+        return self.collision.first_contact(trajectory, obstacles)
 
     def _run(
         self, decision_id: str, plan: Callable[[np.ndarray], JointTrajectory]
