@@ -177,3 +177,22 @@ def test_boxes_are_walls_under_their_cover_goals() -> None:
     assert len(walls) == 4
     assert all(abs(w.size[2] - 0.05) < 1e-9 and abs(w.centre[2] - 0.025) < 1e-9 for w in walls)
     assert {round(w.centre[0], 3) for w in walls} == {0.38, 0.5, 0.62}
+
+
+def test_a_forearm_over_a_tower_before_a_far_low_grasp_swings_its_elbow_aside(
+    collision: ArmCollisionModel,
+) -> None:
+    # Six-block stacking, seed 1: the goal tower stands 15 cm in front of the last block.
+    # Higher or turned, the forearm still sweeps the tower's top; the elbow swung aside clears.
+    item = block("block_0", 0.505, 0.315)
+    world = scene(item, *tower("goal", 0.358, 0.314, 5))
+    pick, _ = choose_grasps(world, item, Vector3(x=0.358, y=0.314, z=0.22))
+    planner = GraspPlanner(PandaModel())
+    planned = planner.pick(HOME_Q, np.array(item.position.as_tuple()), np.pi / 2)
+    contact = collision.first_contact(planned, pick.obstacles)
+    assert contact is not None and contact.link == "panda_link5"
+    arm = PerfectArm()
+    PandaMotionDriver(arm).pick("e:0", item.id, item.position, item.orientation, pick)
+    (sent,) = arm.sent
+    assert collision.first_contact(trajectory_of(sent), pick.obstacles) is None
+    assert np.allclose(PandaModel().tcp_pose(arm.q).translation, [0.505, 0.315, 0.1], atol=1e-3)

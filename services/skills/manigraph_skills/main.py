@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import os
+from collections.abc import Mapping
 
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
@@ -10,7 +12,10 @@ from manigraph_shared.cli import Command
 
 def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--driver", default="sim-gripper", help="robot driver (default sim-gripper)"
+        "--driver",
+        default="sim-gripper",
+        help="robot driver (default sim-gripper); auto: the one the sim backend named by "
+        "MANIGRAPH_SIM_BACKEND (default geometric) offers what it needs, from the manifests",
     )
     parser.add_argument(
         "--workspace",
@@ -33,6 +38,8 @@ def _run(args: argparse.Namespace) -> int:
     from manigraph_skills.workspace import Workspace
 
     workspace = Workspace.parse(args.workspace) if args.workspace else Workspace()
+    if args.driver == "auto":
+        args.driver = auto_driver(os.environ)
     if args.driver not in DRIVERS:
         create_driver(args.driver)  # raises the ConfigError naming the choices
     options: dict[str, object] = {}
@@ -47,6 +54,13 @@ def _run(args: argparse.Namespace) -> int:
         ),
         bus_config_from_args(args),
     )
+
+
+def auto_driver(environ: Mapping[str, str]) -> str:
+    """``--driver auto``: the driver for the sim backend ``MANIGRAPH_SIM_BACKEND`` names."""
+    from manigraph_shared.manifest import driver_for_backend
+
+    return driver_for_backend(environ.get("MANIGRAPH_SIM_BACKEND", "geometric").strip())
 
 
 command = Command(

@@ -40,11 +40,14 @@ from manigraph_skills.obstacles import Obstacle
 
 log = logging.getLogger("manigraph.skills.motion")
 
-#: Raised carry heights tried after the planned one collides, metres above the planner's
-#: ceiling (``PlanConfig.max_carry_z``); each is tried with the hand as chosen, then turned
-#: a quarter (a block or a square cover is held the same either way).
-EXTRA_CARRY = (0.0, 0.10)
+#: After the planned motion collides: the carry height as chosen, then the planner's
+#: ceiling (``PlanConfig.max_carry_z``); at each, the arm as planned and with its elbow swung
+#: to either side of the target's bearing (``ELBOW_SWING``), each with the hand as chosen and
+#: turned a quarter (a block or a square cover is held the same either way).
 QUARTER = np.pi / 2
+#: Gain of the null-space elbow swing (``IKSolver.elbow_push``): small, as it acts at every
+#: IK sample along the motion (at 0.05 the elbow of a far, low grasp swings ~0.3 m aside).
+ELBOW_SWING = 0.05
 
 
 class JointTransport(Protocol):
@@ -103,7 +106,9 @@ class PandaMotionDriver(RobotDriver):
         result = self._run(
             decision_id,
             self._avoiding(
-                lambda q, turn, carry: self.planner.pick(q, target, yaw + turn, carry), grasp
+                lambda planner, q, turn, carry: planner.pick(q, target, yaw + turn, carry),
+                grasp,
+                target,
             ),
         )
         if result.gripper_width < self.min_grasp_width:
@@ -129,7 +134,9 @@ class PandaMotionDriver(RobotDriver):
         carry = self._run(
             decision_id,
             self._avoiding(
-                lambda q, turn, carry_z: self.planner.place(q, hand, yaw + turn, carry_z), grasp
+                lambda planner, q, turn, carry_z: planner.place(q, hand, yaw + turn, carry_z),
+                grasp,
+                hand,
             ),
         )
         if carry.gripper_width < self.min_grasp_width:
@@ -150,20 +157,34 @@ class PandaMotionDriver(RobotDriver):
         self._run(decision_id, self._checked(self.planner.release, obstacles))
 
     def _avoiding(
-        self, make: Callable[[np.ndarray, float, float], JointTrajectory], grasp: Grasp
+        self,
+        make: Callable[[GraspPlanner, np.ndarray, float, float], JointTrajectory],
+        grasp: Grasp,
+        target: np.ndarray,
     ) -> Callable[[np.ndarray], JointTrajectory]:
-        """``make(q, turn, carry_z)`` as planned; if an arm link would touch something,
-        re-planned higher and with the hand turned, until one is clear."""
-        ceiling = max(grasp.carry_z, self.planner.config.max_carry_z)
-        options = [(0.0, grasp.carry_z), (QUARTER, grasp.carry_z)]
-        options += [(turn, ceiling + extra) for extra in EXTRA_CARRY for turn in (0.0, QUARTER)]
+        """``make(planner, q, turn, carry_z)`` as planned; if an arm link would touch
+        something, re-planned with the hand turned, the elbow swung aside and higher, until
+        one is clear."""
+        heights = [grasp.carry_z, max(grasp.carry_z, self.planner.config.max_carry_z)]
+        bearing = float(np.arctan2(target[1], target[0]))
+        aside = ELBOW_SWING * np.array([-np.sin(bearing), np.cos(bearing), 0.0])
+        planners = [self.planner] + [
+            GraspPlanner(self.model, self.planner.config, elbow_push=tuple(side * aside))
+            for side in (1.0, -1.0)
+        ]
+        options = [
+            (planner, turn, carry)
+            for carry in heights
+            for planner in planners
+            for turn in (0.0, QUARTER)
+        ]
 
         def plan(q: np.ndarray) -> JointTrajectory:
             contact = None
             failure: SkillError | None = None
-            for turn, carry in options:
+            for planner, turn, carry in options:
                 try:
-                    trajectory = make(q, turn, carry)
+                    trajectory = make(planner, q, turn, carry)
                 except SkillError as exc:  # e.g. no IK solution this high or turned
                     failure = failure or exc
                     continue
@@ -171,7 +192,11 @@ class PandaMotionDriver(RobotDriver):
                 if found is None:
                     if contact is not None:
                         log.info(
-                            "re-planned around %s: carry %.2f m, turn %.2f", contact, carry, turn
+                            "re-planned around %s: carry %.2f m, turn %.2f, elbow %s",
+                            contact,
+                            carry,
+                            turn,
+                            "as planned" if planner is self.planner else "swung aside",
                         )
                     return trajectory
                 contact = contact or found

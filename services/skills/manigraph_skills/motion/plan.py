@@ -68,9 +68,15 @@ def grasp_yaw(quaternion_xyzw: tuple[float, float, float, float]) -> float:
 class GraspPlanner:
     """Plans pick and place trajectories for the Panda from its current joint state."""
 
-    def __init__(self, model: PandaModel, config: PlanConfig | None = None) -> None:
+    def __init__(
+        self,
+        model: PandaModel,
+        config: PlanConfig | None = None,
+        elbow_push: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    ) -> None:
+        """``elbow_push``: every IK solution also swings the elbow that way (``IKSolver``)."""
         self.model = model
-        self.ik = IKSolver(model)
+        self.ik = IKSolver(model, elbow_push=elbow_push)
         self.config = config or PlanConfig()
         self.joint_speed = model.velocity_limit * self.config.joint_speed_fraction
 
