@@ -20,8 +20,9 @@ from manigraph_shared.messages import (
 )
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.grasp_choice import choose_grasps
-from manigraph_skills.motion import HOME_Q, GraspPlanner, JointTrajectory, PandaModel
+from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, JointTrajectory, PandaModel
 from manigraph_skills.motion.collision import ArmCollisionModel
+from manigraph_skills.motion.model import top_down
 from manigraph_skills.obstacles import Obstacle, box_walls
 
 BLOCK = 0.04
@@ -196,3 +197,23 @@ def test_a_forearm_over_a_tower_before_a_far_low_grasp_swings_its_elbow_aside(
     (sent,) = arm.sent
     assert collision.first_contact(trajectory_of(sent), pick.obstacles) is None
     assert np.allclose(PandaModel().tcp_pose(arm.q).translation, [0.505, 0.315, 0.1], atol=1e-3)
+
+
+def test_from_above_the_tower_a_short_motion_swings_the_elbow_harder(
+    collision: ArmCollisionModel,
+) -> None:
+    # The same episode a move later: the hand has just released on the tower (5 high) and
+    # goes out to the block beside it; a gentle swing adds up too little over so short a path.
+    item = block("block_0", 0.505, 0.315)
+    world = scene(item, *tower("goal", 0.357, 0.314, 5))
+    pick, _ = choose_grasps(world, item, Vector3(x=0.357, y=0.314, z=0.22))
+    model = PandaModel()
+    arm = PerfectArm()
+    arm.q = IKSolver(model).solve_or_raise(
+        top_down(np.array([0.357, 0.314, 0.3]), np.pi / 2), HOME_Q, "start"
+    )
+    planned = GraspPlanner(model).pick(arm.q, np.array(item.position.as_tuple()), np.pi / 2)
+    assert collision.first_contact(planned, pick.obstacles) is not None
+    PandaMotionDriver(arm).pick("e:0", item.id, item.position, item.orientation, pick)
+    (sent,) = arm.sent
+    assert collision.first_contact(trajectory_of(sent), pick.obstacles) is None

@@ -45,9 +45,11 @@ log = logging.getLogger("manigraph.skills.motion")
 #: to either side of the target's bearing (``ELBOW_SWING``), each with the hand as chosen and
 #: turned a quarter (a block or a square cover is held the same either way).
 QUARTER = np.pi / 2
-#: Gain of the null-space elbow swing (``IKSolver.elbow_push``): small, as it acts at every
-#: IK sample along the motion (at 0.05 the elbow of a far, low grasp swings ~0.3 m aside).
-ELBOW_SWING = 0.05
+#: Gains of the null-space elbow swing (``IKSolver.elbow_push``), gentle first: it acts at
+#: every IK sample along the motion, so it adds up over a long one (at 0.05 the elbow of a
+#: far, low grasp from the home pose swings ~0.3 m aside) but not over a short one (from
+#: above a tower to a block beside it only 0.3 cleared the tower).
+ELBOW_SWING = (0.05, 0.3)
 
 
 class JointTransport(Protocol):
@@ -167,9 +169,10 @@ class PandaMotionDriver(RobotDriver):
         one is clear."""
         heights = [grasp.carry_z, max(grasp.carry_z, self.planner.config.max_carry_z)]
         bearing = float(np.arctan2(target[1], target[0]))
-        aside = ELBOW_SWING * np.array([-np.sin(bearing), np.cos(bearing), 0.0])
+        aside = np.array([-np.sin(bearing), np.cos(bearing), 0.0])
         planners = [self.planner] + [
-            GraspPlanner(self.model, self.planner.config, elbow_push=tuple(side * aside))
+            GraspPlanner(self.model, self.planner.config, elbow_push=tuple(gain * side * aside))
+            for gain in ELBOW_SWING
             for side in (1.0, -1.0)
         ]
         options = [
