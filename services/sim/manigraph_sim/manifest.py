@@ -1,6 +1,6 @@
 """What the sim service consumes and produces (see ``manigraph_shared.manifest``)."""
 
-from manigraph_shared.manifest import Manifest, port
+from manigraph_shared.manifest import WORLD_ABILITIES, Manifest, port
 from manigraph_shared.messages import (
     EmergencyStop,
     EpisodeEvent,
@@ -38,5 +38,5 @@ MANIFEST = Manifest(
     ),
     serves=(port(EpisodeRequest),),
     variant_option="backend",
-    variants={"geometric": frozenset({GRIPPER}), "physics": frozenset({JOINTS})},
+    variants=dict(WORLD_ABILITIES),  # geometric: GRIPPER, physics: JOINTS
 )

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from manigraph_shared.messages import Quaternion, Vector3
+from manigraph_skills.obstacles import Obstacle
 
 
 @dataclass(frozen=True)
@@ -22,6 +23,8 @@ class Grasp:
     height: float = 0.0  # TCP above the object's centre, metres (a cover: at its handle)
     turn: float = 0.0  # hand yaw added to the driver's default, radians
     carry_z: float = 0.0  # lowest TCP height for carrying the object across, metres
+    #: What the arm must not touch on the way (a driver that plans arm motion checks it).
+    obstacles: tuple[Obstacle, ...] = ()
 
 
 #: A block's grasp at its centre, the driver's default yaw and carry heights.
