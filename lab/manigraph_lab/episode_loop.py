@@ -118,7 +118,7 @@ def run_episode(
     backend = backend_factory()
     clock = StepClock()
     start = backend.reset(request, clock())
-    planner = DecisionMaker(policy, clock)
+    planner = DecisionMaker(policy, clock=clock)
     planner.on_episode(start)
     skill = in_process_skill(backend, clock, driver_factory, workspace)
     rng = np.random.default_rng([request.seed, 7919])

@@ -186,7 +186,7 @@ def test_episodes_that_succeed_without_recovery_take_the_same_decisions_with_it(
     monkeypatch.setattr(
         episode_loop,
         "DecisionMaker",
-        lambda policy, clock: DecisionMaker(policy, clock, NeverPassOver()),
+        lambda policy, clock: DecisionMaker(policy, clock=clock, progress=NeverPassOver()),
     )
     without = [run_episode(policy, r) for r in requests]
     assert any(r.success for r in without)

@@ -9,7 +9,13 @@ from manigraph_shared.messages.base import (
     key_matches,
     message_type_for_key,
 )
-from manigraph_shared.messages.decision import Action, SkillState, SkillStatus, TrayAction
+from manigraph_shared.messages.decision import (
+    REFUSAL_REASONS,
+    Action,
+    SkillState,
+    SkillStatus,
+    TrayAction,
+)
 from manigraph_shared.messages.episode import EpisodeEvent, EpisodePhase, EpisodeRequest
 from manigraph_shared.messages.robot import GripperOp, RobotCommand, RobotFeedback
 from manigraph_shared.messages.scene import (
@@ -23,6 +29,7 @@ from manigraph_shared.messages.status import ServiceState, ServiceStatus
 
 __all__ = [
     "MAX_PAYLOAD_BYTES",
+    "REFUSAL_REASONS",
     "Action",
     "Delivery",
     "EpisodeEvent",
@@ -72,3 +79,7 @@ from manigraph_shared.messages.explanation import (  # noqa: E402  (appended: th
 )
 
 __all__ += ["ExplainRequest", "ExplainedEdge", "ExplainedNode", "Explanation"]
+
+from manigraph_shared.messages.estop import EmergencyStop  # noqa: E402  (appended: the e-stop)
+
+__all__ += ["EmergencyStop"]

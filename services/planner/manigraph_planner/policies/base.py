@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from manigraph_shared.errors import PolicyError
+from manigraph_shared.ids import derived_id
 from manigraph_shared.messages import Action, Scene, TrayAction
 from manigraph_shared.registry import Registry
 
@@ -33,10 +34,11 @@ class Decision:
         recovery: str | None = None,
     ) -> Action:
         """The contract message for this decision, step ``step`` of the scene's episode; the id
-        ``<episode>:<step>`` is what lets a recorded log drive a fresh planner to the same ids.
+        ``<episode>:<step>`` is what lets a recorded log drive a fresh planner to the same ids
+        (an episode id too long for that is shortened with a hash: ``manigraph_shared.ids``).
         ``rank`` and ``recovery`` say that the policy's first choice was passed over, and why."""
         return Action(
-            decision_id=f"{scene.episode_id}:{step}",
+            decision_id=derived_id(scene.episode_id, ":", str(step)),
             episode_id=scene.episode_id,
             scene_sequence=scene.sequence,
             object_id=self.object_id,

@@ -39,11 +39,15 @@ positions never take one another's place (a draw that cannot avoid it is refused
 object). Every required goal needs an object of its category that is not a spare.
 
 A syntax error names the line and column; a bad value names the field
-(``goals.0.position.2: ...``).
+(``goals.0.position.2: ...``). Layouts that cannot happen are refused too, naming the object
+or goal: objects that overlap one another, objects below the table, objects or goals outside
+the robot's reach (``REACH``, the skills' default workspace, after ``randomize_xy``), block
+goals closer than a block's width, and more required block (cover) goals than blocks (covers).
 """
 
 from __future__ import annotations
 
+import itertools
 import tomllib
 from typing import Annotated, Literal
 
@@ -57,6 +61,17 @@ from manigraph_sim.world_model import Body, Container, Goal, Layout
 Coordinate = Annotated[float, Field(ge=-5.0, le=5.0)]
 Extent = Annotated[float, Field(gt=0.0, le=2.0)]
 Name = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.:\-]{1,64}$")]
+
+#: Where the robot can reach, robot frame, metres: the skills service's default workspace
+#: (services never import each other, so the bounds are repeated here). A goal or object
+#: outside it, after the layout's random shift, is a layout that cannot happen.
+REACH = ((0.1, 0.9), (-0.6, 0.6), (-0.01, 2.0))
+#: Bodies may touch (a stack's blocks share a face) but not interpenetrate by more than this.
+OVERLAP_TOLERANCE = 1e-3
+#: Layout problems named in one error; a file of 256 stacked-up blocks has 32,640 of them.
+MAX_PROBLEMS_NAMED = 10
+#: A block goal is a place for one block: two closer than this cannot both be filled.
+BLOCK_WIDTH = 0.04
 
 
 class _Strict(BaseModel):
@@ -121,14 +136,6 @@ class TaskFile(_Strict):
             raise ValueError(f"id: used twice: {', '.join(duplicates)}")
         if all(goal.optional for goal in self.goals):
             raise ValueError("goals: at least one goal must not be optional")
-        for category in ("block", "cover"):
-            required = sum(g.category == category and not g.optional for g in self.goals)
-            usable = sum(o.category == category and not o.spare for o in self.objects)
-            if usable < required:
-                raise ValueError(
-                    f"objects: {required} required {category} goal(s) but only {usable} "
-                    f"{category}(s) that are not spares"
-                )
         for index, item in enumerate(self.objects):
             base = self.support_of(index)
             if base is not None and (item.jitter > 0 or item.positions is not None):
@@ -136,7 +143,93 @@ class TaskFile(_Strict):
                     f"objects.{index}: rests on {self.objects[base].id} and moves with it; "
                     "give it neither jitter nor positions"
                 )
+        problems = [
+            *self._outside_reach(),
+            *self._overlapping_objects(),
+            *self._crowded_block_goals(),
+            *self._too_many_goals(),
+        ]
+        if problems:
+            shown = problems[:MAX_PROBLEMS_NAMED]
+            more = len(problems) - len(shown)
+            raise ValueError("; ".join(shown) + (f"; and {more} more" if more else ""))
         return self
+
+    def _outside_reach(self) -> list[str]:
+        places = [
+            (f"objects.{i}", o.id, position, jitter)
+            for i, o in enumerate(self.objects)
+            for position, jitter in self.placements(i)
+        ]
+        places += [(f"goals.{i}", g.id, g.position, 0.0) for i, g in enumerate(self.goals)]
+        problems = []
+        for field, name, position, jitter in places:
+            shift_xy = self.randomize_xy + jitter
+            margin = (shift_xy, shift_xy, 0.0)
+            for axis, (value, (low, high), shift) in enumerate(
+                zip(position, REACH, margin, strict=True)
+            ):
+                if not (low <= value - shift and value + shift <= high):
+                    problems.append(
+                        f"{field}.position.{axis}: {name} at {value:g} m is outside the "
+                        f"robot's reach [{low:g}, {high:g}]"
+                        + (f" (with randomize_xy and jitter {shift:g})" if shift else "")
+                    )
+        for i, o in enumerate(self.objects):
+            bottom = o.anchor[2] - o.size[2] / 2
+            if bottom < -OVERLAP_TOLERANCE:
+                problems.append(
+                    f"objects.{i}.position.2: {o.id} reaches {-bottom:g} m below the table"
+                )
+        return problems
+
+    def _overlapping_objects(self) -> list[str]:
+        """Objects that overlap in some draw (jitter at its worst; two objects choosing the
+        same listed position never both take it)."""
+        problems = []
+        for i, a in enumerate(self.objects):
+            for j in range(i + 1, len(self.objects)):
+                b = self.objects[j]
+                depth = max(
+                    (
+                        self._depth(pa, pb, a.size, b.size, ja + jb)
+                        for (pa, ja), (pb, jb) in itertools.product(
+                            self.placements(i), self.placements(j)
+                        )
+                        if not self._exclusive(i, j, pa, pb)
+                    ),
+                    default=0.0,
+                )
+                if depth > OVERLAP_TOLERANCE:
+                    problems.append(
+                        f"objects.{j}: {b.id} overlaps objects.{i} ({a.id}) by {depth * 100:.1f} cm"
+                    )
+        return problems
+
+    def _crowded_block_goals(self) -> list[str]:
+        blocks = [(i, g) for i, g in enumerate(self.goals) if g.category == "block"]
+        problems = []
+        for n, (i, a) in enumerate(blocks):
+            for j, b in blocks[n + 1 :]:
+                gap = max(abs(pa - pb) for pa, pb in zip(a.position, b.position, strict=True))
+                if gap < BLOCK_WIDTH - OVERLAP_TOLERANCE:
+                    problems.append(
+                        f"goals.{j}: {b.id} is {gap * 100:.1f} cm from goals.{i} ({a.id}); "
+                        f"two blocks need {BLOCK_WIDTH * 100:.0f} cm"
+                    )
+        return problems
+
+    def _too_many_goals(self) -> list[str]:
+        problems = []
+        for category in ("block", "cover"):
+            have = sum(o.category == category and not o.spare for o in self.objects)
+            need = sum(g.category == category and not g.optional for g in self.goals)
+            if need > have:
+                problems.append(
+                    f"goals: {need} required {category} goals but only {have} "
+                    f"{category}{'s' if have != 1 else ''} in objects that are not spares"
+                )
+        return problems
 
     def support_of(self, index: int) -> int | None:
         """The object that object ``index`` rests on (same x, y within 1 mm, the highest one
@@ -157,6 +250,46 @@ class TaskFile(_Strict):
         """Blocks in the file, spares included."""
         return sum(o.category == "block" for o in self.objects)
 
+    def root_of(self, index: int) -> int:
+        """The object at the bottom of the tower that object ``index`` belongs to."""
+        base = self.support_of(index)
+        return index if base is None else self.root_of(base)
+
+    def placements(self, index: int) -> list[tuple[Position, float]]:
+        """Where object ``index`` may stand before the whole-layout shift: each listed position
+        of its tower's bottom object, moved as the tower moves, with that object's jitter."""
+        root = self.objects[self.root_of(index)]
+        offset = [a - b for a, b in zip(self.objects[index].anchor, root.anchor, strict=True)]
+        bases = root.positions if root.positions is not None else [root.anchor]
+        return [
+            (
+                (base[0] + offset[0], base[1] + offset[1], base[2] + offset[2]),
+                root.jitter,
+            )
+            for base in bases
+        ]
+
+    def _exclusive(self, i: int, j: int, pa: Position, pb: Position) -> bool:
+        """Objects ``i`` and ``j`` could stand there only by taking one listed position."""
+        ri, rj = self.root_of(i), self.root_of(j)
+        if ri == rj or self.objects[ri].positions is None or self.objects[rj].positions is None:
+            return False
+        ai, aj = self.objects[i].anchor, self.objects[j].anchor
+        base_i = [p - a + b for p, a, b in zip(pa, ai, self.objects[ri].anchor, strict=True)]
+        base_j = [p - a + b for p, a, b in zip(pb, aj, self.objects[rj].anchor, strict=True)]
+        return max(abs(x - y) for x, y in zip(base_i, base_j, strict=True)) < 1e-3
+
+    @staticmethod
+    def _depth(
+        pa: Position, pb: Position, sa: tuple[float, ...], sb: tuple[float, ...], slack: float
+    ) -> float:
+        """How deep two boxes can overlap when each may move by its jitter (``slack``, x, y)."""
+        margins = (slack, slack, 0.0)
+        return min(
+            (da + db) / 2 - max(0.0, abs(a - b) - m)
+            for a, b, da, db, m in zip(pa, pb, sa, sb, margins, strict=True)
+        )
+
 
 def parse_task_file(text: str) -> TaskFile:
     """Validate a task file's text; ``TaskError`` names the line or the field."""
@@ -169,8 +302,10 @@ def parse_task_file(text: str) -> TaskFile:
     except ValidationError as exc:
         problems = []
         for error in exc.errors(include_url=False):
-            field = ".".join(str(part) for part in error["loc"]) or "<file>"
-            problems.append(f"{field}: {error['msg'].removeprefix('Value error, ')}")
+            field = ".".join(str(part) for part in error["loc"])
+            message = error["msg"].removeprefix("Value error, ")
+            # Whole-file checks name their own fields ("objects.1: red overlaps ...").
+            problems.append(f"{field}: {message}" if field else message)
         raise TaskError("task file: " + "; ".join(problems)) from None
 
 

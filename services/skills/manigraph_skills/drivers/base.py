@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from manigraph_shared.messages import Quaternion, Vector3
+from manigraph_skills.obstacles import Obstacle
 
 
 @dataclass(frozen=True)
@@ -22,6 +23,8 @@ class Grasp:
     height: float = 0.0  # TCP above the object's centre, metres (a cover: at its handle)
     turn: float = 0.0  # hand yaw added to the driver's default, radians
     carry_z: float = 0.0  # lowest TCP height for carrying the object across, metres
+    #: What the arm must not touch on the way (a driver that plans arm motion checks it).
+    obstacles: tuple[Obstacle, ...] = ()
 
 
 #: A block's grasp at its centre, the driver's default yaw and carry heights.
@@ -42,7 +45,12 @@ class Motion:
 
 
 class RobotDriver(ABC):
-    """Raises ``SkillError(reason)`` when the robot could not do what was asked."""
+    """Raises ``SkillError(reason)`` when the robot could not do what was asked.
+
+    :meth:`stop` is the emergency stop: it is called from another thread while ``pick`` or
+    ``place`` may be running, must return at once, and makes the running call (and every call
+    until :meth:`resume`) raise ``SkillError("stopped")``.
+    """
 
     name: str
 
@@ -58,6 +66,18 @@ class RobotDriver(ABC):
     @abstractmethod
     def place(self, motion: Motion) -> None:
         """Carry the held object to the motion's position and release it."""
+
+    @abstractmethod
+    def stop(self) -> None:
+        """Halt now (emergency stop): abort the motion under way, refuse new ones."""
+
+    @abstractmethod
+    def resume(self) -> None:
+        """Accept motions again after :meth:`stop`."""
+
+    def abort(self, reason: str) -> None:
+        """The robot went away (its process died): fail the motion under way now with
+        ``reason`` instead of waiting for an answer that cannot come. Not sticky."""
 
     def close(self) -> None:
         """Release the driver's resources."""
