@@ -23,6 +23,7 @@ is passed over, so the policy's decisions are exactly its own.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from manigraph_shared.messages import Scene, SkillState, SkillStatus
@@ -163,7 +164,7 @@ def _filled_goals(scene: Scene) -> frozenset[str]:
     return frozenset(g.id for g in scene.goals if g.filled)
 
 
-def _escalated(pairs: set[Pair], side: int) -> frozenset[str]:
+def _escalated(pairs: Iterable[Pair], side: int) -> frozenset[str]:
     """Objects (side 0) or goals (side 1) that appear in two or more passed-over pairs."""
     seen: dict[str, int] = {}
     for pair in pairs:

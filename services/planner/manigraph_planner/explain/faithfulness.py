@@ -78,7 +78,8 @@ def faithfulness(
         outcomes += [explained == pair, rest != pair]
     top = int(result.kept_edges[0])
     ends = {int(result.edge_index[0, top]), int(result.edge_index[1, top])}
-    return Faithfulness(*outcomes, top_edge_touches=bool(ends & set(pair)))
+    kept, lost, hard_kept, hard_lost = outcomes
+    return Faithfulness(kept, lost, hard_kept, hard_lost, bool(ends & set(pair)))
 
 
 def _decision(
