@@ -29,6 +29,29 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         "needs Vulkan, see scripts/install-vulkan.sh)",
     )
     parser.add_argument(
+        "--camera",
+        action="store_true",
+        help="physics: render the tripod camera (ArUco markers on every body) and publish "
+        "its images, intrinsics and the episode layout (needs Vulkan)",
+    )
+    parser.add_argument(
+        "--camera-hz", type=float, default=2.0, help="camera frames per second (default 2)"
+    )
+    parser.add_argument(
+        "--camera-noise",
+        type=float,
+        default=0.0,
+        help="Gaussian image noise, grey levels (default 0)",
+    )
+    parser.add_argument(
+        "--camera-blur", type=int, default=0, help="horizontal motion blur, pixels (default 0)"
+    )
+    parser.add_argument(
+        "--no-scenes",
+        action="store_true",
+        help="publish no ground-truth Scene: perception is the Scene source (with --camera)",
+    )
+    parser.add_argument(
         "--box-geometry",
         choices=["geometric", "physics"],
         default=None,
@@ -62,6 +85,16 @@ def _run(args: argparse.Namespace) -> int:
         from manigraph_sim.physics.video import VideoConfig
 
         options["video"] = VideoConfig(args.video)
+    if args.camera:
+        if args.backend != "physics":
+            raise ConfigError("camera", "only the physics backend renders")
+        from manigraph_sim.physics.camera import CameraConfig
+
+        options["camera"] = CameraConfig(
+            hz=args.camera_hz, noise_sigma=args.camera_noise, blur_pixels=args.camera_blur
+        )
+    if args.no_scenes and not args.camera:
+        raise ConfigError("no-scenes", "without --camera nothing would observe the world")
     if args.box_geometry is not None:
         if args.backend != "geometric":
             raise ConfigError("box-geometry", "the physics backend always has its own boxes")
@@ -71,7 +104,14 @@ def _run(args: argparse.Namespace) -> int:
             options["boxes"] = PHYSICS_BOXES
     backend = create_backend(args.backend, **options)
     return run_service(
-        lambda bus: SimService(bus, backend, args.publish_hz), bus_config_from_args(args)
+        lambda bus: SimService(
+            bus,
+            backend,
+            args.publish_hz,
+            scenes=not args.no_scenes,
+            camera_hz=args.camera_hz if args.camera else 0.0,
+        ),
+        bus_config_from_args(args),
     )
 
 

@@ -19,6 +19,7 @@ budget is spent.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -46,6 +47,11 @@ from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
 from manigraph_sim.tasks.base import Layout
 from manigraph_sim.tasks.from_request import episode_layout
 
+if TYPE_CHECKING:
+    from manigraph_shared.markers import MarkerMap
+    from manigraph_shared.messages import CameraInfo, CompressedImage, TaskLayout
+    from manigraph_sim.physics.camera import CameraConfig, TripodCamera
+
 #: A body whose grasp point (a block's centre, a cover's handle) is this close to the TCP
 #: while the gripper is closed is held.
 HELD_DISTANCE = 0.03
@@ -62,6 +68,8 @@ class PhysicsBackend(EpisodeBackend):
         realtime: bool = False,
         config: PhysicsConfig | None = None,
         video: VideoConfig | None = None,
+        camera: CameraConfig | None = None,
+        markers: MarkerMap | None = None,
     ) -> None:
         if not 0 < goal_tolerance <= 0.1:
             raise ConfigError("goal_tolerance", f"{goal_tolerance} must be in (0, 0.1] metres")
@@ -70,6 +78,14 @@ class PhysicsBackend(EpisodeBackend):
         self.realtime = realtime
         self.video_config = video
         self.video: EpisodeVideo | None = None
+        #: The tripod camera (``--camera``) and the markers printed on the bodies it sees.
+        self.camera_config = camera
+        self.camera: TripodCamera | None = None
+        if camera is not None and markers is None:
+            from manigraph_shared.markers import sim_marker_map
+
+            markers = sim_marker_map()
+        self.markers = markers
         #: Files written by the video recorder, one per ended episode.
         self.videos_written: list[Path] = []
         self.config = config or PhysicsConfig()
@@ -83,17 +99,28 @@ class PhysicsBackend(EpisodeBackend):
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
         episode = episode_layout(request, boxes=PHYSICS_BOXES)
         layout = episode.layout
+        if self.markers is not None and self.camera_config is not None:
+            self.markers.check_objects((body.id, body.category) for body in layout.bodies)
         self.world = PhysicsWorld(
             layout.bodies,
             self.config,
-            render=self.video_config is not None,
+            render=self.video_config is not None or self.camera_config is not None,
             containers=layout.containers,
+            markers=self.markers if self.camera_config is not None else None,
         )
         self.revealed = set()
         if self.video_config is not None:
             self.video = EpisodeVideo(self.video_config, self.world.scene, self.config.timestep)
             self.world.on_step.append(self.video.on_step)
             self.video.capture()
+        if self.camera_config is not None:
+            from manigraph_sim.physics.camera import TripodCamera, light
+
+            if self.video_config is None:
+                light(self.world.scene)
+            sequence = self.camera.sequence if self.camera is not None else 0
+            self.camera = TripodCamera(self.camera_config, self.world.scene)
+            self.camera.sequence = sequence
         self.layout = layout
         return self.begin(request, layout.required_goals(), episode.max_steps, stamp)
 
@@ -145,6 +172,21 @@ class PhysicsBackend(EpisodeBackend):
             self.ended,
             orientations,
         )
+
+    def layout_message(self, stamp: float) -> TaskLayout | None:
+        """The running episode's objects, goals and boxes (for a Scene source that cannot
+        see goals: perception)."""
+        if self.layout is None or self.request is None:
+            return None
+        from manigraph_sim.layout_message import layout_message
+
+        return layout_message(self.layout, self.request.episode_id, stamp)
+
+    def camera_frame(self, stamp: float) -> tuple[CompressedImage, CameraInfo] | None:
+        """The tripod camera's view now, with its intrinsics; None without ``--camera``."""
+        if self.camera is None:
+            return None
+        return self.camera.capture(stamp), self.camera.info(stamp)
 
     def joint_state(self, stamp: float) -> JointState | None:
         if self.world is None:
