@@ -174,7 +174,7 @@ _SIM_COVER_OFFSETS = ((0.07, 0.07), (-0.07, 0.07), (-0.07, -0.07), (0.07, -0.07)
 def sim_marker_map() -> MarkerMap:
     """The marker map of every object the sim's tasks lay out (``block_0`` .. ``block_39``,
     ``cover_0`` .. ``cover_4``); committed as ``examples/markers/sim.toml``."""
-    markers = []
+    markers: list[MarkerSpec] = []
     for block in range(SIM_BLOCKS):
         for face in _SIM_BLOCK_FACES:
             markers.append(

@@ -7,8 +7,9 @@ device (Mesa lavapipe on CPU, ``scripts/install-vulkan.sh``): the first frame of
 compiles shaders (~10-30 s), later ones take ~0.1-0.3 s on a busy 2-core machine.
 
 Frames are encoded (JPEG by default) into ``CompressedImage`` messages; ``CameraInfo``
-carries the rendered camera's exact intrinsics (no distortion), and :meth:`TripodCamera.base_T_camera`
-its exact pose, the ground truth the calibration commands are checked against.
+carries the rendered camera's exact intrinsics (no distortion); :func:`ideal_calibration`
+gives them with its exact pose, the ground truth the calibration commands are checked against
+(``examples/calibration/sim-front.yaml``).
 """
 
 from __future__ import annotations
@@ -26,8 +27,8 @@ from manigraph_shared.messages import CameraInfo, CompressedImage, ImageFormat
 from manigraph_sim.physics.video import look_at
 
 #: Tripod in front of the table and above it, looking at the middle of the workspace.
-TRIPOD_EYE = (1.0, 0.0, 0.55)
-TRIPOD_TARGET = (0.5, 0.0, 0.0)
+TRIPOD_EYE = (0.92, 0.0, 0.45)
+TRIPOD_TARGET = (0.5, 0.0, 0.02)
 #: Pixels per marker cell in the printed textures (a 4x4 marker is 6 cells with its border).
 _CELL_PIXELS = 16
 
@@ -49,6 +50,9 @@ class CameraConfig:
     noise_sigma: float = 0.0
     blur_pixels: int = 0
     seed: int = 0
+    #: Rendered at this many times the size and averaged down: a real sensor integrates
+    #: light over each pixel, so edges fall between pixels as they should (subpixel corners).
+    supersample: int = 2
 
     def __post_init__(self) -> None:
         if not (16 <= self.width <= 4096 and 16 <= self.height <= 4096):
@@ -73,8 +77,8 @@ class TripodCamera:
         self.scene = scene
         self.camera = scene.add_camera(
             config.name,
-            config.width,
-            config.height,
+            config.width * config.supersample,
+            config.height * config.supersample,
             float(np.deg2rad(config.fovy_degrees)),
             0.01,
             10.0,
@@ -84,7 +88,13 @@ class TripodCamera:
         self._rng = np.random.default_rng(config.seed)
 
     def camera_matrix(self) -> np.ndarray:
-        return np.asarray(self.camera.get_intrinsic_matrix(), dtype=float)
+        """K of the published image in OpenCV's convention (pixel i's centre at i; SAPIEN's
+        projection puts it at i + 0.5)."""
+        k = np.asarray(self.camera.get_intrinsic_matrix(), dtype=float)
+        k[:2] /= self.config.supersample
+        k[0, 2] -= 0.5
+        k[1, 2] -= 0.5
+        return k
 
     def base_T_camera(self) -> np.ndarray:
         """The camera's optical frame (OpenCV: x right, y down, z forward) in the robot base
@@ -99,6 +109,9 @@ class TripodCamera:
         self.camera.take_picture()
         rgba = self.camera.get_picture("Color")
         rgb = (np.clip(rgba[..., :3], 0, 1) * 255).astype(np.uint8)
+        if self.config.supersample > 1:
+            size = (self.config.width, self.config.height)
+            rgb = cv2.resize(rgb, size, interpolation=cv2.INTER_AREA)
         return degrade(rgb, self.config, self._rng)
 
     def capture(self, stamp: float) -> CompressedImage:
@@ -148,16 +161,30 @@ def encode_image(
     )
 
 
-def write_calibration(path: str | Path, camera: TripodCamera) -> None:
+def ideal_calibration(config: CameraConfig) -> tuple[np.ndarray, np.ndarray]:
+    """The rendered camera's exact K (OpenCV convention) and optical frame in the robot base
+    frame, computed from its configuration without rendering."""
+    fy = config.height / 2 / np.tan(np.deg2rad(config.fovy_degrees) / 2)
+    k = np.array([[fy, 0, config.width / 2 - 0.5], [0, fy, config.height / 2 - 0.5], [0, 0, 1]])
+    pose = look_at(np.array(config.eye, dtype=float), np.array(config.target, dtype=float))
+    forward, left, up = pose.to_transformation_matrix()[:3, :3].T
+    base_T_camera = np.eye(4)
+    base_T_camera[:3, :3] = np.stack([-left, -up, forward], axis=1)
+    base_T_camera[:3, 3] = config.eye
+    return k, base_T_camera
+
+
+def write_calibration(path: str | Path, config: CameraConfig) -> None:
     """The rendered camera's exact calibration, in the file format perception reads (OpenCV
     FileStorage YAML: ``camera_matrix``, ``distortion_coefficients``, ``image_width``,
     ``image_height``, ``base_T_camera``)."""
+    k, base_T_camera = ideal_calibration(config)
     storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
-    storage.write("image_width", camera.config.width)
-    storage.write("image_height", camera.config.height)
-    storage.write("camera_matrix", camera.camera_matrix())
+    storage.write("image_width", config.width)
+    storage.write("image_height", config.height)
+    storage.write("camera_matrix", k)
     storage.write("distortion_coefficients", np.zeros((1, 5)))
-    storage.write("base_T_camera", camera.base_T_camera())
+    storage.write("base_T_camera", base_T_camera)
     storage.release()
 
 
