@@ -19,6 +19,9 @@ from manigraph_shared.messages import CameraInfo, CompressedImage, ServiceState,
 from manigraph_shared.service import Service
 
 
+_NO_FRAME = "no usable frame"
+
+
 class PerceptionService(Service):
     name = "perception"
 
@@ -92,6 +95,8 @@ class PerceptionService(Service):
         self._publish(scene, detections)
 
     def _publish(self, scene, detections) -> None:  # type: ignore[no-untyped-def]
+        if scene is not None and not scene.stale and self.last_error.startswith(_NO_FRAME):
+            self.last_error = ""
         if detections is not None:
             self.bus.publish(detections)
         if scene is not None:
@@ -113,14 +118,13 @@ class PerceptionService(Service):
             else:
                 self._publish(*self.perception.process(grey, now, now))
             return
-        # No frames lately: serve the last world, flagged stale, once a second.
+        # No frames lately: say so in the status (a Scene is only made from a frame, so a
+        # planner never takes an old world for one observed after its last skill).
         world = self.perception.world
-        if world.layout is not None and world.stale(now) and now - self._last_stale_report > 1:
+        if world.layout is not None and world.stale(now) and now - self._last_stale_report > 5:
             self._last_stale_report = now
-            self.perception.counters.stale += 1
-            scene = world.scene(now, now)
-            if scene is not None:
-                self.bus.publish(scene)
+            waited = f"for {now - world.last_frame:.0f} s" if world.last_frame else "yet"
+            self.last_error = f"{_NO_FRAME} {waited}"
 
     def publish_status(self, state: ServiceState, detail: str = "") -> None:
         summary = self.perception.counters.summary()
