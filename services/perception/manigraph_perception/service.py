@@ -18,7 +18,6 @@ from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import CameraInfo, CompressedImage, ServiceState, TaskLayout
 from manigraph_shared.service import Service
 
-
 _NO_FRAME = "no usable frame"
 
 
