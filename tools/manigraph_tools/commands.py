@@ -260,6 +260,18 @@ run_command = Command(
 SKILLS_DRIVER_FOR_SIM = {"geometric": "sim-gripper", "physics": "panda-sim"}
 
 
+#: Perception of the physics sim's rendered camera: its markers and exact calibration.
+SIM_CAMERA_PERCEPTION = [
+    "perception",
+    "--camera",
+    "bus",
+    "--markers",
+    "sim",
+    "--calibration",
+    str(Path(__file__).resolve().parents[2] / "examples" / "calibration" / "sim-front.yaml"),
+]
+
+
 def _sim_args(args: argparse.Namespace) -> list[str]:
     extra: list[str] = []
     if args.video is not None:
@@ -270,6 +282,10 @@ def _sim_args(args: argparse.Namespace) -> list[str]:
         if args.sim != "physics":
             raise ConfigError("realtime", "needs --sim physics")
         extra.append("--realtime")
+    if args.scene_source == "camera":
+        if args.sim != "physics":
+            raise ConfigError("scene-source", "camera needs --sim physics (it renders)")
+        extra += ["--camera", "--no-scenes"]
     if args.box_geometry is not None:
         if args.sim != "geometric":
             raise ConfigError("box-geometry", "the physics world always has its own boxes")
@@ -298,6 +314,13 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         choices=["geometric", "physics"],
         help="geometric sim: lay box tasks out with this geometry (physics: the physics "
         "world's, to compare both worlds on the same layouts)",
+    )
+    parser.add_argument(
+        "--scene-source",
+        choices=["sim", "camera"],
+        default="sim",
+        help="who publishes Scene: the sim's ground truth (default) or perception reading "
+        "the physics sim's rendered camera (needs Vulkan; docs/perception.md)",
     )
     parser.add_argument(
         "--explain-decisions",
@@ -336,6 +359,8 @@ def _up_run(args: argparse.Namespace) -> int:
         ),
         ProcessSpec("skills", ["skills", "--driver", SKILLS_DRIVER_FOR_SIM[args.sim]], bus_env),
     ]
+    if args.scene_source == "camera":
+        specs.append(ProcessSpec("perception", SIM_CAMERA_PERCEPTION, bus_env))
     supervisor = Supervisor(args.log_dir)
     summary: dict[str, object] | None = None
     try:

@@ -15,7 +15,11 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         help="'bus' (images from manigraph/camera/<name>/image, e.g. the sim's --camera), a "
         "V4L2 device (/dev/video0 or 0), a video file or a stream URL",
     )
-    parser.add_argument("--markers", required=True, help="marker map TOML (docs/perception.md)")
+    parser.add_argument(
+        "--markers",
+        required=True,
+        help="marker map TOML (docs/perception.md), or 'sim' for the sim's printed markers",
+    )
     parser.add_argument(
         "--calibration", required=True, help="OpenCV FileStorage YAML with base_T_camera"
     )
@@ -37,12 +41,12 @@ def _run(args: argparse.Namespace) -> int:
     from manigraph_perception.sources import VideoSource
     from manigraph_perception.world import WorldConfig
     from manigraph_shared.errors import ConfigError
-    from manigraph_shared.markers import load_marker_map
+    from manigraph_shared.markers import load_marker_map, sim_marker_map
     from manigraph_shared.service import run_service
 
     if not 0 < args.stale_after <= 60:
         raise ConfigError("stale-after", "must be in (0, 60] seconds")
-    markers = load_marker_map(args.markers)
+    markers = sim_marker_map() if args.markers == "sim" else load_marker_map(args.markers)
     calibration = load_calibration(args.calibration)
     perception = Perception(
         markers, calibration, args.camera_name, WorldConfig(stale_after=args.stale_after)

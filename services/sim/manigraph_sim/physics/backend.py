@@ -94,6 +94,9 @@ class PhysicsBackend(EpisodeBackend):
         #: Boxes seen open in this episode: their contents stay observed (partial observability).
         self.revealed: set[str] = set()
         self.physics_steps = 0
+        self._warm_world: PhysicsWorld | None = None
+        if camera is not None:
+            self._warm_up()
 
     # --- episodes ---------------------------------------------------------------------------
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
@@ -108,6 +111,7 @@ class PhysicsBackend(EpisodeBackend):
             containers=layout.containers,
             markers=self.markers if self.camera_config is not None else None,
         )
+        self._warm_world = None
         self.revealed = set()
         if self.video_config is not None:
             self.video = EpisodeVideo(self.video_config, self.world.scene, self.config.timestep)
@@ -123,6 +127,18 @@ class PhysicsBackend(EpisodeBackend):
             self.camera.sequence = sequence
         self.layout = layout
         return self.begin(request, layout.required_goals(), episode.max_steps, stamp)
+
+    def _warm_up(self) -> None:
+        """Render one frame of a one-block episode: the first frame of a process compiles the
+        shaders (10-40 s on a busy CPU), better before the service says it is ready than
+        inside a reset someone is waiting for."""
+        self.reset(EpisodeRequest(episode_id="warm-up", task="stack", blocks=1), 0.0)
+        self.camera_frame(0.0)
+        # Kept until the next episode's world exists: SAPIEN frees the compiled shaders
+        # with the last scene.
+        self._warm_world = self.world
+        self.world = self.layout = self.request = self.camera = None
+        self.ended = True
 
     def _geometric_view(self) -> GeometricWorld:
         """The simulated poses as a geometric world, to apply its goal and visibility rules."""
