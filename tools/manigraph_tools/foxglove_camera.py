@@ -47,7 +47,7 @@ UNKNOWN = Color(r=0.9, g=0.15, b=0.15, a=1.0)
 
 def _timestamp(stamp: float) -> Timestamp:
     seconds = int(stamp)
-    return Timestamp(sec=seconds, nsec=int(round((stamp - seconds) * 1e9)) % 1_000_000_000)
+    return Timestamp(sec=seconds, nsec=round((stamp - seconds) * 1e9) % 1_000_000_000)
 
 
 def foxglove_image(image: CompressedImage) -> FoxgloveImage:
