@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 
 from manigraph_perception.calibration import Calibration
-from manigraph_perception.detection import detect
+from manigraph_perception.detection import detect, detector_for
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.markers import DICTIONARIES, marker_corners
 
@@ -74,20 +74,36 @@ def calibrate_intrinsics(images: list[np.ndarray], spec: CharucoSpec) -> tuple[C
 
 @dataclass(frozen=True)
 class KnownMarker:
-    """A marker whose centre's robot-frame position is known."""
+    """A marker whose centre's robot-frame position is known; for the rigid fit also its
+    orientation: lying face up, its printed up turned ``yaw`` radians from the robot's +x."""
 
     id: int
     size: float
     position: np.ndarray
+    yaw: float = 0.0
+
+    def corners(self) -> np.ndarray:
+        """Its 4 corners in the robot frame, OpenCV's order."""
+        c, s = np.cos(self.yaw), np.sin(self.yaw)
+        up = np.array([c, s, 0.0])
+        normal = np.array([0.0, 0.0, 1.0])
+        rotation = np.stack([np.cross(up, normal), up, normal], axis=1)
+        return marker_corners(self.size) @ rotation.T + self.position
 
 
 def load_known_markers(path: str | Path) -> tuple[str, list[KnownMarker]]:
     """``dictionary = "DICT_4X4_250"`` and ``[[markers]]`` with id, size, position (x y z of
-    the marker's centre, metres, robot base frame)."""
+    the marker's centre, metres, robot base frame) and yaw (degrees, default 0: the printed
+    marker's up along the robot's +x; markers lie face up)."""
     try:
         data = tomllib.loads(Path(path).read_text())
         known = [
-            KnownMarker(int(m["id"]), float(m["size"]), np.array(m["position"], dtype=float))
+            KnownMarker(
+                int(m["id"]),
+                float(m["size"]),
+                np.array(m["position"], dtype=float),
+                float(np.deg2rad(m.get("yaw", 0.0))),
+            )
             for m in data["markers"]
         ]
         dictionary = str(data.get("dictionary", "DICT_4X4_250"))
@@ -107,12 +123,7 @@ def observe_markers(
     greys: list[np.ndarray], intrinsics: Calibration, dictionary: str, known: list[KnownMarker]
 ) -> tuple[np.ndarray, np.ndarray]:
     """(camera-frame centres, robot-frame centres) of every known marker seen in each image."""
-    parameters = cv2.aruco.DetectorParameters()
-    parameters.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
-    parameters.cornerRefinementWinSize = 3
-    detector = cv2.aruco.ArucoDetector(
-        cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary)), parameters
-    )
+    detector = detector_for(dictionary)
     by_id = {m.id: m for m in known}
     seen_in_camera, in_base = [], []
     for grey in greys:
@@ -157,3 +168,40 @@ def fit_transform(camera: np.ndarray, base: np.ndarray, affine: bool = False) ->
 def residuals_mm(transform: np.ndarray, camera: np.ndarray, base: np.ndarray) -> np.ndarray:
     mapped = camera @ transform[:3, :3].T + transform[:3, 3]
     return np.linalg.norm(mapped - base, axis=1) * 1000
+
+
+def fit_camera_pose(
+    views: list[tuple[np.ndarray, list[KnownMarker]]], intrinsics: Calibration, dictionary: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """base_T_camera from the corners of every known flat marker seen in each (image, markers
+    where they were for that image), in one PnP (the camera is fixed, so every image
+    constrains the same pose); also each corner's distance from its pixel's ray, in
+    millimetres (the fit's residuals)."""
+    detector = detector_for(dictionary)
+    points, pixels = [], []
+    for grey, known in views:
+        by_id = {m.id: m for m in known}
+        for marker in detect(detector, grey):
+            if marker.id in by_id:
+                points.append(by_id[marker.id].corners())
+                pixels.append(marker.corners)
+    if len(points) < 2:
+        raise ConfigError("points", f"{len(points)} known markers seen; at least 2 needed")
+    object_points = np.concatenate(points)
+    image_points = np.concatenate(pixels)
+    k, d = intrinsics.camera_matrix, intrinsics.distortion
+    ok, rvec, tvec = cv2.solvePnP(object_points, image_points, k, d, flags=cv2.SOLVEPNP_SQPNP)
+    if not ok:
+        raise ConfigError("points", "no camera pose fits the markers seen")
+    rvec, tvec = cv2.solvePnPRefineLM(object_points, image_points, k, d, rvec, tvec)
+    camera_T_base = np.eye(4)
+    camera_T_base[:3, :3] = cv2.Rodrigues(rvec)[0]
+    camera_T_base[:3, 3] = tvec.ravel()
+    # Residuals: each known corner's distance from the ray through the pixel it was seen at.
+    in_camera = object_points @ camera_T_base[:3, :3].T + camera_T_base[:3, 3]
+    rays = cv2.undistortPoints(image_points.reshape(-1, 1, 2), k, d).reshape(-1, 2)
+    rays = np.hstack([rays, np.ones((len(rays), 1))])
+    rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+    along = np.sum(in_camera * rays, axis=1, keepdims=True)
+    residuals = np.linalg.norm(in_camera - along * rays, axis=1) * 1000
+    return np.linalg.inv(camera_T_base), residuals

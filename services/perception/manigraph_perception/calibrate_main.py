@@ -31,7 +31,10 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         "--points", type=Path, required=True, help="TOML: markers' robot-frame centres"
     )
     extrinsics.add_argument(
-        "--affine", action="store_true", help="fit an affine map (the paper's), not a rigid one"
+        "--affine",
+        action="store_true",
+        help="fit an affine map to the markers' centres (the paper's), not the camera's "
+        "rigid pose to their corners",
     )
     extrinsics.add_argument(
         "-o", "--output", type=Path, help="YAML to write (default: add to --intrinsics)"
@@ -58,6 +61,7 @@ def _run(args: argparse.Namespace) -> int:
     from manigraph_perception.calibrate import (
         CharucoSpec,
         calibrate_intrinsics,
+        fit_camera_pose,
         fit_transform,
         load_known_markers,
         observe_markers,
@@ -79,14 +83,19 @@ def _run(args: argparse.Namespace) -> int:
     else:
         calibration = load_calibration(args.intrinsics, need_extrinsics=False)
         dictionary, known = load_known_markers(args.points)
-        camera, base = observe_markers(greys, calibration, dictionary, known)
-        transform = fit_transform(camera, base, affine=args.affine)
-        residuals = residuals_mm(transform, camera, base)
+        if args.affine:
+            camera, base = observe_markers(greys, calibration, dictionary, known)
+            transform = fit_transform(camera, base, affine=True)
+            residuals = residuals_mm(transform, camera, base)
+        else:
+            transform, residuals = fit_camera_pose(
+                [(grey, known) for grey in greys], calibration, dictionary
+            )
         calibration.base_T_camera = transform
         calibration.save(args.output or args.intrinsics)
         report = {
-            "markers_seen": len(camera),
-            "fit": "affine" if args.affine else "rigid",
+            "points": len(residuals),
+            "fit": "affine (marker centres)" if args.affine else "rigid (PnP on corners)",
             "residual_mm_median": round(float(np.median(residuals)), 3),
             "residual_mm_max": round(float(residuals.max()), 3),
         }

@@ -11,6 +11,7 @@ coplanar (much better in depth, the weak direction of a single small marker).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -37,12 +38,27 @@ class ObjectPose:
     reprojection_px: float
 
 
-def detector_for(markers: MarkerMap) -> cv2.aruco.ArucoDetector:
-    dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, markers.dictionary))
-    parameters = cv2.aruco.DetectorParameters()
-    parameters.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
-    parameters.cornerRefinementWinSize = 3
-    return cv2.aruco.ArucoDetector(dictionary, parameters)
+class Detectors(NamedTuple):
+    """OpenCV's detector for the image, and a cheaper one for the image enlarged twice (one
+    adaptive-threshold window instead of three: the same markers at 40% of the cost)."""
+
+    normal: cv2.aruco.ArucoDetector
+    enlarged: cv2.aruco.ArucoDetector
+
+
+def detector_for(markers: MarkerMap | str) -> Detectors:
+    name = markers if isinstance(markers, str) else markers.dictionary
+    dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, name))
+    detectors = []
+    for window in (None, 13):
+        parameters = cv2.aruco.DetectorParameters()
+        parameters.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
+        parameters.cornerRefinementWinSize = 3
+        if window is not None:
+            parameters.adaptiveThreshWinSizeMin = window
+            parameters.adaptiveThreshWinSizeMax = window
+        detectors.append(cv2.aruco.ArucoDetector(dictionary, parameters))
+    return Detectors(*detectors)
 
 
 #: Subpixel corner refinement finds a black square's corners this far inside the true ones
@@ -55,19 +71,21 @@ UPSCALED_CORNER_BIAS_PX = 0.3
 
 
 def detect(
-    detector: cv2.aruco.ArucoDetector,
+    detector: Detectors,
     grey: np.ndarray,
     corner_bias: float = CORNER_BIAS_PX,
     upscale: bool = True,
 ) -> list[Marker]:
     """Markers found in ``grey``; with ``upscale``, also those found only in the image
-    enlarged twice (about 3x the cost: still >20 frames/s on one busy core)."""
-    markers = _detect(detector, grey, 1, corner_bias)
+    enlarged twice (about twice the cost)."""
+    markers = _detect(detector.normal, grey, 1, corner_bias)
     if upscale:
         found = {m.id for m in markers}
         big = cv2.resize(grey, None, fx=2, fy=2, interpolation=cv2.INTER_LINEAR)
         markers += [
-            m for m in _detect(detector, big, 2, UPSCALED_CORNER_BIAS_PX) if m.id not in found
+            m
+            for m in _detect(detector.enlarged, big, 2, UPSCALED_CORNER_BIAS_PX)
+            if m.id not in found
         ]
     return markers
 
