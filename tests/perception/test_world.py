@@ -29,7 +29,7 @@ def _seen_at(dx: float) -> list[ObjectPose]:
 
 
 def test_filled_has_hysteresis() -> None:
-    world = WorldModel(WorldConfig(fill_enter=0.02, fill_exit=0.03))
+    world = WorldModel(WorldConfig(fill_enter=0.02, fill_exit=0.03))  # as in the sim
     world.set_layout(_layout())
     filled = []
     for t, dx in enumerate([0.025, 0.015, 0.025, 0.029, 0.035, 0.025, 0.01]):

@@ -33,8 +33,11 @@ from manigraph_shared.messages import (
 
 @dataclass(frozen=True)
 class WorldConfig:
-    fill_enter: float = 0.02  # metres: the sim's goal tolerance
-    fill_exit: float = 0.03
+    #: Metres. The sim's own rule is 2 cm from the true pose; perception adds its error (up to
+    #: ~1 cm along the viewing ray for the farthest blocks), so a goal fills a little wider.
+    #: Goals of stacks and pyramids are 4 cm apart, so a neighbour still never fills one.
+    fill_enter: float = 0.025
+    fill_exit: float = 0.035
     stale_after: float = 2.0  # seconds without a frame
     #: A box is closed when a cover's centre is within this of its centre, above its rim.
     lid_distance: float = 0.03
