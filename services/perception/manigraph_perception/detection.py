@@ -135,7 +135,9 @@ class ObjectPoser:
         k, d = self.calibration.camera_matrix, self.calibration.distortion
         object_points = np.concatenate([self.corners_in_object[m.id] for m in seen])
         image_points = np.concatenate([m.corners for m in seen])
-        best: tuple[float, np.ndarray, np.ndarray] | None = None
+        base_T_camera = self.calibration.base_T_camera
+        assert base_T_camera is not None
+        candidates: list[tuple[float, float, np.ndarray, np.ndarray]] = []
         for marker in seen:
             spec = self.specs[marker.id]
             _, rvecs, tvecs, _ = cv2.solvePnPGeneric(
@@ -148,16 +150,28 @@ class ObjectPoser:
                 )
                 r, t = _vectors(cam_T_object)
                 error = _reprojection(object_points, image_points, r, t, k, d)
-                if best is None or error < best[0]:
-                    best = (error, r, t)
-        assert best is not None
-        error, rvec, tvec = best
+                upright = _resting(base_T_camera[:3, :3] @ cam_T_object[:3, :3])
+                candidates.append((error, upright, r, t))
+        # A small marker seen at a slant has two poses that fit its corners almost equally
+        # (IPPE's ambiguity); the wrong one tilts the object and moves its centre by up to a
+        # block's width. Of the poses that fit about as well as the best, take the one that
+        # rests like a box on a table (an axis vertical).
+        best_error = min(c[0] for c in candidates)
+        fitting = [c for c in candidates if c[0] <= 1.5 * best_error + AMBIGUOUS_PX]
+        error, _, rvec, tvec = max(fitting, key=lambda c: c[1])
         if len(seen) > 1:
             rvec, tvec = cv2.solvePnPRefineLM(object_points, image_points, k, d, rvec, tvec)
             error = _reprojection(object_points, image_points, rvec, tvec, k, d)
-        base_T_camera = self.calibration.base_T_camera
-        assert base_T_camera is not None
         return ObjectPose(object_id, base_T_camera @ _matrix(rvec, tvec), len(seen), error)
+
+
+#: Poses whose reprojection error is within this (and 1.5x) of the best fit equally well.
+AMBIGUOUS_PX = 0.3
+
+
+def _resting(rotation: np.ndarray) -> float:
+    """1 when one of the object's axes is vertical (a box resting on a face), less tilted."""
+    return float(np.max(np.abs(rotation[2])))
 
 
 def _marker_transform(corners: np.ndarray, size: float, rotation: np.ndarray) -> np.ndarray:
