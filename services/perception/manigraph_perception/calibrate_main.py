@@ -41,7 +41,7 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _read_grey(paths: list[Path]):  # type: ignore[no-untyped-def]
+def _read_grey(paths: list[Path]) -> list:
     import cv2
 
     from manigraph_shared.errors import ConfigError

@@ -40,6 +40,7 @@ def _run(args: argparse.Namespace) -> int:
     from manigraph_perception.service import PerceptionService
     from manigraph_perception.sources import VideoSource
     from manigraph_perception.world import WorldConfig
+    from manigraph_shared.bus import Bus
     from manigraph_shared.errors import ConfigError
     from manigraph_shared.markers import load_marker_map, sim_marker_map
     from manigraph_shared.service import run_service
@@ -58,7 +59,7 @@ def _run(args: argparse.Namespace) -> int:
     source = None if args.camera == "bus" else VideoSource(args.camera)
     services: list[PerceptionService] = []
 
-    def make(bus):  # type: ignore[no-untyped-def]
+    def make(bus: Bus) -> PerceptionService:
         service = PerceptionService(bus, perception, source, layout)
         services.append(service)
         return service

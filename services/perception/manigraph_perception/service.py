@@ -15,7 +15,14 @@ from manigraph_perception.pipeline import Perception
 from manigraph_perception.sources import VideoSource
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.messages import CameraInfo, CompressedImage, ServiceState, TaskLayout
+from manigraph_shared.messages import (
+    CameraInfo,
+    CompressedImage,
+    MarkerDetections,
+    Scene,
+    ServiceState,
+    TaskLayout,
+)
 from manigraph_shared.service import Service
 
 _NO_FRAME = "no usable frame"
@@ -93,7 +100,7 @@ class PerceptionService(Service):
         scene, detections = self.perception.process_image(image, time.time())
         self._publish(scene, detections)
 
-    def _publish(self, scene, detections) -> None:  # type: ignore[no-untyped-def]
+    def _publish(self, scene: Scene | None, detections: MarkerDetections | None) -> None:
         if scene is not None and not scene.stale and self.last_error.startswith(_NO_FRAME):
             self.last_error = ""
         if detections is not None:
