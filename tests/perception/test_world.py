@@ -64,3 +64,36 @@ def test_quaternion_of_a_rotation() -> None:
         [[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]]
     )
     assert np.allclose(quaternion_of(rotation), [0, 0, np.sin(angle / 2), np.cos(angle / 2)])
+
+
+def test_a_carried_block_lands_on_its_goal_until_seen_elsewhere() -> None:
+    world = WorldModel()
+    world.set_layout(_layout())
+    start = world.beliefs["block_0"].position.copy()
+    world.on_action("other-episode", "block_0", "goal_0")  # not this episode: ignored
+    world.on_gripper(0.04)
+    world.on_gripper(0.08)
+    assert np.array_equal(world.beliefs["block_0"].position, start)
+    world.on_action("e1", "block_0", "goal_0")
+    world.on_gripper(0.08)  # opening before holding: nothing moved
+    assert np.array_equal(world.beliefs["block_0"].position, start)
+    world.on_gripper(0.04)  # closed on the block
+    world.on_gripper(0.08)  # let go at the goal
+    assert np.allclose(world.beliefs["block_0"].position, [0.5, 0.0, 0.02])
+    assert world.filled_by == {"goal_0": "block_0"}
+    world.update(_seen_at(0.1), 5.0)  # a marker says it is elsewhere: the marker wins
+    assert np.isclose(world.beliefs["block_0"].position[0], 0.6)
+
+
+def test_a_grasp_that_closes_on_nothing_moves_nothing() -> None:
+    world = WorldModel()
+    world.set_layout(_layout())
+    start = world.beliefs["block_0"].position.copy()
+    world.on_action("e1", "block_0", "goal_0")
+    world.on_gripper(0.0)  # closed on nothing (grasp slipped)
+    world.on_gripper(0.08)
+    assert np.array_equal(world.beliefs["block_0"].position, start)
+    world.on_gripper(0.04)
+    world.on_gripper(0.0)  # held, then lost on the way
+    world.on_gripper(0.08)
+    assert np.array_equal(world.beliefs["block_0"].position, start)

@@ -16,8 +16,10 @@ from manigraph_perception.sources import VideoSource
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import (
+    Action,
     CameraInfo,
     CompressedImage,
+    JointState,
     MarkerDetections,
     Scene,
     ServiceState,
@@ -54,6 +56,8 @@ class PerceptionService(Service):
             self.perception.set_layout(self.fixed_layout)
         else:
             self.on(TaskLayout, self._on_layout)
+        self.on(Action, self._on_action)
+        self.on(JointState, self._on_joint_state)
         if self.source is None:
             camera = self.perception.camera
             self.bus.subscribe(
@@ -71,6 +75,12 @@ class PerceptionService(Service):
     # --- inputs -----------------------------------------------------------------------------
     def _on_layout(self, layout: TaskLayout) -> None:
         self.perception.set_layout(layout)
+
+    def _on_action(self, action: Action) -> None:
+        self.perception.world.on_action(action.episode_id, action.object_id, action.goal_id)
+
+    def _on_joint_state(self, state: JointState) -> None:
+        self.perception.world.on_gripper(state.gripper_width)
 
     def _on_info(self, info: CameraInfo) -> None:
         calibration = self.perception.calibration

@@ -12,6 +12,11 @@ hysteresis, and a stale flag.
   the threshold does not flicker the feature the paper found most fragile on hardware.
 * The Scene is ``stale`` when no marker of a layout object was seen in the last frame, or
   no frame arrived for ``stale_after`` seconds: the last world is served, flagged.
+* A carried object goes where the robot put it: after the planner's action to move it, the
+  gripper closing on something (``JointState.gripper_width`` between ``held_width``) and
+  opening again means it was released at the action's goal; it is believed there until a
+  marker of it says otherwise. (The camera may not see it land: in a pyramid, the stack the
+  blocks come from can hide the goals behind it.)
 """
 
 from __future__ import annotations
@@ -41,6 +46,9 @@ class WorldConfig:
     stale_after: float = 2.0  # seconds without a frame
     #: A box is closed when a cover's centre is within this of its centre, above its rim.
     lid_distance: float = 0.03
+    #: Gripper openings (metres) that mean "holding something": a block is 4 cm wide, a
+    #: cover's handle 3 cm; the open Panda gripper is 8 cm, closed on nothing 0.
+    held_width: tuple[float, float] = (0.005, 0.07)
 
     def __post_init__(self) -> None:
         if not 0 < self.fill_enter <= self.fill_exit <= 0.1:
@@ -69,6 +77,9 @@ class WorldModel:
         self.sequence = 0
         self.last_frame = 0.0
         self.last_useful = False
+        #: (object id, goal id) of the action being carried out, and whether it is held.
+        self.carrying: tuple[str, str] | None = None
+        self.holding = False
 
     def set_layout(self, layout: TaskLayout) -> bool:
         """Start believing ``layout``'s episode; False if it is the one already held."""
@@ -82,7 +93,36 @@ class WorldModel:
         self.filled_by = {}
         self.revealed = set()
         self.last_useful = False
+        self.carrying = None
+        self.holding = False
         return True
+
+    def on_action(self, episode_id: str, object_id: str, goal_id: str) -> None:
+        """The planner decided to move ``object_id`` to ``goal_id``."""
+        if self.layout is None or episode_id != self.layout.episode_id:
+            return
+        goals = {g.id for g in self.layout.goals}
+        if object_id in self.beliefs and goal_id in goals:
+            self.carrying = (object_id, goal_id)
+            self.holding = False
+
+    def on_gripper(self, width: float) -> None:
+        """The gripper's opening now: closing on the carried object, then letting go of it at
+        its goal, moves it there."""
+        if self.carrying is None or self.layout is None:
+            return
+        low, high = self.config.held_width
+        if low < width < high:
+            self.holding = True
+        elif width <= low:
+            self.holding = False  # closed on nothing: it slipped or was dropped
+        elif self.holding:
+            object_id, goal_id = self.carrying
+            goal = next(g for g in self.layout.goals if g.id == goal_id)
+            self.beliefs[object_id].position = np.array(goal.position.as_tuple())
+            self.carrying = None
+            self.holding = False
+            self._update_filled()
 
     def update(self, poses: list[ObjectPose], stamp: float) -> None:
         """One frame's observations (possibly none)."""

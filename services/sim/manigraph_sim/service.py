@@ -116,13 +116,15 @@ class SimService(Service):
         self._publish_end()
 
     def _publish_scene(self) -> None:
+        # The joint state first: perception learns from it that a carried block was let go
+        # before it looks at the frame that may not show where the block landed.
+        joint_state = getattr(self.backend, "joint_state", None)
+        if joint_state is not None and (state := joint_state(time.time())) is not None:
+            self.bus.publish(state)
         self._publish_frame()
         scene = self.backend.scene(time.time()) if self.scenes else None
         if scene is not None:
             self.bus.publish(scene)
-        joint_state = getattr(self.backend, "joint_state", None)
-        if joint_state is not None and (state := joint_state(time.time())) is not None:
-            self.bus.publish(state)
 
     def _publish_frame(self) -> None:
         """A camera frame (and the layout it shows, so a late perception learns it too)."""
