@@ -92,7 +92,7 @@ def load_manifests() -> dict[str, Manifest]:
 #: sim's manifest declares its variants from this table.
 WORLD_ABILITIES: Mapping[str, frozenset[str]] = {
     "geometric": frozenset({"gripper_commands"}),
-    "physics": frozenset({"joint_trajectories"}),
+    "physics": frozenset({"joint_trajectories", "camera"}),
 }
 
 

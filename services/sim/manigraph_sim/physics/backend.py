@@ -41,7 +41,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_sim.backend import EpisodeBackend, JointedArmBackend
 from manigraph_sim.geometric.world import GeometricWorld
-from manigraph_sim.manifest import JOINTS
+from manigraph_sim.manifest import CAMERA, JOINTS
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig
@@ -65,7 +65,7 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
     """Runs as fast as it can, or in real time with ``realtime=True``. Registered as
     ``physics`` (options: ``manigraph_sim.backends.PhysicsOptions``)."""
 
-    abilities = frozenset({JOINTS})
+    abilities = frozenset({JOINTS, CAMERA})
 
     def __init__(
         self,
