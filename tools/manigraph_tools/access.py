@@ -22,6 +22,8 @@ from dataclasses import dataclass
 from manigraph_shared.bus import ALIVE_PREFIX
 from manigraph_shared.messages import (
     Action,
+    CameraInfo,
+    CompressedImage,
     EmergencyStop,
     EpisodeEvent,
     EpisodeRequest,
@@ -30,10 +32,12 @@ from manigraph_shared.messages import (
     JointState,
     JointTrajectoryCommand,
     JointTrajectoryResult,
+    MarkerDetections,
     RobotCommand,
     RobotFeedback,
     Scene,
     SkillStatus,
+    TaskLayout,
 )
 from manigraph_shared.messages.base import PREFIX
 from manigraph_shared.messages.status import ServiceStatus
@@ -79,6 +83,13 @@ GRANTS: tuple[Grant, ...] = (
         "the simulated robot answers",
     ),
     Grant(("sim",), PUBLISH, (EpisodeEvent.key,), "episode start and end"),
+    Grant(
+        ("sim", "perception"),
+        PUBLISH,
+        (CompressedImage.key_pattern(), CameraInfo.key_pattern(), TaskLayout.key),
+        "a camera's images and intrinsics, the episode's layout",
+    ),
+    Grant(("perception",), PUBLISH, (MarkerDetections.key_pattern(),), "what it detected"),
     Grant(("sim",), SERVE, (EpisodeRequest.key,), "the sim answers resets"),
     Grant(("client",), QUERY, (EpisodeRequest.key,), "only the episode client resets the world"),
     Grant(("client",), QUERY, (ExplainRequest.key,), "asks the planner why"),

@@ -177,6 +177,9 @@ def _repair(cls: type[Message], obj: dict[str, Any]) -> dict[str, Any]:
             obj["features"] = {k: min(max(float(v), 0.0), 1.0) for k, v in features.items()}
     elif name in ("JointState", "JointTrajectoryResult", "JointTrajectoryCommand"):
         _repair_joints(obj)
+    elif name == "CameraInfo" and len(obj.get("camera_matrix", [])) == 9:
+        k = obj["camera_matrix"]  # a pinhole: fx, fy > 0, zeros where the model has them
+        obj["camera_matrix"] = [abs(k[0]) + 1.0, 0.0, k[2], 0.0, abs(k[4]) + 1.0, k[5], 0, 0, 1.0]
     if name == "Scene":
         _repair_scene(obj)
     elif name == "ExplainRequest" and isinstance(obj.get("scene"), dict):
