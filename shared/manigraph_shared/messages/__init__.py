@@ -9,7 +9,13 @@ from manigraph_shared.messages.base import (
     key_matches,
     message_type_for_key,
 )
-from manigraph_shared.messages.decision import Action, SkillState, SkillStatus, TrayAction
+from manigraph_shared.messages.decision import (
+    TRAY_RACKS,
+    Action,
+    SkillState,
+    SkillStatus,
+    TrayAction,
+)
 from manigraph_shared.messages.episode import EpisodeEvent, EpisodePhase, EpisodeRequest
 from manigraph_shared.messages.robot import GripperOp, RobotCommand, RobotFeedback
 from manigraph_shared.messages.scene import (
@@ -18,11 +24,13 @@ from manigraph_shared.messages.scene import (
     Scene,
     SceneGoal,
     SceneObject,
+    SceneRack,
 )
 from manigraph_shared.messages.status import ServiceState, ServiceStatus
 
 __all__ = [
     "MAX_PAYLOAD_BYTES",
+    "TRAY_RACKS",
     "Action",
     "Delivery",
     "EpisodeEvent",
@@ -38,6 +46,7 @@ __all__ = [
     "Scene",
     "SceneGoal",
     "SceneObject",
+    "SceneRack",
     "ServiceState",
     "ServiceStatus",
     "SkillState",
