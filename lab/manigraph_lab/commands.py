@@ -84,6 +84,8 @@ def _eval_run(args: argparse.Namespace) -> int:
         episodes.seed,
         options.noise,
         task_file,
+        episodes.objects,
+        episodes.preference,
     )
     progress = None if episodes.json else sys.stderr
     summary = evaluate(load_policy(options.policy), spec, progress)

@@ -22,6 +22,8 @@ class EvalSpec:
     seed: int = 0
     noise: float = 0.0
     task_file: str | None = None  # TOML text of a user layout
+    objects: int | None = None  # dishwasher
+    preference: str | None = None  # dishwasher
 
     def requests(self) -> list[EpisodeRequest]:
         return [
@@ -30,6 +32,8 @@ class EvalSpec:
                 task="file" if self.task_file is not None else self.task,
                 blocks=self.blocks,
                 stacks=self.stacks,
+                objects=self.objects,
+                preference=self.preference,
                 seed=self.seed + i,
                 task_file=self.task_file,
             )
@@ -73,6 +77,8 @@ def summarize(
         "task": spec.task,
         "blocks": spec.blocks,
         "stacks": spec.stacks,
+        **({"objects": spec.objects} if spec.objects is not None else {}),
+        **({"preference": spec.preference} if spec.preference is not None else {}),
         "noise": spec.noise,
         "seed": spec.seed,
         "episodes": count,

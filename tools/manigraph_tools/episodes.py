@@ -32,6 +32,12 @@ class EpisodeOptions(Options):
     task_file: Path | None = option(None, help="your own TOML layout (docs/running.md)")
     blocks: int = option(4, help="blocks per stack K", within=AT_LEAST_ONE)
     stacks: int = option(1, help="number of stacks s", within=AT_LEAST_ONE)
+    objects: int | None = option(
+        None, help="dishes (dishwasher: half plates, half bowls; default 10)", within=AT_LEAST_ONE
+    )
+    preference: str | None = option(
+        None, help="how to load the dishwasher: top-bottom (default) or left-right"
+    )
     episodes: int | None = option(
         None,
         help="run N episodes, then exit (up without it: keep the stack running)",
@@ -54,6 +60,8 @@ class EpisodeOptions(Options):
             task_file=task_file,
             blocks=self.blocks,
             stacks=self.stacks,
+            objects=self.objects,
+            preference=self.preference,
             episodes=episodes,
             seed=self.seed,
             timeout=self.timeout,
@@ -83,6 +91,8 @@ class EpisodePlan:
     timeout: float = 120.0
     run_id: str = "run"
     task_file: str | None = None  # TOML text of a user layout
+    objects: int | None = None  # dishwasher
+    preference: str | None = None  # dishwasher
 
     def request(self, index: int) -> EpisodeRequest:
         seed = self.seed + index
@@ -91,6 +101,8 @@ class EpisodePlan:
             task="file" if self.task_file is not None else self.task,
             blocks=self.blocks,
             stacks=self.stacks,
+            objects=self.objects,
+            preference=self.preference,
             seed=seed,
             task_file=self.task_file,
         )
