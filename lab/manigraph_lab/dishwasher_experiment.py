@@ -160,7 +160,7 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 def _run(args: argparse.Namespace) -> int:
     import torch
 
-    torch.set_num_threads(2)
+    torch.set_num_threads(1)
     config = ExperimentConfig(
         args.out, args.arch, tuple(args.seeds), 5, args.episodes, args.epochs, args.checkpoints
     )

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import zlib
+
 from manigraph_planner.policies.base import Decision, Policy, register_policy
 from manigraph_shared.messages import (
     TRAY_RACKS,
@@ -35,8 +37,8 @@ class DishwasherExpert(Policy):
     """Loads the top rack first (the bottom one is loaded only with the top one in):
 
     1. while a dish whose preferred rack is the top one is not loaded as preferred: pull the
-       top rack out if it is in, else put the dish with the smallest id into the free preferred
-       slot with the smallest id, in that slot's orientation;
+       top rack out if it is in, else put the dish with the smallest id into a free preferred
+       slot (:meth:`_free_slot`), in that slot's orientation;
     2. push the top rack in;
     3. the same for the bottom rack, then push it in. Then there is nothing left to do.
     """
@@ -83,10 +85,14 @@ class DishwasherExpert(Policy):
         return False
 
     def _free_slot(self, scene: Scene, dish: SceneObject) -> SceneGoal | None:
+        """A free preferred slot, drawn by a hash of episode, dish and slot: deterministic,
+        yet over demonstrations every slot is shown, so a policy learns 'any free slot on
+        the preferred rack and side' rather than one slot order it cannot extend."""
         free = [
             g for g in scene.goals if not g.filled and preferred(self.preference, dish.category, g)
         ]
-        return min(free, key=lambda g: g.id) if free else None
+        key = f"{scene.episode_id}/{dish.id}/"
+        return min(free, key=lambda g: (zlib.crc32((key + g.id).encode()), g.id)) if free else None
 
     @staticmethod
     def _toggle(rack_id: str) -> Decision:
