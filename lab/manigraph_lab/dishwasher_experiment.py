@@ -54,9 +54,7 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
     started = time.perf_counter()
     for preference in PREFERENCES:
         demo_path = config.out / f"demos-{preference}.mcap"
-        protocol = DemoProtocol(
-            ("dishwasher",), (4,), config.demos, 0, TRAIN_OBJECTS, preference
-        )
+        protocol = DemoProtocol(("dishwasher",), (4,), config.demos, 0, TRAIN_OBJECTS, preference)
         record_demos(dishwasher_expert(preference), protocol, demo_path)
         demos = load_dish_demonstrations([demo_path])
         table[preference] = {n: [] for n in TEST_OBJECTS}

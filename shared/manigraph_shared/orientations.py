@@ -36,7 +36,14 @@ ORIENTATIONS: Final[tuple[Quaternion, ...]] = (
 )
 NUM_ORIENTATIONS: Final = len(ORIENTATIONS)
 #: Names for logs and docs.
-ORIENTATION_NAMES: Final = ("up", "upside-down", "rim-y", "rim-y-flipped", "side-x", "side-x-flipped")
+ORIENTATION_NAMES: Final = (
+    "up",
+    "upside-down",
+    "rim-y",
+    "rim-y-flipped",
+    "side-x",
+    "side-x-flipped",
+)
 #: What the dishwasher task asks of each dish type in its slot.
 UPRIGHT: Final = 2
 UPSIDE_DOWN: Final = 1

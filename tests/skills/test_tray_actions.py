@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from manigraph_lab.episode_loop import StepClock, gripper_driver
+from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
     Action,
     EpisodeRequest,
@@ -13,7 +14,6 @@ from manigraph_shared.messages import (
     TrayAction,
     Vector3,
 )
-from manigraph_shared.errors import SkillError
 from manigraph_shared.orientations import UPSIDE_DOWN, nearest_orientation
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_skills.drivers.base import Motion, RobotDriver

@@ -31,9 +31,10 @@ TRAY_RACKS: dict[TrayAction, str] = {
 
 
 class Action(Message):
-    """Move ``object_id`` to ``goal_id`` (PickAndPlace, placed in orientation
-    ``orientation_index`` of ``manigraph_shared.orientations`` when set), or toggle a tray: then
-    ``object_id`` and ``goal_id`` both name the rack (``TrayAction.rack_id``)."""
+    """Move ``object_id`` to ``goal_id`` (PickAndPlace), or toggle a tray.
+
+    A placement turns the object to ``orientation_index`` (``manigraph_shared.orientations``)
+    when set; a tray toggle names its rack (``TrayAction.rack_id``) as object and goal."""
 
     key: ClassVar[str] = "manigraph/planner/action"
     delivery: ClassVar[Delivery] = Delivery.RELIABLE

@@ -39,7 +39,7 @@ def test_the_graph_has_dishes_slots_and_racks_with_their_flags() -> None:
     assert graph.rack_ids == ["rack_top", "rack_bottom"]
     assert graph.x.shape == (4 + 48 + 2, DISH_FEATURE_SPEC.num_features)
     names = DISH_FEATURE_SPEC.names
-    assert graph.x[:, : 6].sum(dim=1).eq(1).all()  # one category each
+    assert graph.x[:, :6].sum(dim=1).eq(1).all()  # one category each
     assert graph.x[-2:, names.index("open")].tolist() == [0.0, 0.0]
     slots = graph.x[4:52]
     assert slots[:, [names.index(f"orientation-{i}") for i in range(6)]].sum(dim=1).eq(1).all()

@@ -77,7 +77,7 @@ class DishGraph:
         return len(self.goal_ids)
 
     def goal_codes(self) -> Tensor:
-        return self.x[:, : _POSITION].argmax(dim=1)
+        return self.x[:, :_POSITION].argmax(dim=1)
 
 
 def dish_scene_to_graph(scene: Scene) -> DishGraph:

@@ -77,7 +77,10 @@ class DishwasherExpert(Policy):
         for slot in scene.goals:
             if slot.category is GoalCategory.BLOCK or slot.category is GoalCategory.COVER:
                 continue
-            gap = max(abs(a - b) for a, b in zip(slot.position.as_tuple(), dish.position.as_tuple()))
+            gap = max(
+                abs(a - b)
+                for a, b in zip(slot.position.as_tuple(), dish.position.as_tuple(), strict=True)
+            )
             if gap < _IN_SLOT:
                 return preferred(self.preference, dish.category, slot) and nearest_orientation(
                     dish.orientation

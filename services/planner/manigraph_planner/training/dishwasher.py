@@ -25,7 +25,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from manigraph_planner.gnn.dish_features import TRAY_ACTIONS, DISH_FEATURE_SPEC, dish_scene_to_graph
+from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC, TRAY_ACTIONS, dish_scene_to_graph
 from manigraph_planner.gnn.models import ModelConfig
 from manigraph_planner.gnn.models.dish_net import DishPolicyNet
 from manigraph_shared.errors import ConfigError, LogError

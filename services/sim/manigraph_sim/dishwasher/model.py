@@ -110,7 +110,9 @@ class DishwasherLayout(Layout):
         return set()
 
     def validate(self) -> None:
-        names = [d.id for d in self.dishes] + [r.id for r in self.racks] + [s.id for s in self.slots]
+        names = (
+            [d.id for d in self.dishes] + [r.id for r in self.racks] + [s.id for s in self.slots]
+        )
         if len(names) != len(set(names)):
             raise TaskError("layout: dish, rack and slot ids must be unique")
         if not self.dishes:

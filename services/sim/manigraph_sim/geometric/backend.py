@@ -15,6 +15,7 @@ from manigraph_shared.messages import (
     RobotFeedback,
     Scene,
 )
+from manigraph_shared.orientations import nearest_orientation
 from manigraph_sim.backend import EpisodeBackend
 from manigraph_sim.dishwasher.model import DishwasherLayout
 from manigraph_sim.dishwasher.scene import dishwasher_scene
@@ -24,7 +25,6 @@ from manigraph_sim.manifest import GRIPPER
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.tasks.box_geometry import BoxGeometry
 from manigraph_sim.tasks.from_request import episode_layout
-from manigraph_shared.orientations import nearest_orientation
 
 
 class GeometricBackend(EpisodeBackend):

@@ -57,8 +57,9 @@ class DishwasherTask(Task):
     upside down (1). A rack is loaded only when pulled out; the bottom rack only while the
     top one is pushed in; a slot holds one dish.
 
-    **Randomizations**: the dishes' counter positions (random cells of a 10 cm grid, jittered) and their
-    orientations (any of the six); which dishes are plates is fixed (``plate_*``, ``bowl_*``).
+    **Randomizations**: the dishes' counter positions (random cells of a 10 cm grid,
+    jittered) and their orientations (any of the six); which dishes are plates is fixed
+    (``plate_*``, ``bowl_*``).
 
     **Success Conditions**: every dish stands in a slot its preference allows, in that slot's
     orientation, and both racks are pushed in.
