@@ -99,7 +99,8 @@ class Slot:
 
 @dataclass
 class DishwasherLayout(Layout):
-    """A dishwasher episode: no block goals; success is the preference's (see the task)."""
+    """A dishwasher episode. ``bodies`` and ``goals`` mirror the dishes and slots as laid out;
+    no goal is required as such: success is the preference's (see the task)."""
 
     dishes: list[Dish] = field(default_factory=list)
     racks: list[Rack] = field(default_factory=list)

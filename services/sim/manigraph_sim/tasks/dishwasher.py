@@ -21,6 +21,7 @@ from manigraph_sim.dishwasher.model import (
 )
 from manigraph_sim.dishwasher.world import resting_height
 from manigraph_sim.tasks.base import Task, register_task
+from manigraph_sim.world_model import Body, Goal
 
 #: Where the dishes start: a counter in front of the robot, a grid of 10 cm cells (metres);
 #: each dish takes a random cell and lies within 1 cm of its centre.
@@ -88,9 +89,12 @@ class DishwasherTask(Task):
             dishes.append(dish)
         racks = [Rack(rack, np.array(centre)) for rack, centre in RACK_CENTRES.items()]
         slots = rack_slots(TOP) + rack_slots(BOTTOM)
+        racks_by_id = {rack.id: rack for rack in racks}
         return DishwasherLayout(
-            bodies=[],
-            goals=[],
+            # The generic view of the same episode (what tools that list bodies and goals see):
+            # the dishes where they start, the slots where they are with both racks in.
+            bodies=[Body(d.id, d.kind, d.size, d.position.copy()) for d in dishes],
+            goals=[Goal(s.id, s.kind, racks_by_id[s.rack].centre + s.offset) for s in slots],
             dishes=dishes,
             racks=racks,
             slots=slots,
