@@ -20,7 +20,7 @@ Its :class:`~manigraph_planner.gnn.features.FeatureSpec` is stamped into checkpo
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import torch
 from torch import Tensor
@@ -30,7 +30,7 @@ from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import TRAY_RACKS, Scene, TrayAction
 from manigraph_shared.orientations import NUM_ORIENTATIONS, nearest_orientation
 
-__all__ = ["DISH_FEATURE_SPEC", "TRAY_ACTIONS", "DishGraph", "dish_scene_to_graph"]
+__all__ = ["DISH_FEATURE_SPEC", "FILLED_COLUMN", "TRAY_ACTIONS", "DishGraph", "dish_scene_to_graph"]
 
 _CATEGORIES = ("plate", "bowl", "plate-slot", "bowl-slot", "rack-top", "rack-bottom")
 DISH_FEATURE_SPEC = FeatureSpec(
@@ -53,6 +53,8 @@ _DISH_CODE = {"plate": 0, "bowl": 1}
 _SLOT_CODE = {"plate": 2, "bowl": 3}
 _POSITION = len(_CATEGORIES)
 _ORIENTATION = _POSITION + 5
+#: Where the "filled" flag is.
+FILLED_COLUMN = _POSITION + 3
 
 
 @dataclass
@@ -67,6 +69,9 @@ class DishGraph:
     object_ids: list[str]
     goal_ids: list[str]
     rack_ids: list[str]
+    #: The rack of each slot (``SceneGoal.rack``), and whether each rack is out.
+    goal_racks: list[str | None] = field(default_factory=list)
+    rack_open: dict[str, bool] = field(default_factory=dict)
 
     @property
     def num_objects(self) -> int:
@@ -88,6 +93,7 @@ def dish_scene_to_graph(scene: Scene) -> DishGraph:
     """
     rows: list[Tensor] = []
     object_ids, goal_ids, rack_ids = [], [], []
+    goal_racks: list[str | None] = []
 
     def row(code: int, p: tuple[float, float, float], filled: float, open_: float, o: int | None):
         r = torch.zeros(DISH_FEATURE_SPEC.num_features)
@@ -113,10 +119,12 @@ def dish_scene_to_graph(scene: Scene) -> DishGraph:
             o = nearest_orientation(goal.orientation)
             row(_SLOT_CODE[goal.category.value], goal.position.as_tuple(), goal.filled, 0.0, o)
             goal_ids.append(goal.id)
+            goal_racks.append(goal.rack)
     for rack in scene.racks:
         if rack.id not in _RACK_CODE:
             raise PolicyError(f"scene: rack '{rack.id}' is not one of {sorted(_RACK_CODE)}")
         row(_RACK_CODE[rack.id], rack.position.as_tuple(), 0.0, float(rack.open), None)
         rack_ids.append(rack.id)
     x = torch.stack(rows) if rows else torch.zeros(0, DISH_FEATURE_SPEC.num_features)
-    return DishGraph(x, object_ids, goal_ids, rack_ids)
+    rack_open = {rack.id: rack.open for rack in scene.racks}
+    return DishGraph(x, object_ids, goal_ids, rack_ids, goal_racks, rack_open)

@@ -5,10 +5,15 @@ from __future__ import annotations
 import torch
 
 from manigraph_planner.gnn.checkpoint import CheckpointInfo
-from manigraph_planner.gnn.dish_features import TRAY_ACTIONS, DishGraph, dish_scene_to_graph
+from manigraph_planner.gnn.dish_features import (
+    FILLED_COLUMN,
+    TRAY_ACTIONS,
+    DishGraph,
+    dish_scene_to_graph,
+)
 from manigraph_planner.gnn.models.dish_net import DishHeads, DishPolicyNet
 from manigraph_planner.policies.base import Decision, Policy
-from manigraph_shared.messages import Scene, TrayAction
+from manigraph_shared.messages import TRAY_RACKS, Scene, TrayAction
 
 __all__ = ["DishwasherGNNPolicy", "decision_from_heads"]
 
@@ -52,7 +57,11 @@ def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
     codes = graph.goal_codes()
     object_logp = heads.node[:k].log_softmax(0)
     goal_logp = heads.node[k : k + m].log_softmax(0)
-    free = graph.x[k : k + m, 9] == 0  # the "filled" column
+    free = graph.x[k : k + m, FILLED_COLUMN] == 0
+    usable = torch.tensor(
+        [_rack_usable(graph, rack) for rack in graph.goal_racks], dtype=torch.bool
+    )
+    free &= usable
     wanted = torch.tensor([_SLOT_FOR_DISH[int(c)] for c in codes[:k]])
     fits = (codes[k : k + m].unsqueeze(0) == wanted.unsqueeze(1)) & free.unsqueeze(0)
     if not bool(fits.any()):
@@ -62,3 +71,14 @@ def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
     o, g = flat // m, flat % m
     orientation = int(heads.orientation[o].argmax())
     return Decision(graph.object_ids[o], graph.goal_ids[g], orientation)
+
+
+def _rack_usable(graph: DishGraph, rack: str | None) -> bool:
+    """A slot of ``rack`` can be loaded now: the rack is out, and for the bottom rack the top
+    one is in (a slot without a rack is always usable)."""
+    if rack is None:
+        return True
+    top = TRAY_RACKS[TrayAction.TOGGLE_TOP]
+    if not graph.rack_open.get(rack, False):
+        return False
+    return rack == top or not graph.rack_open.get(top, False)

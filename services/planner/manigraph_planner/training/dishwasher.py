@@ -32,6 +32,8 @@ from manigraph_shared.errors import ConfigError, LogError
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, Scene, TrayAction
 
+_NONE = TRAY_ACTIONS.index(TrayAction.NONE)
+
 __all__ = ["DishSample", "DishTrainConfig", "dish_loss", "load_dish_demonstrations", "train_dish"]
 
 
@@ -89,6 +91,49 @@ def load_dish_demonstrations(paths: Iterable[Path]) -> DishDemos:
     return DishDemos(samples, digest.hexdigest()[:16], len(episodes))
 
 
+_FILLED = DISH_FEATURE_SPEC.names.index("filled")
+_OPEN = DISH_FEATURE_SPEC.names.index("open")
+_XYZ = slice(DISH_FEATURE_SPEC.names.index("x"), DISH_FEATURE_SPEC.names.index("z") + 1)
+
+
+def drop_dishes(sample: DishSample, rng: random.Random) -> DishSample:
+    """A copy of ``sample`` with a random subset of its dishes removed, where that cannot
+    change the demonstrated decision: a placement keeps its dish; a toggle that pulls a rack
+    out (it is in now) keeps one dish still to load of each kind, as whichever preference
+    it serves, that rack is pulled out for one of them; anything else may go. A removed
+    dish frees the slot it stood in. This shows the network fewer dishes than the
+    demonstrations held, without any further expert label."""
+    k = sample.num_objects
+    x = sample.x
+    keep = [rng.random() < 0.5 for _ in range(k)]
+    if sample.tray == _NONE:
+        keep[sample.object_index] = True
+    elif bool(x[k + sample.num_goals + sample.tray, _OPEN] == 0):  # pulls the rack out
+        for kind in (0, 1):  # the plate and bowl one-hot columns
+            pending = [i for i in range(k) if x[i, kind] == 1 and x[i, _FILLED] == 0]
+            if pending:
+                keep[rng.choice(pending)] = True
+    if all(keep):
+        return sample
+    x = x.clone()
+    slots = x[k : k + sample.num_goals]
+    for i in range(k):
+        if not keep[i] and x[i, _FILLED] == 1:
+            near = (slots[:, _XYZ] - x[i, _XYZ]).abs().amax(dim=1) < 1e-3
+            slots[near, _FILLED] = 0.0
+    rows = [i for i in range(k) if keep[i]] + list(range(k, x.shape[0]))
+    new_index = sum(keep[: sample.object_index]) if sample.tray == _NONE else 0
+    return DishSample(
+        x[rows],
+        sum(keep),
+        sample.num_goals,
+        new_index,
+        sample.goal_index,
+        sample.orientation,
+        sample.tray,
+    )
+
+
 @dataclass(frozen=True)
 class DishTrainConfig:
     architecture: str = "sage"
@@ -99,6 +144,8 @@ class DishTrainConfig:
     num_layers: int = 3
     #: Positions in decimetres: the racks' and sides' differences become O(1).
     position_scale: float = 10.0
+    #: Copies of each sample with dishes dropped (:func:`drop_dishes`), drawn once.
+    copies: int = 4
 
     def __post_init__(self) -> None:
         if self.epochs < 1:
@@ -183,13 +230,16 @@ def train_dish(demos: DishDemos, config: DishTrainConfig) -> tuple[DishPolicyNet
     torch.manual_seed(config.seed)
     random.seed(config.seed)
     net = DishPolicyNet(config.model_config())
+    rng = random.Random(config.seed)
+    samples = list(demos.samples)
+    samples += [drop_dishes(s, rng) for _ in range(config.copies) for s in demos.samples]
     optimiser = torch.optim.Adam(net.parameters(), lr=config.learning_rate)
     net.train()
     loss = torch.tensor(0.0)
     for _ in range(config.epochs):
         optimiser.zero_grad()
-        loss = dish_loss(net, demos.samples)
+        loss = dish_loss(net, samples)
         loss.backward()
         optimiser.step()
     net.eval()
-    return net, {"final_loss": float(loss.detach()), "samples": len(demos.samples)}
+    return net, {"final_loss": float(loss.detach()), "samples": len(samples)}
