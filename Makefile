@@ -5,7 +5,7 @@ UV := $(PYTHON) -m uv
 RUN := $(UV) run --frozen --all-packages
 UV_VERSION := 0.13.9
 
-.PHONY: install vulkan up test test-fast lint format bench clean
+.PHONY: install vulkan up test test-fast lint format bench soak clean
 
 install:  ## install uv and every package of the workspace (uv.lock)
 	@$(PYTHON) -m uv --version >/dev/null 2>&1 || $(PYTHON) -m pip install --quiet "uv==$(UV_VERSION)"
@@ -43,6 +43,10 @@ bench: install  ## speed figures (not tests): medians and ratios
 	$(RUN) python bench/bench_explainer.py
 	$(RUN) python bench/bench_ik.py
 	$(RUN) python bench/bench_physics.py
+
+soak: install  ## reliability soak (~30 min): 100k fuzzed payloads per key, floods, explain bomb, then 3 episodes
+	$(RUN) python bench/soak.py
+	$(RUN) python bench/soak_flood.py
 
 clean:
 	rm -rf .venv logs .pytest_cache .ruff_cache .mypy_cache

@@ -70,9 +70,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--blocks", type=int, nargs="+", default=[3, 6])
     parser.add_argument("--episodes", type=int, default=5)
+    parser.add_argument(
+        "--collision-checks",
+        choices=("on", "off"),
+        default="on",
+        help="arm-link collision checking of every motion (off: the hand's path only)",
+    )
     args = parser.parse_args()
     backend = PhysicsBackend()
-    driver = PandaMotionDriver(InProcessJointTransport(backend))
+    driver = PandaMotionDriver(
+        InProcessJointTransport(backend), check_collisions=args.collision_checks == "on"
+    )
     skill = PickAndPlace(driver, Workspace())
     timestep = backend.config.timestep
 

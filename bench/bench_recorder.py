@@ -3,24 +3,90 @@
 A publisher sends Actions (BLOCK, never dropped) as fast as it can for a few seconds through a
 real router to a real recorder process; the figure is samples written per second, and the
 ratio of written to published (must be 1.0).
+
+``--kill N``: N times, a recorder taking Actions at ~500/s is killed with SIGKILL, its file is
+finalised with ``manigraph record --recover`` and read with the standard ``mcap`` reader; the
+figure is the window of messages lost before the kill, in ms (median and worst; target 100).
 """
 
 from __future__ import annotations
 
 import argparse
+import statistics
 import tempfile
+import threading
 import time
 from pathlib import Path
+
+from mcap.reader import make_reader
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action
 from manigraph_tools.testing import stack
 
 
+def lost_window_ms(tmp: Path, run: int) -> float:
+    """Kill a recording recorder; ms of messages published before the kill that are lost."""
+    with stack(tmp) as running:
+        log = tmp / f"kill-{run}.mcap"
+        running.start("router")
+        recorder = running.start("recorder", "record", "--output", str(log))
+        published: dict[int, float] = {}
+        with running.client() as bus:
+            running.wait_alive(bus, "recorder")
+            stop = threading.Event()
+
+            def publish() -> None:
+                step = 0
+                while not stop.is_set():
+                    published[step] = time.monotonic()
+                    bus.publish(
+                        Action(
+                            decision_id=f"e:{step}",
+                            episode_id="e",
+                            scene_sequence=step,
+                            object_id="b",
+                            goal_id="g",
+                            policy="bench",
+                            stamp=time.time(),
+                        )
+                    )
+                    step += 1
+                    time.sleep(0.002)
+
+            publisher = threading.Thread(target=publish)
+            publisher.start()
+            time.sleep(1.5)
+            killed_at = time.monotonic()
+            recorder.kill()
+            recorder.wait()
+            stop.set()
+            publisher.join()
+        recovered = running.run("record", "--recover", str(log))
+        assert recovered.returncode == 0, recovered.stderr
+        with log.open("rb") as stream:  # the standard reader, summary and all
+            reader = make_reader(stream)
+            assert reader.get_summary() is not None
+            kept = {
+                Action.decode(m.data).scene_sequence
+                for _, channel, m in reader.iter_messages()
+                if channel.topic == Action.key
+            }
+    lost = [at for step, at in published.items() if at < killed_at and step not in kept]
+    return 1000 * (killed_at - min(lost)) if lost else 0.0
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seconds", type=float, default=3.0)
+    parser.add_argument("--kill", type=int, default=0, help="also measure N kill -9 runs")
     args = parser.parse_args()
+    if args.kill:
+        with tempfile.TemporaryDirectory() as tmp:
+            windows = [lost_window_ms(Path(tmp), run) for run in range(args.kill)]
+        print("recorder kill -9, then manigraph record --recover, read with mcap's make_reader")
+        print(f"{'runs':>5} {'median lost ms':>15} {'worst lost ms':>14} {'target':>7}")
+        print(f"{args.kill:>5} {statistics.median(windows):>15.0f} {max(windows):>14.0f} {100:>7}")
     with tempfile.TemporaryDirectory() as tmp, stack(Path(tmp)) as running:
         log = Path(tmp) / "bench.mcap"
         running.start("router")

@@ -66,6 +66,17 @@ class StepClock:
         return self.now
 
 
+def in_process_skill(
+    backend: SimBackend,
+    clock: StepClock,
+    driver_factory: Callable[[SimBackend, StepClock], RobotDriver] | None = None,
+    workspace: Workspace | None = None,
+) -> PickAndPlace:
+    """The skills' PickAndPlace on ``backend``, its driver's commands handed over directly."""
+    driver = (driver_factory or gripper_driver)(backend, clock)
+    return PickAndPlace(driver, workspace or Workspace(), clock)
+
+
 def gripper_driver(backend: SimBackend, clock: StepClock) -> RobotDriver:
     """The geometric world's robot: the skills' gripper driver, commands straight to the world."""
     return GripperDriver(InProcessGripperTransport(backend), clock)
@@ -107,9 +118,9 @@ def run_episode(
     backend = backend_factory()
     clock = StepClock()
     start = backend.reset(request, clock())
-    planner = DecisionMaker(policy, clock)
+    planner = DecisionMaker(policy, clock=clock)
     planner.on_episode(start)
-    skill = PickAndPlace(driver_factory(backend, clock), workspace or Workspace(), clock)
+    skill = in_process_skill(backend, clock, driver_factory, workspace)
     rng = np.random.default_rng([request.seed, 7919])
     steps: list[Step] = []
     while True:

@@ -30,6 +30,9 @@ class InProcessGripperTransport:
     def execute(self, command: RobotCommand) -> RobotFeedback:
         return self.backend.execute(command, command.stamp)
 
+    def interrupt(self, reason: str) -> None:
+        """Nothing waits: a command is carried out within ``execute``."""
+
 
 class InProcessJointTransport:
     """Joint trajectories executed by a physics backend, for tests and benchmarks."""
@@ -51,3 +54,9 @@ class InProcessJointTransport:
         if scene is None:
             return None
         return np.array(scene.object(object_id).position.as_tuple())
+
+    def stop(self) -> None:
+        self.backend.emergency_stop(True)
+
+    def resume(self) -> None:
+        self.backend.emergency_stop(False)

@@ -18,7 +18,7 @@ from typing import Any, TypeVar
 import zenoh
 
 from manigraph_shared.bus_config import BusConfig
-from manigraph_shared.errors import BusError, ManigraphError, MessageError
+from manigraph_shared.errors import BusError, ManigraphError, MessageError, RequestRefused
 from manigraph_shared.messages import Delivery, Message
 
 log = logging.getLogger(__name__)
@@ -161,7 +161,7 @@ class Bus:
             if reply.ok is not None:
                 return reply_type.decode(reply.ok.payload.to_bytes(), key)
             error = reply.err.payload.to_string() if reply.err is not None else "error reply"
-            raise BusError(f"{key}: {error}")
+            raise RequestRefused(f"{key}: {error}")
         raise BusError(f"{key}: no answer within {timeout:.1f} s (is the service running?)")
 
     # --- liveliness -------------------------------------------------------------------------
@@ -174,6 +174,24 @@ class Bus:
             if reply.ok is not None:
                 names.add(str(reply.ok.key_expr).removeprefix(f"{ALIVE_PREFIX}/"))
         return names
+
+    def watch_alive(self, on_change: Callable[[str, bool], None]) -> None:
+        """Call ``on_change(service, alive)`` (on a Zenoh thread) for every service alive now
+        and whenever a service's liveliness token appears or disappears; a killed process's
+        token goes within milliseconds."""
+
+        def changed(sample: zenoh.Sample) -> None:
+            name = str(sample.key_expr).removeprefix(f"{ALIVE_PREFIX}/")
+            try:
+                on_change(name, sample.kind == zenoh.SampleKind.PUT)
+            except Exception:  # a callback bug must not silence the watcher
+                log.exception("liveliness callback failed")
+
+        self._declared.append(
+            self.session.liveliness().declare_subscriber(
+                f"{ALIVE_PREFIX}/**", changed, history=True
+            )
+        )
 
     def close(self) -> None:
         for entity in reversed(self._declared):

@@ -43,6 +43,11 @@ class BusError(ManigraphError):
     """The Zenoh bus could not be reached or answered with an error."""
 
 
+class RequestRefused(BusError):
+    """A queryable answered a request with an error reply: the request itself was refused
+    (as opposed to no answer at all, a plain :class:`BusError`)."""
+
+
 class LogError(ManigraphError):
     """An MCAP log could not be read or written."""
 

@@ -87,6 +87,27 @@ def load_manifests() -> dict[str, Manifest]:
     return found
 
 
+#: What each sim backend offers a robot driver. Part of the contract, so a process whose
+#: image lacks the sim (the skills container) still matches its driver to the world; the
+#: sim's manifest declares its variants from this table.
+WORLD_ABILITIES: Mapping[str, frozenset[str]] = {
+    "geometric": frozenset({"gripper_commands"}),
+    "physics": frozenset({"joint_trajectories"}),
+}
+
+
+def driver_for_backend(backend: str, manifests: Mapping[str, Manifest] | None = None) -> str:
+    """The skills driver for the sim backend ``backend``: from the installed sim manifest, or
+    (where the sim is not installed) from :data:`WORLD_ABILITIES`."""
+    manifests = load_manifests() if manifests is None else manifests
+    world = manifests.get("sim") or Manifest(
+        "sim", "world", variant_option="backend", variants=dict(WORLD_ABILITIES)
+    )
+    if "skills" not in manifests:
+        raise ConfigError("driver", "the skills manifest is not installed")
+    return driver_for_world(world, backend, manifests["skills"])
+
+
 def driver_for_world(world: Manifest, backend: str, robot: Manifest) -> str:
     """The robot driver whose needs the world's ``backend`` offers (the first in name order
     that does). A driver that needs an ability no world offers (a real robot) is never picked."""

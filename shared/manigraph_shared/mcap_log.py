@@ -3,11 +3,13 @@
 Channels are named by key expression and carry the message's JSON Schema, so Foxglove and the
 ``mcap`` reader both understand them. The writer closes a chunk and flushes the file at least
 every ``flush_interval`` seconds; the reader recovers every complete chunk of a file whose writer
-was killed (``kill -9``) mid-write.
+was killed (``kill -9``) mid-write, and :func:`recover_log` rewrites such a file as a finalised
+MCAP file (summary, indexes, footer) that any standard reader opens.
 """
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -16,6 +18,7 @@ from typing import BinaryIO
 
 from mcap.exceptions import InvalidMagic
 from mcap.reader import NonSeekingReader
+from mcap.records import Channel, Schema
 from mcap.writer import CompressionType, Writer
 
 from manigraph_shared.errors import LogError
@@ -98,6 +101,11 @@ class McapLogWriter:
         self._stream.flush()
         self._last_flush = time.monotonic()
 
+    @property
+    def bytes_written(self) -> int:
+        """Bytes in the file so far (the open chunk not counted until flushed)."""
+        return self._stream.tell()
+
     def close(self) -> None:
         self._writer.finish()
         self._stream.close()
@@ -158,3 +166,81 @@ def decode_log(path: Path, topics: Iterable[str] = ()) -> list[Message]:
     """The contract's messages in ``path`` (by default every ``manigraph/**`` channel; other
     channels, such as Foxglove's drawings, are not messages of the contract)."""
     return [item.decode() for item in read_log(path, list(topics) or [f"{PREFIX}/**"])]
+
+
+#: The 8 bytes every MCAP file starts and a finalised one ends with.
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def is_finalised(path: Path) -> bool:
+    """Whether ``path`` ends with the MCAP magic (its writer finished it)."""
+    try:
+        with path.open("rb") as stream:
+            stream.seek(0, os.SEEK_END)
+            if stream.tell() < 2 * len(MCAP_MAGIC):
+                return False
+            stream.seek(-len(MCAP_MAGIC), os.SEEK_END)
+            return stream.read() == MCAP_MAGIC
+    except OSError as exc:
+        raise LogError(f"cannot open {path}: {exc.strerror}") from None
+
+
+def recover_log(path: Path, output: Path | None = None) -> int:
+    """Rewrite ``path`` (cut short by a killed writer) as a finalised MCAP file.
+
+    Every message of every complete chunk is kept, with its channel, schema, times and
+    sequence. Written to ``output``, or (without one) to a temporary file that then replaces
+    ``path``, so the file is never half-repaired. Returns the number of messages kept.
+    """
+    target = output or path.with_name(path.name + ".recovering")
+    try:
+        source = path.open("rb")
+    except OSError as exc:
+        raise LogError(f"cannot open {path}: {exc.strerror}") from None
+    kept = 0
+    with source, target.open("wb") as sink:
+        writer = Writer(sink, compression=CompressionType.ZSTD)
+        writer.start(profile=PROFILE, library="manigraph (recovered)")
+        schemas: dict[int, int] = {}
+        channels: dict[int, int] = {}
+        reader = NonSeekingReader(source, record_size_limit=None)
+        try:
+            for schema, channel, message in reader.iter_messages(log_time_order=False):
+                if channel.id not in channels:
+                    channels[channel.id] = _copy_channel(writer, schema, channel, schemas)
+                writer.add_message(
+                    channel_id=channels[channel.id],
+                    log_time=message.log_time,
+                    publish_time=message.publish_time,
+                    data=message.data,
+                    sequence=message.sequence,
+                )
+                kept += 1
+        except InvalidMagic as exc:
+            sink.close()
+            target.unlink()
+            raise LogError(f"{path} is not an MCAP file: {exc}") from None
+        except Exception:  # the cut: everything before it was copied
+            pass
+        writer.finish()
+    if output is None:
+        os.replace(target, path)
+    return kept
+
+
+def _copy_channel(
+    writer: Writer, schema: Schema | None, channel: Channel, schemas: dict[int, int]
+) -> int:
+    schema_id = 0
+    if schema is not None:
+        if schema.id not in schemas:
+            schemas[schema.id] = writer.register_schema(
+                name=schema.name, encoding=schema.encoding, data=schema.data
+            )
+        schema_id = schemas[schema.id]
+    return writer.register_channel(
+        topic=channel.topic,
+        message_encoding=channel.message_encoding,
+        schema_id=schema_id,
+        metadata=dict(channel.metadata),
+    )

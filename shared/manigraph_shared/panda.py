@@ -1,7 +1,10 @@
 """The Franka Panda as both the physics sim and the skills service see it.
 
-Joint names and frames are those of the Panda URDF that ships inside the mani-skill package;
-the file is only located (``importlib.util.find_spec``), never imported or downloaded.
+Joint names and frames are those of the Panda URDF shipped with this package
+(``manigraph_shared/robots/panda/``: ManiSkill's ``panda_v2.urdf`` and the meshes it
+references, with their Apache 2.0 licence), so the skills image has the robot without
+mani-skill. Other variants of ManiSkill's Panda are located in the mani-skill package when it
+is installed (``importlib.util.find_spec``), never imported or downloaded.
 """
 
 from __future__ import annotations
@@ -32,12 +35,18 @@ FINGER_BELOW_TCP = 0.0095
 FINGER_ABOVE_TCP = 0.045
 
 
+#: The Panda description shipped as package data.
+SHIPPED_PANDA = Path(__file__).parent / "robots" / "panda"
+
+
 def panda_urdf_path(name: str = "panda_v2.urdf") -> Path:
-    """The Panda URDF inside the installed mani-skill package.
+    """The Panda URDF: the shipped copy, else the one inside the mani-skill package.
 
     Raises:
-        ConfigError: mani-skill is not installed, or the file is not in it.
+        ConfigError: not shipped, and mani-skill is not installed or lacks the file.
     """
+    if (SHIPPED_PANDA / name).is_file():
+        return SHIPPED_PANDA / name
     spec = importlib.util.find_spec("mani_skill")
     if spec is None or not spec.submodule_search_locations:
         raise ConfigError("panda_urdf", "mani-skill is not installed; it ships the Panda URDF")

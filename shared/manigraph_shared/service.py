@@ -4,25 +4,87 @@ Service logic lives in plain classes that take and return messages; a :class:`Se
 wires them to the bus. All handlers of one service run on one thread, in arrival order, so the
 logic needs no locks. A payload that fails validation is logged, counted and reported as an
 error ``ServiceStatus`` (so it also lands in the MCAP log) and the service keeps running.
-"""
+
+What a flood can cost is bounded: the inbox holds at most ``INBOX_CAPACITY`` samples and one
+waiting sample per state stream (:mod:`manigraph_shared.inbox` states the overflow policy);
+rejected payloads are reported individually up to ``REJECTION_REPORTS_PER_SECOND`` (the rest
+are counted and the count goes with the next report); after a burst the service hands freed
+heap back to the OS (``malloc_trim``), so its RSS returns to where it was.
+
+The service thread publishes a ``ServiceStatus`` heartbeat every ``HEARTBEAT_SECONDS``: a
+service whose liveliness token is there but whose heartbeats stop is *stalled* (a handler that
+never returns), and ``manigraph doctor`` reports it so.
+
+A valid message a service will not act on (a scene of another episode, an action while
+stopped) is refused with :meth:`Service.reject`. Every refusal, malformed or not, is counted
+by ``<Type>:<reason>`` and published with every heartbeat (``ServiceStatus.rejections``)."""
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import logging
-import queue
 import signal
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from typing import Any, ClassVar, TypeVar
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
-from manigraph_shared.errors import ManigraphError
-from manigraph_shared.messages import Message, ServiceState, ServiceStatus
+from manigraph_shared.errors import ManigraphError, MessageError
+from manigraph_shared.inbox import DEFAULT_CAPACITY, Inbox
+from manigraph_shared.messages import Delivery, Message, ServiceState, ServiceStatus
+from manigraph_shared.messages.status import MAX_REJECTION_KINDS
 
 M = TypeVar("M", bound=Message)
 HEARTBEAT_SECONDS = 1.0
+INBOX_CAPACITY = DEFAULT_CAPACITY
+#: Rejected payloads reported one by one (log line + error status) per second, at most; a
+#: burst of up to ``REJECTION_BURST`` is reported in full.
+REJECTION_REPORTS_PER_SECOND = 10.0
+REJECTION_BURST = 20
+#: Messages handled or rejected since the last trim that make a heap trim worthwhile.
+TRIM_AFTER_MESSAGES = 1000
+
+#: A refusal is logged at most this often per ``<Type>:<reason>`` (all are counted).
+REJECTION_LOG_SECONDS = 1.0
+
+
+class Rejections:
+    """Thread-safe counters of refused messages by ``<Type>:<reason>``."""
+
+    def __init__(self) -> None:
+        self._counts: dict[str, int] = {}
+        self._logged: dict[str, float] = {}
+        self._lock = threading.Lock()
+
+    def add(self, kind: str) -> bool:
+        """Count one refusal; True when it is time to log this kind again."""
+        now = time.monotonic()
+        with self._lock:
+            if kind not in self._counts and len(self._counts) >= MAX_REJECTION_KINDS - 1:
+                kind = "other"
+            self._counts[kind] = self._counts.get(kind, 0) + 1
+            if now - self._logged.get(kind, -REJECTION_LOG_SECONDS) >= REJECTION_LOG_SECONDS:
+                self._logged[kind] = now
+                return True
+            return False
+
+    def snapshot(self) -> dict[str, int]:
+        with self._lock:
+            return dict(self._counts)
+
+    @property
+    def total(self) -> int:
+        with self._lock:
+            return sum(self._counts.values())
+
+
+def type_label(message_type: str) -> str:
+    """``manigraph.Scene`` -> ``Scene``."""
+    return message_type.rsplit(".", 1)[-1]
 
 
 class Service:
@@ -35,25 +97,55 @@ class Service:
     def __init__(self, bus: Bus) -> None:
         self.bus = bus
         self.log = logging.getLogger(f"manigraph.{self.name}")
-        self._inbox: queue.SimpleQueue[tuple[Callable[[Any], None], Any]] = queue.SimpleQueue()
+        self._inbox = Inbox(INBOX_CAPACITY)
         self.messages_in = 0
-        self.messages_rejected = 0
+        self.rejections = Rejections()
         self.last_error = ""
         self.stop_event = threading.Event()
+        self._errors_to_report: deque[ManigraphError] = deque()
+        self._rejections_unreported = 0
+        self._rejection_lock = threading.Lock()
+        self._report_tokens = float(REJECTION_BURST)
+        self._tokens_at = time.monotonic()
+        self._dropped_reported = 0
+        self._activity_at_trim = 0
+
+    @property
+    def messages_rejected(self) -> int:
+        return self.rejections.total
 
     # --- wiring -----------------------------------------------------------------------------
     def on(
         self, message_type: type[M], handler: Callable[[M], None], key: str | None = None
     ) -> None:
-        """Run ``handler`` on the service thread for every valid ``message_type`` sample."""
+        """Run ``handler`` on the service thread for every valid ``message_type`` sample
+        (state streams coalesced to the newest waiting sample, the rest bounded)."""
+        if message_type.delivery is Delivery.LATEST:
+            slot = (message_type.type_name(), key, id(handler))
 
-        def enqueue(message: M) -> None:
-            self._inbox.put((handler, message))
+            def enqueue(message: M) -> None:
+                self._inbox.put_latest(slot, handler, message)
+
+        else:
+
+            def enqueue(message: M) -> None:
+                self._inbox.put(handler, message)
 
         self.bus.subscribe(message_type, enqueue, on_error=self._rejected, key=key)
 
-    def call_soon(self, handler: Callable[[Any], None], argument: Any = None) -> None:
-        self._inbox.put((handler, argument))
+    def call_soon(self, handler: Callable[[Any], None], argument: Any = None) -> bool:
+        """Run ``handler(argument)`` on the service thread: the service's own work, never
+        dropped (so always True)."""
+        self._inbox.put_unbounded(handler, argument)
+        return True
+
+    def reject(self, message: Message | str, reason: str, detail: str = "") -> None:
+        """Refuse a valid ``message`` (or a message type's name): count it by type and
+        ``reason``, log it now and then. Safe from any thread; never blocks."""
+        name = message if isinstance(message, str) else type(message).type_name()
+        kind = f"{type_label(name)}:{reason}"
+        if self.rejections.add(kind):
+            self.log.warning("refused %s%s", kind, f" ({detail})" if detail else "")
 
     def setup(self) -> None:
         """Declare subscriptions, queryables and publishers."""
@@ -78,14 +170,50 @@ class Service:
                 detail=detail[:2048],
                 messages_in=self.messages_in,
                 messages_rejected=self.messages_rejected,
+                rejections=self.rejections.snapshot(),
                 stamp=time.time(),
             )
         )
 
     def _rejected(self, error: ManigraphError) -> None:
-        # Zenoh thread: count here, report on the service thread.
-        self.messages_rejected += 1
-        self._inbox.put((self.report_error, error))
+        # Zenoh thread: count here, report on the service thread (bounded, see run).
+        name = error.message_type if isinstance(error, MessageError) else "handler"
+        self.rejections.add(f"{type_label(name)}:invalid")
+        with self._rejection_lock:
+            if len(self._errors_to_report) < REJECTION_BURST:
+                self._errors_to_report.append(error)
+            else:
+                self._rejections_unreported += 1
+
+    def _report_rejections(self, now: float) -> None:
+        """Report waiting rejections within the rate budget (a token bucket)."""
+        self._report_tokens = min(
+            float(REJECTION_BURST),
+            self._report_tokens + (now - self._tokens_at) * REJECTION_REPORTS_PER_SECOND,
+        )
+        self._tokens_at = now
+        while self._report_tokens >= 1.0:
+            with self._rejection_lock:
+                if not self._errors_to_report:
+                    break
+                error = self._errors_to_report.popleft()
+                unreported, self._rejections_unreported = self._rejections_unreported, 0
+            self._report_tokens -= 1.0
+            suffix = f" (and {unreported} more rejected, not reported one by one)"
+            self.report_error(ManigraphError(f"{error}{suffix if unreported else ''}"))
+        dropped = self._inbox.dropped
+        if dropped > self._dropped_reported:
+            self._dropped_reported = dropped
+            self.report_error(
+                ManigraphError(f"inbox full ({self._inbox.capacity}): {dropped} samples dropped")
+            )
+
+    def _trim_heap(self) -> None:
+        """After a burst, give freed heap back to the OS (glibc keeps it otherwise)."""
+        activity = self.messages_in + self.messages_rejected + self._inbox.coalesced
+        if activity - self._activity_at_trim >= TRIM_AFTER_MESSAGES and not len(self._inbox):
+            self._activity_at_trim = activity
+            malloc_trim()
 
     # --- life cycle -------------------------------------------------------------------------
     def run(self) -> None:
@@ -100,20 +228,19 @@ class Service:
             while not self.stop_event.is_set():
                 now = time.monotonic()
                 wake = min(next_beat, next_tick if self.tick_period else next_beat)
-                try:
-                    handler, argument = self._inbox.get(timeout=max(0.0, min(wake - now, 0.1)))
-                except queue.Empty:
-                    pass
-                else:
+                work = self._inbox.get(timeout=max(0.0, min(wake - now, 0.1)))
+                if work is not None:
                     self.messages_in += 1
-                    self._dispatch(handler, argument)
+                    self._dispatch(*work)
                 now = time.monotonic()
+                self._report_rejections(now)
                 if self.tick_period and now >= next_tick:
                     next_tick = now + self.tick_period
                     self._dispatch(lambda _: self.tick(), None)
                 if now >= next_beat:
                     next_beat = now + HEARTBEAT_SECONDS
                     self.publish_status(ServiceState.OK, self.last_error)
+                    self._trim_heap()
         finally:
             self.publish_status(ServiceState.STOPPING)
             self.teardown()
@@ -129,8 +256,40 @@ class Service:
             self.report_error(exc)
 
 
+#: glibc's ``M_ARENA_MAX`` (mallopt): at most this many malloc arenas per process. glibc
+#: otherwise gives each of Zenoh's many threads its own arena (up to 8 per core), and memory
+#: freed after a flood stays stranded in them.
+MALLOC_ARENAS = 2
+_M_ARENA_MAX = -8
+
+
+def limit_malloc_arenas(arenas: int = MALLOC_ARENAS) -> None:
+    """Cap glibc's malloc arenas (before the bus starts its threads); no-op elsewhere."""
+    if _LIBC is not None and hasattr(_LIBC, "mallopt"):
+        _LIBC.mallopt(_M_ARENA_MAX, arenas)
+
+
+def malloc_trim() -> None:
+    """Hand the heap's free memory back to the OS (glibc only; elsewhere nothing)."""
+    if _LIBC is not None:
+        _LIBC.malloc_trim(0)
+
+
+def _load_libc() -> ctypes.CDLL | None:
+    name = ctypes.util.find_library("c")
+    try:
+        libc = ctypes.CDLL(name) if name else None
+    except OSError:
+        return None
+    return libc if libc is not None and hasattr(libc, "malloc_trim") else None  # not musl
+
+
+_LIBC = _load_libc()
+
+
 def run_service(factory: Callable[[Bus], Service], bus_config: BusConfig) -> int:
     """Open the bus, run the service until SIGINT/SIGTERM, then close everything."""
+    limit_malloc_arenas()
     bus = Bus.open(bus_config)
     service = factory(bus)
 

@@ -27,7 +27,7 @@ import zenoh
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.mcap_log import read_log
-from manigraph_shared.messages import Action, EpisodeEvent
+from manigraph_shared.messages import Action, EpisodeEvent, JointState
 from manigraph_tools.testing import free_port, open_raw_session
 
 # The first test also builds every image: cold, on a fresh engine, that takes 6-15 minutes
@@ -151,29 +151,45 @@ def compose() -> Iterator[Compose]:
         stack("down", "--volumes", "--remove-orphans", "--timeout", "20", check=False)
 
 
-def ended_episodes(logs: Path, since: float) -> list[EpisodeEvent]:
-    events = []
+def recorded(logs: Path, since: float) -> tuple[list[EpisodeEvent], list[Action], int]:
+    """From the MCAP logs written since ``since``: episode end events, actions, and how
+    many ``JointState`` messages (the physics Panda's joints) were recorded."""
+    ends: list[EpisodeEvent] = []
+    actions: list[Action] = []
+    joint_states = 0
     for path in logs.glob("*.mcap"):
         if path.stat().st_mtime < since:
             continue
-        for item in read_log(path, [EpisodeEvent.key]):
-            event = EpisodeEvent.decode(item.data)
-            if event.phase == "end":
-                events.append(event)
-    return events
+        for item in read_log(path, [EpisodeEvent.key, Action.key, JointState.key]):
+            if item.topic == EpisodeEvent.key:
+                event = EpisodeEvent.decode(item.data)
+                if event.phase == "end":
+                    ends.append(event)
+            elif item.topic == Action.key:
+                actions.append(Action.decode(item.data))
+            else:
+                joint_states += 1
+    return ends, actions, joint_states
 
 
-def test_an_episode_succeeds_inside_containers_and_lands_in_logs(compose: Compose) -> None:
+def test_physics_episodes_with_the_gnn_succeed_inside_containers_and_land_in_logs(
+    compose: Compose,
+) -> None:
+    # The default stack: the SAPIEN Panda (physics sim, panda-sim driver) and Sage.
     started = time.time()
     compose.wait_healthy(["router", "recorder", "sim", "planner", "skills"])
-    result = compose.tools("run", "--blocks", "4", "--episodes", "2", "--seed", "1")
+    result = compose.tools("run", "--blocks", "4", "--episodes", "3", "--seed", "1", timeout=600)
     assert result.returncode == 0, result.stderr[-3000:]
     summary = json.loads(result.stdout.strip().splitlines()[-1])
     assert summary["success_rate"] == 1.0
     time.sleep(1.0)  # the recorder flushes every 100 ms
-    ends = {e.episode_id: e for e in ended_episodes(compose.logs, started)}
+    ends, actions, joint_states = recorded(compose.logs, started)
     ran = {r["episode_id"] for r in summary["results"]}
-    assert ran <= ends.keys() and all(ends[e].success for e in ran)
+    ended = {e.episode_id: e for e in ends}
+    assert ran <= ended.keys() and all(ended[e].success for e in ran)
+    assert joint_states > 0  # the physics world's arm, not the geometric world
+    ours = [a for a in actions if a.episode_id in ran]
+    assert ours and {a.policy for a in ours} == {"gnn-sage"}
 
 
 def test_a_killed_planner_is_reported_missing_and_recovers(compose: Compose) -> None:

@@ -5,7 +5,15 @@ from __future__ import annotations
 import pytest
 
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.manifest import Manifest, driver_for_world, load_manifests, mermaid_flow, port
+from manigraph_shared.manifest import (
+    WORLD_ABILITIES,
+    Manifest,
+    driver_for_backend,
+    driver_for_world,
+    load_manifests,
+    mermaid_flow,
+    port,
+)
 from manigraph_shared.messages import Action, JointState, RobotCommand, Scene
 
 
@@ -58,3 +66,12 @@ def test_flow_draws_an_arrow_from_each_producer_to_each_consumer_dotted_when_gat
     assert 'BRAIN -- "manigraph/planner/action" --> HAND' in flow
     assert 'HAND -. "manigraph/robot/command (grip)" .-> WORLD' in flow
     assert "HAND -- " not in flow.replace('HAND -. "', "")  # the gated edge only, dotted
+
+
+def test_without_the_sim_installed_the_contract_table_matches_the_driver() -> None:
+    # The skills container has no sim package; the world abilities are part of the contract.
+    manifests = load_manifests()
+    assert manifests["sim"].variants == dict(WORLD_ABILITIES)
+    without_sim = {name: m for name, m in manifests.items() if name != "sim"}
+    assert driver_for_backend("physics", without_sim) == "panda-sim"
+    assert driver_for_backend("geometric", without_sim) == "sim-gripper"

@@ -87,3 +87,86 @@ def test_bad_files_name_the_line_or_field(text: str, message: str) -> None:
 def test_file_task_without_its_text_is_refused() -> None:
     with pytest.raises(TaskError, match="task_file"):
         GeometricBackend().reset(EpisodeRequest(episode_id="f", task="file"), 0.0)
+
+
+TWO_BLOCKS = """
+randomize_xy = {shift}
+
+[[objects]]
+id = "red"
+category = "block"
+position = [0.50, 0.00, 0.02]
+
+[[objects]]
+id = "green"
+category = "block"
+position = {green}
+
+[[goals]]
+id = "base"
+category = "block"
+position = [0.45, 0.20, 0.02]
+
+[[goals]]
+id = "top"
+category = "block"
+position = {top}
+"""
+
+
+def _layout(green: str = "[0.50, 0.00, 0.06]", top: str = "[0.45, 0.20, 0.06]", shift=0.0):
+    return TWO_BLOCKS.format(green=green, top=top, shift=shift)
+
+
+def test_a_possible_layout_with_touching_blocks_is_accepted() -> None:
+    spec = parse_task_file(_layout())  # green stands on red: faces touch, nothing overlaps
+    assert [o.id for o in spec.objects] == ["red", "green"]
+
+
+@pytest.mark.parametrize(
+    ("text", "named"),
+    [
+        # green sunk 2 cm into red
+        (_layout(green="[0.50, 0.00, 0.04]"), "objects.1: green overlaps objects.0 (red) by 2.0"),
+        # a goal 5 m away (inside the file format's bounds, outside the robot's reach)
+        (_layout(top="[4.5, 0.20, 0.06]"), "goals.1.position.0: top at 4.5 m is outside"),
+        # a goal that the seeded shift can push out of reach
+        (_layout(top="[0.85, 0.20, 0.06]", shift=0.1), "goals.1.position.0: top"),
+        (_layout(green="[0.3, 0.0, -0.5]"), "objects.1.position.2: green reaches"),
+        (_layout(top="[0.46, 0.21, 0.03]"), "goals.1: top is 1.0 cm from goals.0 (base)"),
+        (
+            _layout()
+            + '\n[[goals]]\nid = "third"\ncategory = "block"\nposition = [0.3, 0.3, 0.02]\n',
+            "goals: 3 required block goals but only 2 blocks",
+        ),
+        (
+            _layout()
+            + '\n[[goals]]\nid = "lid"\ncategory = "cover"\nposition = [0.3, 0.3, 0.01]\n',
+            "goals: 1 required cover goals but only 0 covers",
+        ),
+    ],
+)
+def test_layouts_that_cannot_happen_are_refused_naming_the_object(text: str, named: str) -> None:
+    with pytest.raises(TaskError, match="task file") as caught:
+        parse_task_file(text)
+    assert named in str(caught.value)
+
+
+def test_an_impossible_layout_is_refused_by_the_sim_reset() -> None:
+    request = EpisodeRequest(
+        episode_id="f", task="file", task_file=_layout(green="[0.50, 0.00, 0.04]")
+    )
+    with pytest.raises(TaskError, match="green overlaps"):
+        GeometricBackend().reset(request, 0.0)
+
+
+def test_a_file_with_thousands_of_problems_names_ten_and_counts_the_rest() -> None:
+    blocks = "".join(
+        f'[[objects]]\nid = "b{i}"\ncategory = "block"\nposition = [0.5, 0.0, 0.02]\n'
+        for i in range(20)
+    )
+    text = blocks + '[[goals]]\nid = "g"\ncategory = "block"\nposition = [0.4, 0.2, 0.02]\n'
+    with pytest.raises(TaskError) as caught:
+        parse_task_file(text)
+    message = str(caught.value)
+    assert message.count("overlaps") == 10 and message.endswith("and 180 more")

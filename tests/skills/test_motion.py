@@ -16,8 +16,9 @@ def model() -> PandaModel:
     return PandaModel()
 
 
-def test_the_model_is_the_mani_skill_panda(model: PandaModel) -> None:
-    assert model.urdf.name == "panda_v2.urdf" and "mani_skill" in str(model.urdf)
+def test_the_model_is_the_shipped_panda(model: PandaModel) -> None:
+    # ManiSkill's panda_v2.urdf, shipped with manigraph_shared (no mani-skill needed).
+    assert model.urdf.name == "panda_v2.urdf" and "manigraph_shared" in str(model.urdf)
     assert model.model.nq == 7
     # The rest pose holds the hand above the table, fingers straight down.
     pose = model.tcp_pose(HOME_Q)

@@ -61,6 +61,12 @@ class ScriptedArm:
     def object_position(self, object_id: str, after: float) -> np.ndarray | None:
         return self.rests
 
+    def stop(self) -> None:
+        self.stopped = True
+
+    def resume(self) -> None:
+        self.stopped = False
+
 
 def test_a_pick_and_place_sends_pick_carry_and_release_motions() -> None:
     arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=np.array(GOAL.as_tuple()))
@@ -127,5 +133,30 @@ def test_the_driver_is_registered_and_validates_its_settings() -> None:
         create_driver("panda-sim", bus=None, min_grasp_width=0.1)
     assert caught.value.field == "driver.min_grasp_width"
     assert "must be in [0, 0.08) m" in caught.value.problem
-    with pytest.raises(ConfigError, match=r"driver\.timeout: .franka. takes no options"):
+    with pytest.raises(
+        ConfigError, match=r"driver\.timeout: not an option of driver .franka. \(its: dry_run\)"
+    ):
         create_driver("franka", bus=None, timeout=1.0)
+
+
+def test_after_an_emergency_stop_nothing_is_sent_until_resume() -> None:
+    arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=np.array(GOAL.as_tuple()))
+    driver = PandaMotionDriver(arm)
+    driver.stop()
+    assert arm.stopped
+    with pytest.raises(SkillError) as stopped:
+        driver.pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
+    assert stopped.value.reason == "stopped" and arm.sent == []
+    driver.resume()
+    driver.pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
+    assert len(arm.sent) == 1 and not arm.stopped
+
+
+def test_command_ids_of_a_64_character_decision_stay_valid() -> None:
+    arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=np.array(GOAL.as_tuple()))
+    driver = PandaMotionDriver(arm)
+    decision = "d" * 64
+    driver.pick(Motion(decision, "block_0", BLOCK, Quaternion()))
+    driver.place(Motion(decision, "block_0", GOAL, Quaternion()))
+    ids = [command.command_id for command in arm.sent]
+    assert len(set(ids)) == 3 and all(len(i) <= 64 for i in ids)

@@ -34,6 +34,12 @@ class RecordingArm(RobotDriver):
     def place(self, motion: Motion) -> None:
         self.calls.append(("place", motion.object_id, motion.position.as_tuple()))
 
+    def stop(self) -> None:
+        self.calls.append(("stop", "", (0.0, 0.0, 0.0)))
+
+    def resume(self) -> None:
+        self.calls.append(("resume", "", (0.0, 0.0, 0.0)))
+
 
 def scene(goal_x: float = 0.4) -> Scene:
     return Scene(

@@ -73,6 +73,10 @@ class ArmWithoutTrays(RobotDriver):
 
     def place(self, motion: Motion) -> None: ...
 
+    def stop(self) -> None: ...
+
+    def resume(self) -> None: ...
+
 
 def test_a_driver_without_tray_support_refuses_as_unsupported() -> None:
     with pytest.raises(SkillError) as refused:

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from manigraph_shared.bus import ALIVE_PREFIX
 from manigraph_shared.messages import (
     Action,
+    EmergencyStop,
     EpisodeEvent,
     EpisodeRequest,
     ExplainRequest,
@@ -81,6 +82,7 @@ GRANTS: tuple[Grant, ...] = (
     Grant(("sim",), SERVE, (EpisodeRequest.key,), "the sim answers resets"),
     Grant(("client",), QUERY, (EpisodeRequest.key,), "only the episode client resets the world"),
     Grant(("client",), QUERY, (ExplainRequest.key,), "asks the planner why"),
+    Grant(("client",), PUBLISH, (EmergencyStop.key,), "an operator stops or resumes the robot"),
     Grant(
         SERVICES,
         PUBLISH,

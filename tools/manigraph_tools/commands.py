@@ -16,8 +16,9 @@ from typing import Any
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig, add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
+from manigraph_shared.errors import ManigraphError
 from manigraph_shared.manifest import driver_for_world, load_manifests
-from manigraph_shared.mcap_log import LoggedMessage
+from manigraph_shared.mcap_log import LoggedMessage, recover_log
 from manigraph_shared.messages import Action
 from manigraph_shared.options import add_option_arguments, options_from_args
 from manigraph_shared.registry import Registry
@@ -25,7 +26,7 @@ from manigraph_shared.service import run_service
 from manigraph_tools import contract_doc, doctor
 from manigraph_tools.certs import make_certificates
 from manigraph_tools.episodes import EpisodeOptions, EpisodePlan, run_episodes
-from manigraph_tools.recorder import Recorder
+from manigraph_tools.recorder import DEFAULT_MAX_BYTES, DEFAULT_MAX_SECONDS, Recorder
 from manigraph_tools.replay import ActionCheck, Replayer, recorded_actions
 from manigraph_tools.router import run_router
 from manigraph_tools.supervisor import ProcessSpec, Supervisor
@@ -68,16 +69,50 @@ def _record_configure(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="only the JSON channels: no /foxglove/scene and /foxglove/tf",
     )
+    parser.add_argument(
+        "--max-bytes",
+        type=int,
+        default=DEFAULT_MAX_BYTES,
+        help=f"start a new file past this size (default {DEFAULT_MAX_BYTES >> 20} MiB)",
+    )
+    parser.add_argument(
+        "--max-seconds",
+        type=float,
+        default=DEFAULT_MAX_SECONDS,
+        help=f"start a new file after this long (default {DEFAULT_MAX_SECONDS:g} s)",
+    )
+    parser.add_argument(
+        "--recover",
+        type=Path,
+        metavar="FILE",
+        help="finalise FILE, left unfinished by a killed recorder, in place; then exit",
+    )
     add_bus_arguments(parser)
 
 
-record_command = Command(
-    help="record every manigraph/** sample to MCAP (flushed every 100 ms)",
-    configure=_record_configure,
-    run=lambda args: run_service(
-        lambda bus: Recorder(bus, args.output, args.flush_interval, not args.no_foxglove),
+def _record_run(args: argparse.Namespace) -> int:
+    if args.recover is not None:
+        kept = recover_log(args.recover)
+        print(f"{args.recover}: finalised with {kept} messages", file=sys.stderr)
+        return 0
+    return run_service(
+        lambda bus: Recorder(
+            bus,
+            args.output,
+            args.flush_interval,
+            args.max_bytes,
+            args.max_seconds,
+            foxglove=not args.no_foxglove,
+        ),
         bus_config_from_args(args),
-    ),
+    )
+
+
+record_command = Command(
+    help="record every manigraph/** sample to MCAP (flushed every 100 ms, rotated by size "
+    "and age); --recover finalises a killed recorder's file",
+    configure=_record_configure,
+    run=_record_run,
 )
 
 
@@ -170,6 +205,13 @@ def _doctor_configure(parser: argparse.ArgumentParser) -> None:
         help=f"services that must be alive (default: {' '.join(doctor.DEFAULT_STACK)})",
     )
     parser.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for answers")
+    parser.add_argument(
+        "--stall-seconds",
+        type=float,
+        default=doctor.DEFAULT_STALL_SECONDS,
+        help="an alive service without a heartbeat for this long is STALLED "
+        f"(default {doctor.DEFAULT_STALL_SECONDS:g}; 0: liveliness only)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     add_bus_arguments(parser)
 
@@ -180,19 +222,20 @@ def _doctor_run(args: argparse.Namespace) -> int:
         bus = Bus.open(config)
     except Exception as exc:  # no router at all: everything is missing
         print(f"cannot reach the bus ({config.describe()}): {exc}", file=sys.stderr)
-        names, missing = list(args.expect), list(args.expect)
+        health = doctor.Health(list(args.expect), list(args.expect))
     else:
         with bus:
-            names, missing = doctor.check(bus, args.expect, args.timeout)
+            health = doctor.check(bus, args.expect, args.timeout, args.stall_seconds)
     if args.json:
-        _emit_json({"alive": [n for n in names if n not in missing], "missing": missing})
+        _emit_json(health.as_json())
     else:
-        print(doctor.table(names, missing, args.expect))
-    return 1 if missing else 0
+        print(doctor.table(health, args.expect))
+    return 1 if doctor.unhealthy(health, args.expect) else 0
 
 
 doctor_command = Command(
-    help="list which services are alive and which are missing (exit 1 if any is missing)",
+    help="list which services are alive, missing or stalled (exit 1 if any expected one is "
+    "missing or stalled)",
     configure=_doctor_configure,
     run=_doctor_run,
 )
@@ -354,6 +397,7 @@ def _up_run(args: argparse.Namespace) -> int:
     try:
         for process in specs:
             supervisor.start(process)
+        supervisor.watch()  # a dead service is restarted; a dead router stops the stack
         with Bus.open(client) as bus:
             supervisor.wait_alive(bus, [process.name for process in specs])
             security = "mutual TLS + access control" if tls_dir else "plain TCP"
@@ -365,16 +409,21 @@ def _up_run(args: argparse.Namespace) -> int:
             if plan is None:
                 print("Ctrl-C stops every service", file=sys.stderr, flush=True)
                 while True:
-                    supervisor.raise_if_dead()
+                    supervisor.raise_if_failed()
                     time.sleep(0.5)
             summary = run_episodes(bus, plan)
     except KeyboardInterrupt:
-        print("stopping the stack", file=sys.stderr)
+        if supervisor.failure is None:
+            print("stopping the stack", file=sys.stderr)
     finally:
         supervisor.stop()
         if tls_dir is not None:
             shutil.rmtree(tls_dir, ignore_errors=True)
+    if supervisor.failure is not None:
+        raise ManigraphError(f"the stack stopped: {supervisor.failure}")
     if summary is not None:
+        if any(supervisor.restarts.values()):
+            summary["restarts"] = {k: v for k, v in supervisor.restarts.items() if v}
         _emit_json(summary, readable=not args.json)
     return 0
 

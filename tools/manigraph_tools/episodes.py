@@ -3,6 +3,18 @@
 The client resets the world through the sim's ``manigraph/world/reset`` queryable, waits for
 each episode's end event and prints one progress line per episode; the summary is a dict the
 command prints as the last line of its output (one JSON object).
+
+A fault costs one episode at most. The client watches the liveliness tokens of the services
+the run needs, and an episode is failed, with a named reason, and the run goes on when:
+
+* a service goes away while it runs (``service_lost: skills``; a killed process's token is
+  gone within milliseconds), since a decision or a command in flight is lost with it;
+* nothing happens for ``stall_timeout`` seconds: no decision and no skill status of the
+  episode (``no_progress``), e.g. a service alive but stuck;
+* it does not end within ``timeout`` seconds (``timeout``), or the reset fails (``reset_failed``).
+
+Before each episode the client waits (up to ``recover_timeout`` seconds) until every service is
+back, so a service restarted by a supervisor (or by hand) takes the next episode.
 """
 
 from __future__ import annotations
@@ -10,17 +22,26 @@ from __future__ import annotations
 import queue
 import statistics
 import sys
+import threading
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TextIO
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.errors import BusError, ConfigError
-from manigraph_shared.messages import EpisodeEvent, EpisodePhase, EpisodeRequest
+from manigraph_shared.errors import BusError, ConfigError, RequestRefused
+from manigraph_shared.messages import (
+    Action,
+    EpisodeEvent,
+    EpisodePhase,
+    EpisodeRequest,
+    SkillStatus,
+)
 from manigraph_shared.options import Interval, Options, option
 
 AT_LEAST_ONE = Interval(1, None)
+#: The services an episode needs.
+RUN_SERVICES = ("sim", "planner", "skills")
 
 
 @dataclass(frozen=True)
@@ -47,6 +68,12 @@ class EpisodeOptions(Options):
     timeout: float = option(
         120.0, help="seconds per episode", within=Interval(0, None, low_open=True)
     )
+    stall_timeout: float = option(
+        30.0,
+        help="fail an episode after this long without a decision or skill status",
+        within=Interval(0, None, low_open=True),
+        unit="s",
+    )
     json: bool = option(False, help="print only the JSON summary (stdout, one line)")
 
     def task_text(self) -> str | None:
@@ -65,6 +92,7 @@ class EpisodeOptions(Options):
             episodes=episodes,
             seed=self.seed,
             timeout=self.timeout,
+            stall_timeout=self.stall_timeout,
             run_id=run_id,
         )
 
@@ -91,6 +119,11 @@ class EpisodePlan:
     timeout: float = 120.0
     run_id: str = "run"
     task_file: str | None = None  # TOML text of a user layout
+    #: No decision and no skill status of the episode for this long fails it.
+    stall_timeout: float = 30.0
+    #: Longest wait for every service to be back before an episode.
+    recover_timeout: float = 60.0
+    services: tuple[str, ...] = RUN_SERVICES
     objects: int | None = None  # dishwasher
     preference: str | None = None  # dishwasher
 
@@ -109,62 +142,193 @@ class EpisodePlan:
 
 
 def read_task_file(path: Path | None) -> str | None:
-    """The text of a ``--task-file`` (validated later, by the sim), or None without one."""
+    """The text of a ``--task-file`` (its layout is validated later, by the sim), or None
+    without one. A file too long to travel in a reset request is refused here."""
     if path is None:
         return None
     try:
-        return path.read_text()
-    except OSError as exc:
-        raise ConfigError("task-file", f"cannot read {path}: {exc.strerror}") from None
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
+        raise ConfigError("task-file", f"cannot read {path}: {why}") from None
+    limit = _task_file_limit()
+    if len(text) > limit:
+        raise ConfigError(
+            "task-file", f"{path} has {len(text):,} characters; a task file holds at most {limit:,}"
+        )
+    return text
+
+
+def _task_file_limit() -> int:
+    """``EpisodeRequest.task_file``'s max_length, from the contract itself."""
+    for constraint in EpisodeRequest.model_fields["task_file"].metadata:
+        if hasattr(constraint, "max_length"):
+            return int(constraint.max_length)
+    raise AssertionError("EpisodeRequest.task_file lost its max_length")
+
+
+class ServiceWatch:
+    """Which of ``services`` are alive, and which were lost since :meth:`mark`."""
+
+    def __init__(self, bus: Bus, services: tuple[str, ...]) -> None:
+        self.services = services
+        self._alive: set[str] = set()  # filled by the watch: it reports who is alive now
+        self._lost: list[str] = []
+        self._changed = threading.Condition()
+        bus.watch_alive(self._on_change)
+
+    def _on_change(self, name: str, alive: bool) -> None:
+        if name not in self.services:
+            return
+        with self._changed:
+            if alive:
+                self._alive.add(name)
+            else:
+                self._alive.discard(name)
+                self._lost.append(name)
+            self._changed.notify_all()
+
+    def mark(self) -> None:
+        with self._changed:
+            self._lost.clear()
+
+    def lost(self) -> list[str]:
+        with self._changed:
+            return list(dict.fromkeys(self._lost))
+
+    def lost_within(self, seconds: float) -> list[str]:
+        """The services lost since :meth:`mark`, waiting up to ``seconds`` for one."""
+        with self._changed:
+            self._changed.wait_for(lambda: bool(self._lost), seconds)
+            return list(dict.fromkeys(self._lost))
+
+    def wait_all_alive(self, timeout: float) -> list[str]:
+        """Wait until every service is alive; returns the missing ones after ``timeout``."""
+        with self._changed:
+            self._changed.wait_for(lambda: set(self.services) <= self._alive, timeout)
+            return sorted(set(self.services) - self._alive)
+
+
+class EpisodeProgress:
+    """End events, and when the running episode last made progress (a decision or a status)."""
+
+    def __init__(self, bus: Bus) -> None:
+        self.ends: queue.SimpleQueue[EpisodeEvent] = queue.SimpleQueue()
+        self.episode_id = ""
+        self._decisions: set[str] = set()
+        self.last = time.monotonic()
+        self._lock = threading.Lock()
+        bus.subscribe(EpisodeEvent, self._on_event)
+        bus.subscribe(Action, self._on_action)
+        bus.subscribe(SkillStatus, self._on_status)
+
+    def start(self, episode_id: str) -> None:
+        with self._lock:
+            self.episode_id = episode_id
+            self._decisions.clear()
+            self.last = time.monotonic()
+
+    def _on_event(self, event: EpisodeEvent) -> None:
+        if event.phase is EpisodePhase.END:
+            self.ends.put(event)
+
+    def _on_action(self, action: Action) -> None:
+        with self._lock:
+            if action.episode_id == self.episode_id:
+                self._decisions.add(action.decision_id)
+                self.last = time.monotonic()
+
+    def _on_status(self, status: SkillStatus) -> None:
+        with self._lock:
+            if status.decision_id in self._decisions:
+                self.last = time.monotonic()
+
+    def idle_for(self) -> float:
+        with self._lock:
+            return time.monotonic() - self.last
 
 
 def run_episodes(bus: Bus, plan: EpisodePlan, progress: TextIO = sys.stderr) -> dict[str, object]:
-    ends: queue.SimpleQueue[EpisodeEvent] = queue.SimpleQueue()
-    bus.subscribe(
-        EpisodeEvent, lambda event: ends.put(event) if event.phase is EpisodePhase.END else None
-    )
-    results = []
-    for index in range(plan.episodes):
-        request = plan.request(index)
-        started = time.monotonic()
-        bus.request(request, EpisodeEvent, timeout=plan.timeout)
-        end = _wait_for_end(ends, request.episode_id, plan.timeout)
-        result = EpisodeResult(
+    """Run ``plan``'s episodes one after the other; a failed one is a result, not an error.
+    Ctrl-C ends the run early with the episodes finished so far."""
+    watch = ServiceWatch(bus, plan.services)
+    events = EpisodeProgress(bus)
+    results: list[EpisodeResult] = []
+    interrupted = False
+    try:
+        for index in range(plan.episodes):
+            result = _run_one(bus, plan, index, watch, events)
+            results.append(result)
+            mark = "success" if result.success else f"FAILED ({result.reason})"
+            print(
+                f"episode {index + 1}/{plan.episodes} {plan.task} K={plan.blocks} "
+                f"seed {result.seed}: {mark}, {result.goals_filled}/{result.goals_total} goals, "
+                f"{result.steps} steps, {result.seconds:.2f} s",
+                file=progress,
+                flush=True,
+            )
+    except KeyboardInterrupt:
+        interrupted = True
+    summary = summarize(plan, results)
+    if interrupted:
+        summary["interrupted"] = True
+    return summary
+
+
+def _run_one(
+    bus: Bus, plan: EpisodePlan, index: int, watch: ServiceWatch, events: EpisodeProgress
+) -> EpisodeResult:
+    request = plan.request(index)
+    started = time.monotonic()
+
+    def failed(reason: str, last: EpisodeEvent | None = None) -> EpisodeResult:
+        return EpisodeResult(
             episode_id=request.episode_id,
             seed=request.seed,
-            success=bool(end.success),
-            goals_filled=end.goals_filled,
-            goals_total=end.goals_total,
-            steps=end.steps,
+            success=False,
+            goals_filled=last.goals_filled if last else 0,
+            goals_total=last.goals_total if last else 0,
+            steps=last.steps if last else 0,
             seconds=round(time.monotonic() - started, 3),
-            reason=end.reason,
+            reason=reason,
         )
-        results.append(result)
-        mark = "success" if result.success else f"FAILED ({result.reason})"
-        print(
-            f"episode {index + 1}/{plan.episodes} {plan.task} K={plan.blocks} seed {result.seed}: "
-            f"{mark}, {result.goals_filled}/{result.goals_total} goals, {result.steps} steps, "
-            f"{result.seconds:.2f} s",
-            file=progress,
-            flush=True,
-        )
-    return summarize(plan, results)
 
-
-def _wait_for_end(
-    ends: queue.SimpleQueue[EpisodeEvent], episode_id: str, timeout: float
-) -> EpisodeEvent:
-    deadline = time.monotonic() + timeout
+    missing = watch.wait_all_alive(plan.recover_timeout)
+    if missing:
+        return failed(f"service_missing: {', '.join(missing)}")
+    watch.mark()
+    events.start(request.episode_id)
+    try:
+        start = bus.request(request, EpisodeEvent, timeout=min(plan.timeout, 30.0))
+    except RequestRefused:  # the request itself was refused (a bad task file): abort
+        raise
+    except BusError as exc:
+        lost = watch.lost_within(0.5)  # killed while it answered? Its token goes too: say so
+        return failed(f"service_lost: {', '.join(lost)}" if lost else f"reset_failed: {exc}"[:256])
+    deadline = started + plan.timeout
     while True:
-        remaining = deadline - time.monotonic()
-        if remaining <= 0:
-            raise BusError(f"episode {episode_id} did not end within {timeout:.0f} s")
+        lost = watch.lost()
+        if lost:
+            return failed(f"service_lost: {', '.join(lost)}", start)
+        if events.idle_for() > plan.stall_timeout:
+            return failed(f"no_progress: nothing for {plan.stall_timeout:g} s", start)
+        if time.monotonic() > deadline:
+            return failed(f"timeout: no end within {plan.timeout:g} s", start)
         try:
-            event = ends.get(timeout=remaining)
+            end = events.ends.get(timeout=0.05)
         except queue.Empty:
             continue
-        if event.episode_id == episode_id:
-            return event
+        if end.episode_id == request.episode_id:
+            return EpisodeResult(
+                episode_id=request.episode_id,
+                seed=request.seed,
+                success=bool(end.success),
+                goals_filled=end.goals_filled,
+                goals_total=end.goals_total,
+                steps=end.steps,
+                seconds=round(time.monotonic() - started, 3),
+                reason=end.reason,
+            )
 
 
 def summarize(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, object]:

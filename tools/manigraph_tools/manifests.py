@@ -1,7 +1,7 @@
 """What the stack tools consume and produce (see ``manigraph_shared.manifest``)."""
 
 from manigraph_shared.manifest import Manifest, port
-from manigraph_shared.messages import EpisodeEvent, EpisodeRequest, ExplainRequest
+from manigraph_shared.messages import EmergencyStop, EpisodeEvent, EpisodeRequest, ExplainRequest
 
 RECORDER = Manifest(service="recorder", summary="manigraph record: MCAP", observes_all=True)
 
@@ -19,3 +19,9 @@ EXPLAIN_CLIENT = Manifest(
 )
 
 VIEW = Manifest(service="view", summary="manigraph view: Foxglove WebSocket", observes_all=True)
+
+STOP = Manifest(
+    service="stop",
+    summary="manigraph stop / resume: emergency stop",
+    produces=(port(EmergencyStop),),
+)

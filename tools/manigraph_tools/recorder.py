@@ -1,8 +1,16 @@
-"""``manigraph record``: every sample under ``manigraph/**`` into one MCAP file.
+"""``manigraph record``: every sample under ``manigraph/**`` into MCAP files.
 
-The Zenoh callback only appends to a queue, so a slow disk never slows a publisher; a writer
-thread drains the queue and flushes at least every 100 ms, so ``kill -9`` loses at most the
-last 100 ms of samples.
+The Zenoh callback only appends to a bounded queue, so a slow disk never slows a publisher; a
+writer thread drains the queue and flushes at least every 100 ms, so ``kill -9`` loses at most
+the last 100 ms of samples. What the recorder can cost is bounded too:
+
+* **files rotate** by size (``max_bytes``) and age (``max_seconds``): the current file is
+  finalised and the next one opened (``run.mcap``, ``run.001.mcap``, ...; in a directory, a new
+  timestamped name);
+* **the queue holds at most** ``MAX_QUEUED_BYTES`` of samples waiting for the disk; past that,
+  arriving samples are dropped, counted and reported (an error ``ServiceStatus``, once a second);
+* a file whose recorder was killed is finalised by ``manigraph record --recover FILE``, and a
+  recorder writing into a directory finalises the unfinished files it finds there at start-up.
 
 Beside the JSON channels (one per key, byte for byte what was on the bus), the writer thread
 also writes Foxglove's well-known types, ``/foxglove/scene`` and ``/foxglove/tf``
@@ -20,49 +28,114 @@ from pathlib import Path
 import zenoh
 
 from manigraph_shared.bus import ALIVE_PREFIX, Bus
-from manigraph_shared.mcap_log import McapLogWriter
+from manigraph_shared.errors import ManigraphError
+from manigraph_shared.mcap_log import McapLogWriter, is_finalised, recover_log
 from manigraph_shared.messages.base import PREFIX
-from manigraph_shared.service import Service
+from manigraph_shared.service import TRIM_AFTER_MESSAGES, Service, malloc_trim
 from manigraph_tools.foxglove_bridge import FOXGLOVE_SCHEMAS, FoxgloveBridge
+
+DEFAULT_MAX_BYTES = 256 * 1024 * 1024
+DEFAULT_MAX_SECONDS = 3600.0
+MAX_QUEUED_BYTES = 64 * 1024 * 1024
+#: A file in the output directory untouched this long has no live recorder (a live one writes
+#: its own heartbeat every second and flushes every 100 ms).
+ABANDONED_AFTER_SECONDS = 10.0
 
 
 def resolve_output(output: Path) -> Path:
     """A directory (existing, or named with a trailing slash) gets a timestamped file."""
-    if output.is_dir() or str(output).endswith("/") or not output.suffix:
-        stamp = datetime.now().strftime("%Y%m%d-%H%M%S")
-        return output / f"manigraph-{stamp}.mcap"
+    if is_directory(output):
+        return output / f"manigraph-{datetime.now().strftime('%Y%m%d-%H%M%S')}.mcap"
     return output
+
+
+def is_directory(output: Path) -> bool:
+    return output.is_dir() or str(output).endswith("/") or not output.suffix
 
 
 class Recorder(Service):
     name = "recorder"
+    tick_period = 1.0  # report dropped samples, trim the heap after bursts
 
     def __init__(
-        self, bus: Bus, output: Path, flush_interval: float = 0.1, foxglove: bool = True
+        self,
+        bus: Bus,
+        output: Path,
+        flush_interval: float = 0.1,
+        max_bytes: int = DEFAULT_MAX_BYTES,
+        max_seconds: float = DEFAULT_MAX_SECONDS,
+        foxglove: bool = True,
     ) -> None:
         super().__init__(bus)
+        if max_bytes < 1024:
+            raise ManigraphError(f"max_bytes: must be >= 1024, got {max_bytes}")
+        if max_seconds <= 0:
+            raise ManigraphError(f"max_seconds: must be > 0, got {max_seconds}")
+        self.output = output
         self.path = resolve_output(output)
+        self.first_path = self.path
         self.flush_interval = flush_interval
         self._foxglove = FoxgloveBridge() if foxglove else None
+        self.max_bytes = max_bytes
+        self.max_seconds = max_seconds
+        self.files: list[Path] = []
         self._samples: queue.SimpleQueue[tuple[str, bytes, int] | None] = queue.SimpleQueue()
+        self._queued_bytes = 0
+        self._queue_lock = threading.Lock()
         self._writer_thread = threading.Thread(target=self._write_loop, name="mcap-writer")
         self.samples_seen = 0
+        self.samples_dropped = 0
+        self._drops_reported = 0
+        self._seen_at_trim = 0
+        self.messages_written = 0
 
     def setup(self) -> None:
-        self._log = McapLogWriter(self.path, self.flush_interval)
-        if self._foxglove is not None:
-            for topic, schema in FOXGLOVE_SCHEMAS.items():
-                self._log.add_channel(topic, "protobuf", schema.name, schema.encoding, schema.data)
+        if is_directory(self.output) and self.output.is_dir():
+            for stale in sorted(self.output.glob("manigraph-*.mcap")):
+                if time.time() - stale.stat().st_mtime > ABANDONED_AFTER_SECONDS and not (
+                    is_finalised(stale)
+                ):
+                    kept = recover_log(stale)
+                    self.log.info(
+                        "finalised %s left by a killed recorder (%d messages)", stale, kept
+                    )
+        self._open(self.path)
         self._writer_thread.start()
         self.bus.subscribe_raw(f"{PREFIX}/**", self._enqueue)
         self.log.info("recording %s/** to %s", PREFIX, self.path)
+
+    def _open(self, path: Path) -> None:
+        self.path = path
+        self._log = McapLogWriter(path, self.flush_interval)
+        if self._foxglove is not None:
+            for topic, schema in FOXGLOVE_SCHEMAS.items():
+                self._log.add_channel(topic, "protobuf", schema.name, schema.encoding, schema.data)
+        self._opened = time.monotonic()
+        self.files.append(path)
+
+    def _next_path(self) -> Path:
+        if is_directory(self.output):
+            path = resolve_output(self.output)
+            stem, n = path.stem, 0
+            while path in self.files or path.exists():
+                n += 1
+                path = path.with_name(f"{stem}-{n}.mcap")
+            return path
+        first = self.first_path
+        return first.with_name(f"{first.stem}.{len(self.files):03d}{first.suffix}")
 
     def _enqueue(self, sample: zenoh.Sample) -> None:
         key = str(sample.key_expr)
         if key.startswith(ALIVE_PREFIX) or sample.kind != zenoh.SampleKind.PUT:
             return
         self.samples_seen += 1
-        self._samples.put((key, sample.payload.to_bytes(), time.time_ns()))
+        data = sample.payload.to_bytes()
+        with self._queue_lock:
+            if self._queued_bytes + len(data) > MAX_QUEUED_BYTES:
+                self.samples_dropped += 1
+                return
+            self._queued_bytes += len(data)
+        self._samples.put((key, data, time.time_ns()))
 
     def _write_loop(self) -> None:
         while True:
@@ -70,17 +143,48 @@ class Recorder(Service):
                 item = self._samples.get(timeout=self.flush_interval / 2)
             except queue.Empty:
                 self._log.maybe_flush()
+                self._maybe_rotate()
                 continue
             if item is None:
                 break
+            with self._queue_lock:
+                self._queued_bytes -= len(item[1])
             self._log.write(*item)
             if self._foxglove is not None:
                 key, data, log_time_ns = item
                 for converted in self._foxglove.convert(key, data):
                     self._log.write(converted.topic, converted.message.encode(), log_time_ns)
+            self.messages_written += 1
+            self._maybe_rotate()
         self._log.close()
+
+    def _maybe_rotate(self) -> None:
+        too_big = self._log.bytes_written >= self.max_bytes
+        if too_big or time.monotonic() - self._opened >= self.max_seconds:
+            self._log.close()
+            previous = self.path
+            self._open(self._next_path())
+            self.log.info(
+                "rotated %s (%s) -> %s", previous, "size" if too_big else "age", self.path
+            )
+
+    def tick(self) -> None:
+        if self.samples_seen - self._seen_at_trim >= TRIM_AFTER_MESSAGES:
+            self._seen_at_trim = self.samples_seen  # after a burst: give freed heap back
+            malloc_trim()
+        dropped = self.samples_dropped
+        if dropped > self._drops_reported:
+            self._drops_reported = dropped
+            self.report_error(
+                ManigraphError(
+                    f"recorder behind the bus: {dropped} samples dropped "
+                    f"({MAX_QUEUED_BYTES >> 20} MiB waiting for the disk)"
+                )
+            )
 
     def teardown(self) -> None:
         self._samples.put(None)
         self._writer_thread.join(timeout=10)
-        self.log.info("wrote %d messages to %s", self._log.messages_written, self.path)
+        self.log.info(
+            "wrote %d messages to %s", self.messages_written, ", ".join(map(str, self.files))
+        )

@@ -62,12 +62,24 @@ class DecisionMaker:
     ``<episode>:<step>``; the same log therefore drives a fresh planner to the same decisions.
     """
 
-    def __init__(self, policy: Policy, clock: Callable[[], float] = time.time) -> None:
+    def __init__(
+        self,
+        policy: Policy,
+        *,
+        clock: Callable[[], float] = time.time,
+        decision_timeout: float = 30.0,
+    ) -> None:
+        if not decision_timeout > 0:
+            raise ValueError(f"decision_timeout: must be > 0 seconds, got {decision_timeout}")
         self.policy = policy
         self.clock = clock
+        self.decision_timeout = decision_timeout
         self.episode_id: str | None = None
         self.step = 0
         self.pending: str | None = None
+        self.pending_since = 0.0  # time.monotonic() when the pending decision was sent
+        #: Emergency stop engaged: no decision until it is released.
+        self.stopped = False
         self.ready_after = 0.0
         self._held: list[Scene] = []  # scenes that arrived while a skill ran
         self._finished: OrderedDict[str, float] = OrderedDict()
@@ -90,7 +102,31 @@ class DecisionMaker:
         self.ready_after = status.stamp
         return self._decide_on_held()
 
+    def give_up(self, now: float, skills_alive: bool = True) -> str | None:
+        """Forget a decision whose skill will never report; returns why (or None).
+
+        ``skill_timeout``: no final status within ``decision_timeout`` seconds of
+        ``time.monotonic()`` ``now``; ``skills_lost``: the skills service went away while it ran.
+        The next scene observed after now is decided on, so a planner never waits forever on
+        a lost decision (the run client fails the episode; see ``manigraph_tools.episodes``).
+        """
+        if self.pending is None:
+            return None
+        if skills_alive and now - self.pending_since < self.decision_timeout:
+            return None
+        self.pending = None
+        self._held.clear()
+        self.ready_after = self.clock()
+        return "skills_lost" if not skills_alive else "skill_timeout"
+
+    def on_stop(self, engaged: bool) -> None:
+        """Emergency stop: decide nothing while engaged; after release, the next scene."""
+        self.stopped = engaged
+        self._held.clear()
+
     def on_scene(self, scene: Scene) -> Action | None:
+        if self.stopped:
+            return None
         if scene.episode_ended:  # said by the world itself: no race with the end event
             _remember(self._ended, scene.episode_id, None)
         if scene.episode_id in self._ended:
@@ -108,7 +144,7 @@ class DecisionMaker:
     def _decide_on_held(self) -> Action | None:
         fresh = [s for s in self._held if s.stamp > self.ready_after]
         self._held.clear()
-        if not fresh or fresh[0].episode_id in self._ended:
+        if self.stopped or not fresh or fresh[0].episode_id in self._ended:
             return None
         return self._decide(min(fresh, key=lambda s: (s.stamp, s.sequence)))
 
@@ -120,6 +156,7 @@ class DecisionMaker:
         self.step += 1
         self.history.add(scene, action)
         self.pending = action.decision_id
+        self.pending_since = time.monotonic()
         if action.decision_id in self._finished:  # its result overtook the decision (replay)
             self.pending = None
             self.ready_after = self._finished[action.decision_id]

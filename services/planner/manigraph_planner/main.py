@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
-from manigraph_shared.options import Options, add_option_arguments, option
+from manigraph_shared.options import Interval, Options, add_option_arguments, option
 
 
 @dataclass(frozen=True)
@@ -18,6 +18,13 @@ class PlannerOptions(Options):
     explain_decisions: bool = option(
         False,
         help="publish an Explanation after every decision (GNN policies; lands in the log)",
+    )
+    decision_timeout: float = option(
+        30.0,
+        help="wait this long for a decision's final skill status before giving it up (a lost "
+        "skills service is noticed at once)",
+        within=Interval(0, 3600, low_open=True),
+        unit="s",
     )
 
 
@@ -44,7 +51,9 @@ def _run(args: argparse.Namespace) -> int:
                 f"only GNN policies can be explained, not '{policy.name}' (give a checkpoint)",
             )
     return run_service(
-        lambda bus: PlannerService(bus, policy, options.explain_decisions),
+        lambda bus: PlannerService(
+            bus, policy, options.explain_decisions, decision_timeout=options.decision_timeout
+        ),
         bus_config_from_args(args),
     )
 

@@ -3,6 +3,7 @@
 from manigraph_shared.manifest import Manifest, port
 from manigraph_shared.messages import (
     Action,
+    EmergencyStop,
     EpisodeEvent,
     ExplainRequest,
     Explanation,
@@ -14,7 +15,7 @@ from manigraph_shared.messages import (
 MANIFEST = Manifest(
     service="planner",
     summary="policy: expert / GNN",
-    consumes=(port(Scene), port(SkillStatus), port(EpisodeEvent)),
+    consumes=(port(EmergencyStop), port(Scene), port(SkillStatus), port(EpisodeEvent)),
     produces=(port(Action), port(Explanation), port(ServiceStatus)),
     serves=(port(ExplainRequest),),
 )

@@ -2,12 +2,22 @@
 
 from __future__ import annotations
 
+import time
+
 from manigraph_planner.decisions import DecisionMaker
 from manigraph_planner.explain.handler import ExplainHandler
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import PolicyError
-from manigraph_shared.messages import Action, EpisodeEvent, ExplainRequest, Scene, SkillStatus
+from manigraph_shared.messages import (
+    Action,
+    EmergencyStop,
+    EpisodeEvent,
+    ExplainRequest,
+    Scene,
+    SkillStatus,
+)
+from manigraph_shared.scene_gate import SceneGate
 from manigraph_shared.service import Service
 
 
@@ -16,6 +26,13 @@ class PlannerService(Service):
 
     Explain queries run on a Zenoh thread against the explainer's own copy of the network,
     so they never delay or disturb a decision.
+
+    Scenes pass a :class:`~manigraph_shared.scene_gate.SceneGate` first: one of another episode
+    than the running one, or jumping far ahead in sequence or stamp, is refused and counted.
+    A decision whose skill never reports is given up after ``decision_timeout`` seconds
+    (``skill_timeout``), or at once when the skills service's liveliness token goes
+    (``skills_lost``); either is logged and published as an error status. While the emergency
+    stop is engaged, or the skills service is gone, the planner decides nothing.
 
     Args:
         bus: the process's bus.
@@ -26,24 +43,75 @@ class PlannerService(Service):
 
     name = "planner"
 
-    def __init__(self, bus: Bus, policy: Policy, explain_decisions: bool = False) -> None:
+    tick_period = 0.25  # how often a pending decision is checked for its deadline
+
+    def __init__(
+        self,
+        bus: Bus,
+        policy: Policy,
+        explain_decisions: bool = False,
+        decision_timeout: float = 30.0,
+    ) -> None:
         super().__init__(bus)
-        self.decisions = DecisionMaker(policy)
+        self.decisions = DecisionMaker(policy, decision_timeout=decision_timeout)
+        self.gate = SceneGate()
+        self.skills_alive = True
         self.explain = ExplainHandler(policy, self.decisions.history)
         self.explain_decisions = explain_decisions
 
     def setup(self) -> None:
         if self.explain_decisions and not self.explain.available:
             raise PolicyError(f"explain_decisions: {self.explain.problem}")
-        self.on(EpisodeEvent, self.decisions.on_episode)
+        self.on(EpisodeEvent, self._on_episode)
         self.on(SkillStatus, lambda status: self._act(self.decisions.on_status(status)))
-        self.on(Scene, lambda scene: self._act(self.decisions.on_scene(scene)))
+        self.on(Scene, self._on_scene)
+        self.on(EmergencyStop, lambda message: self.decisions.on_stop(message.engaged))
+        self.bus.watch_alive(self._on_liveliness)
         self.bus.serve(ExplainRequest, self.explain)
         self.log.info(
             "serving policy '%s'%s",
             self.decisions.policy.name,
             " (explaining every decision)" if self.explain_decisions else "",
         )
+
+    def _on_episode(self, event: EpisodeEvent) -> None:
+        self.gate.on_episode(event)
+        self.decisions.on_episode(event)
+
+    def _on_scene(self, scene: Scene) -> None:
+        reason = self.gate.check(scene)
+        if reason is not None:
+            self.reject(scene, reason, f"{scene.episode_id} #{scene.sequence}")
+            return
+        if not self.skills_alive:  # nobody would execute it; decide once skills is back
+            return
+        self._act(self.decisions.on_scene(scene))
+
+    def _on_liveliness(self, service: str, alive: bool) -> None:
+        if service == "skills":  # Zenoh thread: hand it to the service thread
+            self.call_soon(self._skills_changed, alive)
+
+    def _skills_changed(self, alive: bool) -> None:
+        self.skills_alive = alive
+        self._check_pending()
+
+    def tick(self) -> None:
+        self._check_pending()
+
+    def _check_pending(self) -> None:
+        pending = self.decisions.pending
+        reason = self.decisions.give_up(time.monotonic(), self.skills_alive)
+        if reason is not None:
+            self.report_error(
+                PolicyError(
+                    f"{reason}: decision {pending} given up "
+                    + (
+                        "(the skills service went away)"
+                        if reason == "skills_lost"
+                        else f"(no final status within {self.decisions.decision_timeout:g} s)"
+                    )
+                )
+            )
 
     def _act(self, action: Action | None) -> None:
         if action is None:

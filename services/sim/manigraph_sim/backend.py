@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar
 
@@ -83,6 +84,15 @@ class EpisodeBackend(SimBackend):
         self.sequence = 0
         self.ended = True
         self._end_reported = True
+        #: Set while the emergency stop is engaged (from any thread): no motion at all.
+        self.halted = threading.Event()
+
+    def emergency_stop(self, engaged: bool) -> None:
+        """Engage or release the emergency stop; a motion under way stops at once."""
+        if engaged:
+            self.halted.set()
+        else:
+            self.halted.clear()
 
     def begin(
         self, request: EpisodeRequest, required: set[str], max_steps: int, stamp: float

@@ -43,6 +43,11 @@ class GeometricOptions(Options):
         help="lay box tasks out with this geometry (unset: geometric; physics: the physics "
         "world's roomier boxes, for comparing the two worlds)",
     )
+    workspace: str | None = option(
+        None,
+        help="box the gripper may reach, xmin,xmax,ymin,ymax,zmin,zmax in metres (unset: the "
+        "skills' default); commands outside it are refused",
+    )
 
 
 @dataclass(frozen=True)

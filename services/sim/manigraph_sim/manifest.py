@@ -1,7 +1,8 @@
 """What the sim service consumes and produces (see ``manigraph_shared.manifest``)."""
 
-from manigraph_shared.manifest import Manifest, port
+from manigraph_shared.manifest import WORLD_ABILITIES, Manifest, port
 from manigraph_shared.messages import (
+    EmergencyStop,
     EpisodeEvent,
     EpisodeRequest,
     JointState,
@@ -22,6 +23,7 @@ MANIFEST = Manifest(
     service="sim",
     summary="geometric or physics world",
     consumes=(
+        port(EmergencyStop),
         port(RobotCommand, GRIPPER),
         port(JointTrajectoryCommand, JOINTS),
         port(SkillStatus),
@@ -36,5 +38,5 @@ MANIFEST = Manifest(
     ),
     serves=(port(EpisodeRequest),),
     variant_option="backend",
-    variants={"geometric": frozenset({GRIPPER}), "physics": frozenset({JOINTS})},
+    variants=dict(WORLD_ABILITIES),  # geometric: GRIPPER, physics: JOINTS
 )

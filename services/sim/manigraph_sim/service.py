@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 from manigraph_shared.bus import Bus
+from manigraph_shared.errors import BusError
 from manigraph_shared.messages import (
+    EmergencyStop,
     EpisodeEvent,
     EpisodeRequest,
     JointTrajectoryCommand,
@@ -15,6 +18,12 @@ from manigraph_shared.messages import (
 from manigraph_shared.service import Service
 from manigraph_sim.backend import JointedArmBackend, SimBackend
 from manigraph_sim.manifest import JOINTS
+
+#: Failures that refuse a command outright (counted as rejections in the status), as opposed
+#: to a motion that was tried and failed.
+REFUSED = frozenset(
+    {"outside_workspace", "unknown_object", "no_episode", "stopped", "bad_joints", "unsupported"}
+)
 
 
 class SimService(Service):
@@ -29,12 +38,27 @@ class SimService(Service):
         self.tick_period = 1.0 / publish_hz
 
     def setup(self) -> None:
+        # The emergency stop acts in the Zenoh thread that delivers it: the service thread may
+        # be busy moving the arm, and the motion must stop now, not after it.
+        estop = getattr(self.backend, "emergency_stop", None)
+        if estop is not None:
+            self.bus.subscribe(
+                EmergencyStop, lambda message: self._on_estop(estop, message), self._rejected
+            )
         # Resets arrive on a Zenoh thread; hand them to the service thread and wait.
         self.bus.serve(EpisodeRequest, self._reset_from_query)
         self.on(RobotCommand, self._execute)
         self.on(SkillStatus, self._on_skill_status)
         if JOINTS in self.backend.abilities:
             self.on(JointTrajectoryCommand, self._execute_trajectory)
+
+    def _on_estop(self, estop: Callable[[bool], None], message: EmergencyStop) -> None:
+        estop(message.engaged)
+        self.log.warning(
+            "emergency stop %s: %s",
+            "engaged" if message.engaged else "released",
+            message.reason or "(no reason)",
+        )
 
     def _reset_from_query(self, request: EpisodeRequest) -> EpisodeEvent:
         import queue
@@ -47,7 +71,8 @@ class SimService(Service):
             except BaseException as exc:  # handed back to the querier as an error reply
                 answer.put(exc)
 
-        self.call_soon(reset)
+        if not self.call_soon(reset):
+            raise BusError("sim busy: its inbox is full, try the reset again")
         result = answer.get(timeout=30)
         if isinstance(result, BaseException):
             raise result
@@ -71,6 +96,8 @@ class SimService(Service):
         feedback = self.backend.execute(command, time.time())
         if not feedback.ok:
             self.log.info("%s %s failed: %s", command.op, command.object_id, feedback.reason)
+            if feedback.reason in REFUSED:
+                self.reject(command, feedback.reason, command.command_id)
         self._publish_scene()
         self.bus.publish(feedback)
         self._publish_end()
@@ -93,6 +120,8 @@ class SimService(Service):
         result = self.backend.execute_trajectory(command, time.time())
         if not result.ok:
             self.log.info("trajectory %s failed: %s", command.command_id, result.reason)
+            if result.reason in REFUSED:
+                self.reject(command, result.reason, command.command_id)
         self._publish_scene()
         self.bus.publish(result)
         self._publish_end()

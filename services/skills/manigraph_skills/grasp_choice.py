@@ -26,6 +26,7 @@ from manigraph_shared.panda import (
     FINGER_REACH,
 )
 from manigraph_skills.drivers.base import Grasp
+from manigraph_skills.obstacles import scene_obstacles
 
 #: Added to the fingers' reach before an axis counts as free, metres.
 MARGIN = 0.005
@@ -82,9 +83,21 @@ def _point(position: Vector3, height: float) -> np.ndarray:
 
 
 def choose_grasps(scene: Scene, item: SceneObject, goal: Vector3) -> tuple[Grasp, Grasp]:
-    """The grasp to pick ``item`` with, and the one to set it down at ``goal`` with."""
+    """The grasp to pick ``item`` with, and the one to set it down at ``goal`` with, each
+    with the obstacles the arm must avoid on the way (``obstacles``)."""
     height = grasp_height(item.category.value, np.array(item.size.as_tuple()))
     carry = carry_height(scene, item, height)
-    pick = Grasp(height, closing_turn(scene, _point(item.position, height), item.id), carry)
-    place = Grasp(height, closing_turn(scene, _point(goal, height), item.id), carry)
+    here, there = np.array(item.position.as_tuple()), np.array(goal.as_tuple())
+    pick = Grasp(
+        height,
+        closing_turn(scene, _point(item.position, height), item.id),
+        carry,
+        scene_obstacles(scene, item, here),
+    )
+    place = Grasp(
+        height,
+        closing_turn(scene, _point(goal, height), item.id),
+        carry,
+        scene_obstacles(scene, item, there),
+    )
     return pick, place

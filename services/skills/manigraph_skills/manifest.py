@@ -8,6 +8,7 @@ robot, which no sim offers, so ``manigraph up`` never picks it.
 from manigraph_shared.manifest import Manifest, port
 from manigraph_shared.messages import (
     Action,
+    EmergencyStop,
     JointState,
     JointTrajectoryCommand,
     JointTrajectoryResult,
@@ -26,6 +27,7 @@ MANIFEST = Manifest(
     service="skills",
     summary="PickAndPlace + robot driver",
     consumes=(
+        port(EmergencyStop),
         port(Action),
         port(Scene),
         port(RobotFeedback, GRIPPER),

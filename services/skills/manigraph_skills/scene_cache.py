@@ -24,6 +24,11 @@ class SceneCache:
             self._scene = scene
             self._changed.notify_all()
 
+    def newest_sequence(self, episode_id: str) -> int | None:
+        """Sequence of the cached scene if it is of ``episode_id``, else None."""
+        scene = self._scene
+        return scene.sequence if scene is not None and scene.episode_id == episode_id else None
+
     def wait_for(self, episode_id: str, sequence: int, timeout: float) -> Scene | None:
         """The newest scene of ``episode_id`` at least as new as ``sequence``, or the newest
         scene at all once ``timeout`` passes (the skill then reports what it sees)."""

@@ -1,33 +1,173 @@
-"""The skills service: executes planner decisions with the configured robot driver."""
+"""The skills service: executes planner decisions with the configured robot driver.
+
+Nothing a sender does can block the threads that receive messages:
+
+* scenes pass the :class:`~manigraph_shared.scene_gate.SceneGate` (running episode, sane
+  sequence and stamp) on the Zenoh thread and go straight into the scene cache;
+* an ``Action`` is checked on the Zenoh thread and put in a bounded queue (``queue_capacity``);
+  a worker thread executes the queue in order. **Overflow policy: drop the newest.** An action
+  arriving at a full queue, one for an episode that is not running, one whose scene is far
+  ahead of any scene seen, and any action while the emergency stop is engaged are refused at
+  once: counted (``ServiceStatus.rejections``) and answered with a failed ``SkillStatus``
+  naming the reason, so a real planner decides again instead of waiting;
+* the worker waits at most ``scene_wait`` seconds for the scene an action was decided on;
+* ``EmergencyStop`` is acted on in the Zenoh thread that delivers it: the driver is stopped,
+  the skill under way fails with reason ``stopped``, queued actions are refused, and so is
+  every action until the stop is released;
+* when the robot's process (``robot_service``, the sim) goes away, the skill under way fails
+  at once with reason ``robot_lost`` instead of waiting out the driver's timeout, so the
+  next episode finds skills free.
+"""
 
 from __future__ import annotations
 
+import queue
+import threading
+import time
+from collections.abc import Callable
+
 from manigraph_shared.bus import Bus
-from manigraph_shared.messages import Action, Scene
+from manigraph_shared.messages import (
+    Action,
+    EmergencyStop,
+    EpisodeEvent,
+    Scene,
+    ServiceState,
+    SkillState,
+    SkillStatus,
+)
+from manigraph_shared.scene_gate import SceneGate
 from manigraph_shared.service import Service
 from manigraph_skills.drivers.base import RobotDriver
-from manigraph_skills.pick_and_place import PickAndPlace
+from manigraph_skills.pick_and_place import SKILL, PickAndPlace
 from manigraph_skills.scene_cache import SceneCache
 from manigraph_skills.workspace import Workspace
+
+#: Actions waiting for the worker; a real planner has at most one decision in flight.
+QUEUE_CAPACITY = 4
+#: Longest the worker waits for the scene an action was decided on, seconds.
+SCENE_WAIT = 1.0
+#: An action decided on a scene this far ahead of the newest scene seen is refused unread.
+MAX_SCENE_AHEAD = 50
 
 
 class SkillsService(Service):
     name = "skills"
 
-    def __init__(self, bus: Bus, driver_factory, workspace: Workspace) -> None:
+    def __init__(
+        self,
+        bus: Bus,
+        driver_factory: Callable[[Bus], RobotDriver],
+        workspace: Workspace,
+        queue_capacity: int = QUEUE_CAPACITY,
+        scene_wait: float = SCENE_WAIT,
+        robot_service: str = "sim",
+    ) -> None:
         super().__init__(bus)
         self.driver: RobotDriver = driver_factory(bus)
         self.skill = PickAndPlace(self.driver, workspace)
+        self.gate = SceneGate()
         self.scenes = SceneCache()
+        self.scene_wait = scene_wait
+        self.robot_service = robot_service
+        self.stopped = threading.Event()
+        self.stop_reason = ""
+        self._actions: queue.Queue[Action] = queue.Queue(queue_capacity)
+        self._worker = threading.Thread(target=self._work, name="skills-worker", daemon=True)
 
     def setup(self) -> None:
-        # Scenes bypass the inbox: an action waits for the scene it was decided on.
-        self.bus.subscribe(Scene, self.scenes.update, on_error=self._rejected)
-        self.on(Action, self._on_action)
+        self.bus.subscribe(EpisodeEvent, self.gate.on_episode, on_error=self._rejected)
+        self.bus.subscribe(Scene, self._on_scene, on_error=self._rejected)
+        self.bus.subscribe(EmergencyStop, self._on_estop, on_error=self._rejected)
+        self.bus.subscribe(Action, self._on_action, on_error=self._rejected)
+        self.bus.watch_alive(self._on_liveliness)
+        self._worker.start()
         self.log.info("driver '%s'", self.driver.name)
 
+    # --- Zenoh threads: check, cache, enqueue; never wait -----------------------------------
+    def _on_scene(self, scene: Scene) -> None:
+        reason = self.gate.check(scene)
+        if reason is not None:
+            self.reject(scene, reason, f"{scene.episode_id} #{scene.sequence}")
+            return
+        self.scenes.update(scene)
+
     def _on_action(self, action: Action) -> None:
-        scene = self.scenes.wait_for(action.episode_id, action.scene_sequence, timeout=2.0)
+        self.messages_in += 1
+        newest = self.scenes.newest_sequence(action.episode_id)
+        if self.stopped.is_set():
+            self._refuse(action, "stopped", f"emergency stop engaged: {self.stop_reason}")
+        elif not self.gate.is_running(action.episode_id):
+            self._refuse(action, "not_running_episode", action.episode_id)
+        elif newest is not None and action.scene_sequence > newest + MAX_SCENE_AHEAD:
+            self._refuse(action, "unknown_scene", f"scene {action.scene_sequence} not seen")
+        else:
+            try:
+                self._actions.put_nowait(action)
+            except queue.Full:
+                self._refuse(action, "skills_busy", f"{self._actions.maxsize} actions queued")
+
+    def _on_estop(self, message: EmergencyStop) -> None:
+        if message.engaged:
+            self.stopped.set()
+            self.stop_reason = message.reason
+            self.driver.stop()
+            while True:  # what was queued is not done either
+                try:
+                    self._refuse(self._actions.get_nowait(), "stopped", "emergency stop engaged")
+                except queue.Empty:
+                    break
+            self.log.warning("EMERGENCY STOP engaged: %s", message.reason or "(no reason)")
+        else:
+            self.driver.resume()
+            self.stopped.clear()
+            self.log.warning("emergency stop released: %s", message.reason or "(no reason)")
+        self.call_soon(lambda _: self.publish_status(ServiceState.OK, self._detail()))
+
+    def _on_liveliness(self, service: str, alive: bool) -> None:
+        if service == self.robot_service and not alive:
+            self.log.warning("the robot (%s) went away: the skill under way fails", service)
+            self.driver.abort("robot_lost")
+
+    def _refuse(self, action: Action, reason: str, detail: str) -> None:
+        self.reject(action, reason, f"{action.decision_id}: {detail}")
+        status = SkillStatus(
+            decision_id=action.decision_id,
+            skill=SKILL,
+            state=SkillState.FAILED,
+            reason=reason,
+            detail=detail[:1024],
+            stamp=time.time(),
+        )
+        self.call_soon(self.bus.publish, status)
+
+    def _detail(self) -> str:
+        if self.stopped.is_set():
+            return f"emergency stop engaged: {self.stop_reason}"
+        return self.last_error
+
+    def publish_status(self, state: ServiceState, detail: str = "") -> None:
+        if self.stopped.is_set() and state is ServiceState.OK:
+            detail = self._detail()
+        super().publish_status(state, detail)
+
+    # --- worker thread ----------------------------------------------------------------------
+    def _work(self) -> None:
+        while not self.stop_event.is_set():
+            try:
+                action = self._actions.get(timeout=0.2)
+            except queue.Empty:
+                continue
+            try:
+                self._execute(action)
+            except Exception:  # a bug in one action must not end the worker
+                self.log.exception("action %s failed unexpectedly", action.decision_id)
+
+    def _execute(self, action: Action) -> None:
+        if self.stopped.is_set():
+            self._refuse(action, "stopped", "emergency stop engaged")
+            return
+        scene = self.scenes.wait_for(action.episode_id, action.scene_sequence, self.scene_wait)
         final = self.skill.execute(action, scene, self.bus.publish)
         self.log.info(
             "%s %s -> %s: %s%s",
@@ -39,4 +179,7 @@ class SkillsService(Service):
         )
 
     def teardown(self) -> None:
+        self.stop_event.set()
+        self.driver.stop()  # a skill under way gives up instead of holding the shutdown
+        self._worker.join(timeout=5.0)
         self.driver.close()

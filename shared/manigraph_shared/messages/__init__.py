@@ -10,6 +10,7 @@ from manigraph_shared.messages.base import (
     message_type_for_key,
 )
 from manigraph_shared.messages.decision import (
+    REFUSAL_REASONS,
     TRAY_RACKS,
     Action,
     SkillState,
@@ -30,6 +31,7 @@ from manigraph_shared.messages.status import ServiceState, ServiceStatus
 
 __all__ = [
     "MAX_PAYLOAD_BYTES",
+    "REFUSAL_REASONS",
     "TRAY_RACKS",
     "Action",
     "Delivery",
@@ -81,3 +83,7 @@ from manigraph_shared.messages.explanation import (  # noqa: E402  (appended: th
 )
 
 __all__ += ["ExplainRequest", "ExplainedEdge", "ExplainedNode", "Explanation"]
+
+from manigraph_shared.messages.estop import EmergencyStop  # noqa: E402  (appended: the e-stop)
+
+__all__ += ["EmergencyStop"]

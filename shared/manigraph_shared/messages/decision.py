@@ -53,6 +53,22 @@ class Action(Message):
     stamp: Stamp
 
 
+#: Failure reasons of a skill that refused its action before any motion, because the action
+#: itself could not be acted on (an object or goal the scene does not have, another episode, a
+#: full queue, an emergency stop). Such a failure is not a step of the episode: counting it
+#: would let forged actions spend an episode's step budget.
+REFUSAL_REASONS = frozenset(
+    {
+        "unknown_object",
+        "unknown_goal",
+        "not_running_episode",
+        "unknown_scene",
+        "skills_busy",
+        "stopped",
+    }
+)
+
+
 class SkillState(StrEnum):
     ACCEPTED = "accepted"
     RUNNING = "running"

@@ -9,6 +9,9 @@ from pydantic import Field
 
 from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp
 
+#: Distinct `<Type>:<reason>` counters a status carries (the rest are summed under `other`).
+MAX_REJECTION_KINDS = 64
+
 
 class ServiceState(StrEnum):
     STARTING = "starting"
@@ -28,5 +31,12 @@ class ServiceStatus(Message):
     state: ServiceState
     detail: str = Field("", max_length=2048, description="last error, or what it is doing")
     messages_in: int = Field(0, ge=0)
-    messages_rejected: int = Field(0, ge=0)
+    messages_rejected: int = Field(
+        0, ge=0, description="every message refused: malformed, or valid but not acceptable"
+    )
+    rejections: dict[str, int] = Field(
+        default_factory=dict,
+        max_length=MAX_REJECTION_KINDS,
+        description="refusals so far by `<Type>:<reason>`, e.g. `Scene:sequence_jump`",
+    )
     stamp: Stamp

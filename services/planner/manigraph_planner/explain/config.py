@@ -26,6 +26,11 @@ class ExplainerConfig:
             :math:`\sigma(3) \approx 0.95`, i.e. from the policy's own graph, so the budget
             penalty removes what the choice does not need.
         seed: seed of the mask initialisation; the same seed gives the same explanation.
+        max_nodes: the largest scene explained (visible objects + goals); a bigger one is
+            refused (``scene_too_large``). The cost grows with the square of the nodes: 80
+            nodes (K = 40) take ~0.3 s, 512 took 22 s and gigabytes before this bound.
+        deadline_seconds: an explanation still optimising after this long is abandoned
+            (``explain_deadline``).
 
     Raises:
         ConfigError: naming the offending field.
@@ -39,6 +44,8 @@ class ExplainerConfig:
     entropy_weight: float = 0.1
     initial_edge_logit: float = 3.0
     seed: int = 0
+    max_nodes: int = 128
+    deadline_seconds: float = 5.0
 
     def __post_init__(self) -> None:
         for name, low in (("steps", 1), ("edge_budget", 1), ("feature_budget", 1), ("seed", 0)):
@@ -58,6 +65,16 @@ class ExplainerConfig:
         ):
             raise ConfigError(
                 "initial_edge_logit", f"must be in [-10, 10], got {self.initial_edge_logit!r}"
+            )
+        if isinstance(self.max_nodes, bool) or not isinstance(self.max_nodes, int):
+            raise ConfigError("max_nodes", f"must be an integer, got {self.max_nodes!r}")
+        if not 2 <= self.max_nodes <= 512:
+            raise ConfigError("max_nodes", f"must be in [2, 512], got {self.max_nodes}")
+        if not isinstance(self.deadline_seconds, int | float) or not (
+            0 < self.deadline_seconds <= 600
+        ):
+            raise ConfigError(
+                "deadline_seconds", f"must be in (0, 600] seconds, got {self.deadline_seconds!r}"
             )
         if self.learning_rate == 0:
             raise ConfigError("learning_rate", "must be > 0")

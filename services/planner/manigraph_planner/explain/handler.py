@@ -42,7 +42,7 @@ class ExplainHandler:
     def __call__(self, request: ExplainRequest) -> Explanation:
         explainer = self._explainer()
         if request.scene is not None:
-            return explainer.explain_scene(request.scene, request.seed)
+            return explainer.explain_scene(request.scene, request.seed, wait=False)
         if request.wants_latest:
             found = self.history.latest()
             if found is None:
@@ -59,7 +59,7 @@ class ExplainHandler:
                 )
         scene, action = found
         return explainer.explain(
-            scene, action.object_id, action.goal_id, action.decision_id, request.seed
+            scene, action.object_id, action.goal_id, action.decision_id, request.seed, wait=False
         )
 
     def explain_action(self, action: Action) -> Explanation | None:

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import copy
 import math
+import time
 from dataclasses import dataclass
 
 import torch
@@ -103,6 +104,7 @@ class MaskExplainer:
         object_index: int,
         goal_index: int,
         seed: int | None = None,
+        deadline: float | None = None,
     ) -> MaskExplanation:
         """Explain the choice of node ``object_index`` and node ``goal_index``.
 
@@ -112,13 +114,14 @@ class MaskExplainer:
             num_objects: :math:`K`.
             object_index, goal_index: the chosen nodes (``goal_index >= num_objects``).
             seed: overrides the config's seed.
+            deadline: ``time.monotonic()`` after which the optimisation is abandoned.
 
         Shapes:
             - **x:** :math:`(N, F)`; **edge_index:** :math:`(2, E)`
 
         Raises:
             PolicyError: the indices do not name an object and a goal of this graph, or the
-                graph has no edges.
+                graph has no edges, or the deadline passed (``explain_deadline``).
         """
         num_nodes = int(x.shape[0])
         _check_indices(num_nodes, num_objects, object_index, goal_index, int(edge_index.shape[1]))
@@ -137,7 +140,12 @@ class MaskExplainer:
         with torch.inference_mode(False), torch.enable_grad():
             set_masks(self.net, edge_logits, edge_index, apply_sigmoid=True)
             try:
-                for _ in range(cfg.steps):
+                for step in range(cfg.steps):
+                    if deadline is not None and time.monotonic() > deadline:
+                        raise PolicyError(
+                            f"explain_deadline: gave up after {step} of {cfg.steps} steps "
+                            f"({num_nodes} nodes, {num_edges} edges)"
+                        )
                     optimiser.zero_grad()
                     edge_mask, feature_mask = edge_logits.sigmoid(), feature_logits.sigmoid()
                     log_p = self._log_choice(

@@ -19,6 +19,13 @@ __all__ = ["SceneExplainer", "sentence", "to_message"]
 class SceneExplainer:
     """Explains a GNN policy's decisions on scenes; safe to call from several threads.
 
+    What one request may cost is bounded: a scene with more than ``config.max_nodes`` visible
+    nodes is refused (``scene_too_large``) before anything is computed, an explanation runs
+    for at most ``config.deadline_seconds`` (``explain_deadline``), and one explanation runs at
+    a time: a request that finds the explainer busy is refused at once (``explainer_busy``)
+    unless it asks to wait (the planner's own ``--explain-decisions``). Zenoh does not tell a
+    queryable which client asked, so "one at a time per client" is kept as one at a time.
+
     Args:
         policy: the policy whose decisions are explained; only GNN policies can be.
         config: the mask optimisation's settings.
@@ -37,15 +44,27 @@ class SceneExplainer:
         self.masks = MaskExplainer(policy.net, config)
         self._lock = threading.Lock()
 
-    def explain_scene(self, scene: Scene, seed: int | None = None) -> Explanation:
+    def explain_scene(
+        self, scene: Scene, seed: int | None = None, wait: bool = True
+    ) -> Explanation:
         """Decide on ``scene`` as the policy would, then explain that decision."""
+        self.check_size(scene)
         decision = self.policy.decide(scene)
         if decision is None:
             raise PolicyError(
                 f"scene: the policy has nothing to decide on scene {scene.sequence} "
                 f"of episode '{scene.episode_id}' (no object fits a free goal)"
             )
-        return self.explain(scene, decision.object_id, decision.goal_id, None, seed)
+        return self.explain(scene, decision.object_id, decision.goal_id, None, seed, wait)
+
+    def check_size(self, scene: Scene) -> None:
+        """Raises ``PolicyError`` (``scene_too_large``) for a scene over ``max_nodes``."""
+        nodes = sum(o.visible for o in scene.objects) + sum(g.visible for g in scene.goals)
+        limit = self.masks.config.max_nodes
+        if nodes > limit:
+            raise PolicyError(
+                f"scene_too_large: {nodes} visible nodes, the explainer takes at most {limit}"
+            )
 
     def explain(
         self,
@@ -54,12 +73,16 @@ class SceneExplainer:
         goal_id: str,
         decision_id: str | None = None,
         seed: int | None = None,
+        wait: bool = True,
     ) -> Explanation:
-        """Explain choosing ``object_id`` for ``goal_id`` on ``scene``.
+        """Explain choosing ``object_id`` for ``goal_id`` on ``scene``; with ``wait`` False,
+        refuse at once if another explanation is running.
 
         Raises:
-            PolicyError: the object or goal is not a visible node of the scene.
+            PolicyError: the object or goal is not a visible node of the scene, the scene is
+                too large, the explainer is busy or the deadline passed.
         """
+        self.check_size(scene)
         graph = scene_to_graph(scene)
         if object_id not in graph.object_ids:
             raise PolicyError(f"object: '{object_id}' is not a visible object of the scene")
@@ -68,10 +91,22 @@ class SceneExplainer:
         object_index = graph.object_ids.index(object_id)
         goal_index = graph.num_objects + graph.goal_ids.index(goal_id)
         seed = self.masks.config.seed if seed is None else seed
-        with self._lock:
+        config = self.masks.config
+        if not self._lock.acquire(blocking=True, timeout=config.deadline_seconds if wait else 0):
+            raise PolicyError("explainer_busy: one explanation at a time; ask again later")
+        try:
+            deadline = time.monotonic() + config.deadline_seconds
             result = self.masks.explain(
-                graph.x, graph.edge_index, graph.num_objects, object_index, goal_index, seed
+                graph.x,
+                graph.edge_index,
+                graph.num_objects,
+                object_index,
+                goal_index,
+                seed,
+                deadline=deadline,
             )
+        finally:
+            self._lock.release()
         return to_message(result, graph, scene, self.policy.name, decision_id, seed)
 
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from manigraph_shared.errors import PolicyError
+from manigraph_shared.ids import derived_id
 from manigraph_shared.messages import Action, Scene, TrayAction
 from manigraph_shared.registry import Registry
 
@@ -21,9 +22,10 @@ class Decision:
 
     def to_action(self, scene: Scene, step: int, policy: str, stamp: float) -> Action:
         """The contract message for this decision, step ``step`` of the scene's episode; the id
-        ``<episode>:<step>`` is what lets a recorded log drive a fresh planner to the same ids."""
+        ``<episode>:<step>`` is what lets a recorded log drive a fresh planner to the same ids
+        (an episode id too long for that is shortened with a hash: ``manigraph_shared.ids``)."""
         return Action(
-            decision_id=f"{scene.episode_id}:{step}",
+            decision_id=derived_id(scene.episode_id, ":", str(step)),
             episode_id=scene.episode_id,
             scene_sequence=scene.sequence,
             object_id=self.object_id,

@@ -16,6 +16,7 @@ from manigraph_shared.messages import (
     Scene,
 )
 from manigraph_shared.orientations import nearest_orientation
+from manigraph_shared.workspace import Workspace
 from manigraph_sim.backend import EpisodeBackend
 from manigraph_sim.dishwasher.model import DishwasherLayout
 from manigraph_sim.dishwasher.scene import dishwasher_scene
@@ -32,9 +33,16 @@ class GeometricBackend(EpisodeBackend):
 
     abilities = frozenset({GRIPPER})
 
-    def __init__(self, goal_tolerance: float = 0.01, boxes: BoxGeometry | None = None) -> None:
+    def __init__(
+        self,
+        goal_tolerance: float = 0.01,
+        boxes: BoxGeometry | None = None,
+        workspace: Workspace | None = None,
+    ) -> None:
         super().__init__()
         self.goal_tolerance = goal_tolerance
+        #: Where the gripper may go; a command outside is refused (``outside_workspace``).
+        self.workspace = workspace or Workspace()
         #: The box tasks' geometry (None: the default, the demonstrations').
         self.boxes = boxes
         self.world: GeometricWorld | None = None
@@ -48,7 +56,8 @@ class GeometricBackend(EpisodeBackend):
             from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 
             boxes = PHYSICS_BOXES
-        return cls(options.goal_tolerance, boxes)
+        workspace = Workspace.parse(options.workspace) if options.workspace else None
+        return cls(options.goal_tolerance, boxes, workspace)
 
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
         episode = episode_layout(request, self.boxes)
@@ -83,6 +92,10 @@ class GeometricBackend(EpisodeBackend):
 
     def execute(self, command: RobotCommand, stamp: float) -> RobotFeedback:
         try:
+            if self.halted.is_set():
+                raise SkillError("stopped", "emergency stop engaged")
+            if not self.workspace.contains(command.position):
+                raise SkillError("outside_workspace", f"{command.position.as_tuple()}")
             if self.dishwasher is not None and not self.ended:
                 self._execute_dishwasher(self.dishwasher, command)
             elif self.world is None or self.ended:
@@ -90,6 +103,9 @@ class GeometricBackend(EpisodeBackend):
             elif command.op is GripperOp.TOGGLE_TRAY:
                 raise SkillError("unsupported", "this task has no trays")
             elif command.op is GripperOp.PICK:
+                # Refused before counting: a pick of nothing is not a step of the episode.
+                if command.object_id not in self.world.bodies:
+                    raise SkillError("unknown_object", command.object_id)
                 self.steps += 1  # every attempted pick counts against the step budget
                 self.world.pick(command.object_id)
             else:

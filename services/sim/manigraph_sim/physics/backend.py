@@ -26,6 +26,7 @@ import numpy as np
 from manigraph_shared.errors import SkillError
 from manigraph_shared.grasp_points import grasp_height
 from manigraph_shared.messages import (
+    REFUSAL_REASONS,
     EpisodeEvent,
     EpisodeRequest,
     GripperTarget,
@@ -181,6 +182,8 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
     ) -> JointTrajectoryResult:
         """Follow ``command`` with the PD drives."""
         try:
+            if self.halted.is_set():
+                raise SkillError("stopped", "emergency stop engaged")
             if self.world is None or self.ended:
                 raise SkillError("no_episode", "no episode is running")
             if tuple(command.joint_names) != ARM_JOINTS:
@@ -193,7 +196,11 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
             times = np.array([p.time_from_start for p in command.points])
             positions = np.array([p.positions for p in command.points])
             closed = [p.gripper is GripperTarget.CLOSED for p in command.points]
-            self.physics_steps += self.world.follow(times, positions, closed, self.realtime)
+            self.physics_steps += self.world.follow(
+                times, positions, closed, self.realtime, halt=self.halted.is_set
+            )
+            if self.halted.is_set():
+                raise SkillError("stopped", "emergency stop during the trajectory")
         except SkillError as exc:
             return self._result(command, stamp, exc.reason, exc.detail)
         return self._result(command, stamp)
@@ -217,6 +224,8 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         budget: a skill that fails before moving (no IK solution) still ends the episode
         once the budget is spent, instead of leaving it running forever."""
         if self.request is None or self.ended or not status.state.terminal:
+            return
+        if status.reason in REFUSAL_REASONS:  # refused before any motion: not a step
             return
         if status.decision_id.startswith(f"{self.request.episode_id}:"):
             self.steps += 1

@@ -219,14 +219,24 @@ class PhysicsWorld:
         self.sim_time += count * self.config.timestep
 
     def follow(
-        self, times: np.ndarray, positions: np.ndarray, closed: list[bool], realtime: bool
+        self,
+        times: np.ndarray,
+        positions: np.ndarray,
+        closed: list[bool],
+        realtime: bool,
+        halt: Callable[[], bool] | None = None,
     ) -> int:
         """Track the trajectory step by step (linear between points), then settle.
+        ``halt`` (checked every step) stops the arm where it is: the emergency stop.
         Returns the number of physics steps taken."""
         dt = self.config.timestep
         total = int(np.ceil(times[-1] / dt)) + round(self.config.settle_time / dt)
         start_wall = time.perf_counter()
         for k in range(1, total + 1):
+            if halt is not None and halt():
+                self.set_targets(self.arm_q.copy(), self.gripper_closed)
+                self.step()
+                return k
             t = k * dt
             index = min(int(np.searchsorted(times, t)), len(times) - 1)
             target = np.array([np.interp(t, times, positions[:, j]) for j in range(len(self.arm))])

@@ -26,7 +26,10 @@ height = 0.06
 ```
 
 A syntax error names the line and column; a bad value names the field
-(``goals.0.position.2: ...``).
+(``goals.0.position.2: ...``). Layouts that cannot happen are refused too, naming the object
+or goal: objects that overlap one another, objects below the table, objects or goals outside
+the robot's reach (``REACH``, the skills' default workspace, after ``randomize_xy``), block
+goals closer than a block's width, and more required block (cover) goals than blocks (covers).
 """
 
 from __future__ import annotations
@@ -44,6 +47,17 @@ from manigraph_sim.world_model import Body, Container, Goal, Layout
 Coordinate = Annotated[float, Field(ge=-5.0, le=5.0)]
 Extent = Annotated[float, Field(gt=0.0, le=2.0)]
 Name = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.:\-]{1,64}$")]
+
+#: Where the robot can reach, robot frame, metres: the skills service's default workspace
+#: (services never import each other, so the bounds are repeated here). A goal or object
+#: outside it, after the layout's random shift, is a layout that cannot happen.
+REACH = ((0.1, 0.9), (-0.6, 0.6), (-0.01, 2.0))
+#: Bodies may touch (a stack's blocks share a face) but not interpenetrate by more than this.
+OVERLAP_TOLERANCE = 1e-3
+#: Layout problems named in one error; a file of 256 stacked-up blocks has 32,640 of them.
+MAX_PROBLEMS_NAMED = 10
+#: A block goal is a place for one block: two closer than this cannot both be filled.
+BLOCK_WIDTH = 0.04
 
 
 class _Strict(BaseModel):
@@ -88,7 +102,80 @@ class TaskFile(_Strict):
             raise ValueError(f"id: used twice: {', '.join(duplicates)}")
         if all(goal.optional for goal in self.goals):
             raise ValueError("goals: at least one goal must not be optional")
+        problems = [
+            *self._outside_reach(),
+            *self._overlapping_objects(),
+            *self._crowded_block_goals(),
+            *self._too_many_goals(),
+        ]
+        if problems:
+            shown = problems[:MAX_PROBLEMS_NAMED]
+            more = len(problems) - len(shown)
+            raise ValueError("; ".join(shown) + (f"; and {more} more" if more else ""))
         return self
+
+    def _outside_reach(self) -> list[str]:
+        margin = (self.randomize_xy, self.randomize_xy, 0.0)
+        places = [(f"objects.{i}", o.id, o.position) for i, o in enumerate(self.objects)]
+        places += [(f"goals.{i}", g.id, g.position) for i, g in enumerate(self.goals)]
+        problems = []
+        for field, name, position in places:
+            for axis, (value, (low, high), shift) in enumerate(
+                zip(position, REACH, margin, strict=True)
+            ):
+                if not (low <= value - shift and value + shift <= high):
+                    problems.append(
+                        f"{field}.position.{axis}: {name} at {value:g} m is outside the "
+                        f"robot's reach [{low:g}, {high:g}]"
+                        + (f" (with randomize_xy {shift:g})" if shift else "")
+                    )
+        for i, o in enumerate(self.objects):
+            bottom = o.position[2] - o.size[2] / 2
+            if bottom < -OVERLAP_TOLERANCE:
+                problems.append(
+                    f"objects.{i}.position.2: {o.id} reaches {-bottom:g} m below the table"
+                )
+        return problems
+
+    def _overlapping_objects(self) -> list[str]:
+        problems = []
+        for i, a in enumerate(self.objects):
+            for j in range(i + 1, len(self.objects)):
+                b = self.objects[j]
+                depth = min(
+                    (sa + sb) / 2 - abs(pa - pb)
+                    for pa, pb, sa, sb in zip(a.position, b.position, a.size, b.size, strict=True)
+                )
+                if depth > OVERLAP_TOLERANCE:
+                    problems.append(
+                        f"objects.{j}: {b.id} overlaps objects.{i} ({a.id}) by {depth * 100:.1f} cm"
+                    )
+        return problems
+
+    def _crowded_block_goals(self) -> list[str]:
+        blocks = [(i, g) for i, g in enumerate(self.goals) if g.category == "block"]
+        problems = []
+        for n, (i, a) in enumerate(blocks):
+            for j, b in blocks[n + 1 :]:
+                gap = max(abs(pa - pb) for pa, pb in zip(a.position, b.position, strict=True))
+                if gap < BLOCK_WIDTH - OVERLAP_TOLERANCE:
+                    problems.append(
+                        f"goals.{j}: {b.id} is {gap * 100:.1f} cm from goals.{i} ({a.id}); "
+                        f"two blocks need {BLOCK_WIDTH * 100:.0f} cm"
+                    )
+        return problems
+
+    def _too_many_goals(self) -> list[str]:
+        problems = []
+        for category in ("block", "cover"):
+            have = sum(o.category == category for o in self.objects)
+            need = sum(g.category == category and not g.optional for g in self.goals)
+            if need > have:
+                problems.append(
+                    f"goals: {need} required {category} goals but only {have} "
+                    f"{category}{'s' if have != 1 else ''} in objects"
+                )
+        return problems
 
 
 def parse_task_file(text: str) -> TaskFile:
@@ -102,8 +189,10 @@ def parse_task_file(text: str) -> TaskFile:
     except ValidationError as exc:
         problems = []
         for error in exc.errors(include_url=False):
-            field = ".".join(str(part) for part in error["loc"]) or "<file>"
-            problems.append(f"{field}: {error['msg'].removeprefix('Value error, ')}")
+            field = ".".join(str(part) for part in error["loc"])
+            message = error["msg"].removeprefix("Value error, ")
+            # Whole-file checks name their own fields ("objects.1: red overlaps ...").
+            problems.append(f"{field}: {message}" if field else message)
         raise TaskError("task file: " + "; ".join(problems)) from None
 
 

@@ -13,6 +13,7 @@ from typing import Any
 
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Quaternion, Vector3
+from manigraph_skills.obstacles import Obstacle
 
 
 @dataclass(frozen=True)
@@ -23,6 +24,8 @@ class Grasp:
     height: float = 0.0  # TCP above the object's centre, metres (a cover: at its handle)
     turn: float = 0.0  # hand yaw added to the driver's default, radians
     carry_z: float = 0.0  # lowest TCP height for carrying the object across, metres
+    #: What the arm must not touch on the way (a driver that plans arm motion checks it).
+    obstacles: tuple[Obstacle, ...] = ()
 
 
 #: A block's grasp at its centre, the driver's default yaw and carry heights.
@@ -43,7 +46,12 @@ class Motion:
 
 
 class RobotDriver(ABC):
-    """Raises ``SkillError(reason)`` when the robot could not do what was asked."""
+    """Raises ``SkillError(reason)`` when the robot could not do what was asked.
+
+    :meth:`stop` is the emergency stop: it is called from another thread while ``pick`` or
+    ``place`` may be running, must return at once, and makes the running call (and every call
+    until :meth:`resume`) raise ``SkillError("stopped")``.
+    """
 
     name: str
 
@@ -62,10 +70,21 @@ class RobotDriver(ABC):
 
     def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3) -> None:
         """Grasp rack ``rack_id``'s handle (at ``handle``) and pull the rack out or push it in
-        (dishwasher). A driver
-        that cannot refuses with reason ``unsupported``."""
+        (dishwasher). A driver that cannot refuses with reason ``unsupported``."""
         name = getattr(self, "name", type(self).__name__)
         raise SkillError("unsupported", f"the {name} driver cannot toggle a tray yet")
+
+    @abstractmethod
+    def stop(self) -> None:
+        """Halt now (emergency stop): abort the motion under way, refuse new ones."""
+
+    @abstractmethod
+    def resume(self) -> None:
+        """Accept motions again after :meth:`stop`."""
+
+    def abort(self, reason: str) -> None:
+        """The robot went away (its process died): fail the motion under way now with
+        ``reason`` instead of waiting for an answer that cannot come. Not sticky."""
 
     def close(self) -> None:
         """Release the driver's resources."""

@@ -19,6 +19,7 @@ class BusGripperTransport:
         self.timeout = timeout
         self._waiting: dict[str, threading.Event] = {}
         self._answers: dict[str, RobotFeedback] = {}
+        self._interrupted: dict[str, str] = {}
         self._lock = threading.Lock()
         bus.subscribe(RobotFeedback, self._on_feedback)
 
@@ -29,10 +30,18 @@ class BusGripperTransport:
                 self._answers[feedback.command_id] = feedback
                 event.set()
 
+    def interrupt(self, reason: str) -> None:
+        """Wake every waiting command: it fails with ``reason`` (a stop, a dead robot)."""
+        with self._lock:
+            for command_id, event in self._waiting.items():
+                self._interrupted[command_id] = reason
+                event.set()
+
     def execute(self, command: RobotCommand) -> RobotFeedback:
+        key = command.command_id
         event = threading.Event()
         with self._lock:
-            self._waiting[command.command_id] = event
+            self._waiting[key] = event
         try:
             self.bus.publish(command)
             if not event.wait(self.timeout):
@@ -40,11 +49,15 @@ class BusGripperTransport:
                     "driver_timeout", f"no answer to {command.op} within {self.timeout} s"
                 )
             with self._lock:
-                return self._answers.pop(command.command_id)
+                reason = self._interrupted.get(key)
+                if reason is not None:
+                    raise SkillError(reason, f"{command.op} interrupted: {reason}")
+                return self._answers.pop(key)
         finally:
             with self._lock:
-                self._waiting.pop(command.command_id, None)
-                self._answers.pop(command.command_id, None)
+                self._waiting.pop(key, None)
+                self._answers.pop(key, None)
+                self._interrupted.pop(key, None)
 
 
 class BusGripperDriver(GripperDriver):

@@ -7,12 +7,12 @@ so both run the very same driver.
 
 from __future__ import annotations
 
-import hashlib
 import time
 from collections.abc import Callable
 from typing import Protocol
 
 from manigraph_shared.errors import SkillError
+from manigraph_shared.ids import derived_id
 from manigraph_shared.messages import (
     GripperOp,
     Quaternion,
@@ -27,6 +27,10 @@ class GripperTransport(Protocol):
     def execute(self, command: RobotCommand) -> RobotFeedback:
         """Carry out ``command`` and return the world's answer (raise ``SkillError`` if none)."""
 
+    def interrupt(self, reason: str) -> None:
+        """Fail the command under way now with ``reason`` (a transport that never waits has
+        nothing to interrupt)."""
+
 
 class GripperDriver(RobotDriver):
     """Sends one ``RobotCommand`` per pick and per place and raises on a refusal."""
@@ -34,12 +38,25 @@ class GripperDriver(RobotDriver):
     def __init__(self, transport: GripperTransport, clock: Callable[[], float] = time.time) -> None:
         self.transport = transport
         self.clock = clock
+        self._stopped = False
+
+    def stop(self) -> None:
+        self._stopped = True
+        self.transport.interrupt("stopped")
+
+    def resume(self) -> None:
+        self._stopped = False
+
+    def abort(self, reason: str) -> None:
+        self.transport.interrupt(reason)
 
     def _send(self, op: GripperOp, motion: Motion) -> None:
         """One command; the motion's grasp is ignored (the gripper is magic)."""
+        if self._stopped:
+            raise SkillError("stopped", "emergency stop engaged")
         feedback = self.transport.execute(
             RobotCommand(
-                command_id=command_id(motion.decision_id, op),
+                command_id=derived_id(motion.decision_id, ".", op.value),
                 decision_id=motion.decision_id,
                 op=op,
                 object_id=motion.object_id,
@@ -60,13 +77,3 @@ class GripperDriver(RobotDriver):
     def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3) -> None:
         """One ``toggle_tray`` command naming the rack, at its handle."""
         self._send(GripperOp.TOGGLE_TRAY, Motion(decision_id, rack_id, handle, Quaternion()))
-
-
-def command_id(decision_id: str, op: GripperOp) -> str:
-    """``<decision>.<op>``, or, for a decision id too long to extend within the contract's
-    limit, a short digest of it: any valid decision id gives a valid command id."""
-    suffix = f".{op.value}"
-    if len(decision_id) + len(suffix) <= 64:
-        return decision_id + suffix
-    digest = hashlib.blake2s(decision_id.encode(), digest_size=8).hexdigest()
-    return f"{digest}{suffix}"

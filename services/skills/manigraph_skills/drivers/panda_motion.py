@@ -4,6 +4,9 @@ trajectories to the robot. The robot end (sim or hardware) is a ``JointTransport
 Checks, each reported as a ``SkillError`` reason:
 
 * ``no_ik_solution``: a waypoint cannot be reached (nothing is sent to the robot);
+* ``collision``: an arm link would touch the table or an obstacle of the grasp
+  (``Grasp.obstacles``) on every re-plan: higher across the table and the hand turned a
+  quarter (``motion.collision``); nothing is sent to the robot;
 * ``grasp_slipped``: after closing and lifting (or after the transfer) the fingers closed to
   less than ``min_grasp_width``, so nothing is between them;
 * ``placement_missed``: after release the object's centre is more than
@@ -13,6 +16,7 @@ Checks, each reported as a ``SkillError`` reason:
 from __future__ import annotations
 
 import itertools
+import logging
 import time
 from collections.abc import Callable
 from typing import Protocol
@@ -20,16 +24,32 @@ from typing import Protocol
 import numpy as np
 
 from manigraph_shared.errors import SkillError
+from manigraph_shared.ids import derived_id
 from manigraph_shared.messages import (
     GripperTarget,
     JointTrajectoryCommand,
     JointTrajectoryPoint,
     JointTrajectoryResult,
 )
-from manigraph_skills.drivers.base import Motion, RobotDriver
+from manigraph_skills.drivers.base import Grasp, Motion, RobotDriver
 from manigraph_skills.drivers.registry import MotionOptions
 from manigraph_skills.motion import GraspPlanner, JointTrajectory, PandaModel, PlanConfig
+from manigraph_skills.motion.collision import ArmCollisionModel, Contact
 from manigraph_skills.motion.plan import UP, grasp_yaw
+from manigraph_skills.obstacles import Obstacle
+
+log = logging.getLogger("manigraph.skills.motion")
+
+#: After the planned motion collides: the carry height as chosen, then the planner's
+#: ceiling (``PlanConfig.max_carry_z``); at each, the arm as planned and with its elbow swung
+#: to either side of the target's bearing (``ELBOW_SWING``), each with the hand as chosen and
+#: turned a quarter (a block or a square cover is held the same either way).
+QUARTER = np.pi / 2
+#: Gains of the null-space elbow swing (``IKSolver.elbow_push``), gentle first: it acts at
+#: every IK sample along the motion, so it adds up over a long one (at 0.05 the elbow of a
+#: far, low grasp from the home pose swings ~0.3 m aside) but not over a short one (from
+#: above a tower to a block beside it only 0.3 cleared the tower).
+ELBOW_SWING = (0.05, 0.3)
 
 
 class JointTransport(Protocol):
@@ -47,6 +67,18 @@ class JointTransport(Protocol):
         """Where ``object_id`` is, observed after time ``after``; None if unknown."""
         ...
 
+    def stop(self) -> None:
+        """Emergency stop: make a running ``execute`` return or raise at once."""
+        ...
+
+    def resume(self) -> None:
+        """Accept trajectories again."""
+        ...
+
+    def abort(self, reason: str) -> None:
+        """The robot went away: make a running ``execute`` raise ``SkillError(reason)``."""
+        ...
+
 
 class PandaMotionDriver(RobotDriver):
     name = "panda-motion"
@@ -56,14 +88,17 @@ class PandaMotionDriver(RobotDriver):
         transport: JointTransport,
         options: MotionOptions | None = None,
         config: PlanConfig | None = None,
+        check_collisions: bool = True,
     ) -> None:
         options = options or MotionOptions()
         self.transport = transport
         self.model = PandaModel()
         self.planner = GraspPlanner(self.model, config)
+        self.collision = ArmCollisionModel(self.model) if check_collisions else None
         self.min_grasp_width = options.min_grasp_width
         self.placement_tolerance = options.placement_tolerance
         self._ids = itertools.count()
+        self._stopped = False
 
     def pick(self, motion: Motion) -> None:
         decision_id, object_id, grasp = motion.decision_id, motion.object_id, motion.grasp
@@ -74,9 +109,16 @@ class PandaMotionDriver(RobotDriver):
             + grasp.turn
             + grasp_yaw((orientation.x, orientation.y, orientation.z, orientation.w))
         )
-        result = self._run(decision_id, lambda q: self.planner.pick(q, target, yaw))
+        result = self._run(
+            decision_id,
+            self._avoiding(
+                lambda planner, q, turn, carry: planner.pick(q, target, yaw + turn, carry),
+                grasp,
+                target,
+            ),
+        )
         if result.gripper_width < self.min_grasp_width:
-            self._open(decision_id)
+            self._open(decision_id, grasp.obstacles)
             raise SkillError(
                 "grasp_slipped",
                 f"fingers closed to {result.gripper_width * 1000:.1f} mm: {object_id} not held",
@@ -90,12 +132,17 @@ class PandaMotionDriver(RobotDriver):
         # block or a square cover looks the same after a quarter turn).
         yaw = self.planner.config.hand_yaw + grasp.turn
         carry = self._run(
-            decision_id, lambda q: self.planner.place(q, hand, yaw, carry_z=grasp.carry_z)
+            decision_id,
+            self._avoiding(
+                lambda planner, q, turn, carry_z: planner.place(q, hand, yaw + turn, carry_z),
+                grasp,
+                hand,
+            ),
         )
         if carry.gripper_width < self.min_grasp_width:
-            self._open(decision_id)
+            self._open(decision_id, grasp.obstacles)
             raise SkillError("grasp_slipped", f"{object_id} was lost during the transfer")
-        released = self._run(decision_id, self.planner.release)
+        released = self._run(decision_id, self._checked(self.planner.release, grasp.obstacles))
         seen = self.transport.object_position(object_id, after=released.stamp)
         if seen is not None:
             miss = float(np.linalg.norm(seen - target))
@@ -104,15 +151,101 @@ class PandaMotionDriver(RobotDriver):
                     "placement_missed", f"{object_id} rests {miss * 1000:.0f} mm from its goal"
                 )
 
+    def stop(self) -> None:
+        self._stopped = True
+        self.transport.stop()
+
+    def resume(self) -> None:
+        self._stopped = False
+        self.transport.resume()
+
+    def abort(self, reason: str) -> None:
+        abort = getattr(self.transport, "abort", None)
+        if abort is not None:
+            abort(reason)
+
     # --- pieces -----------------------------------------------------------------------------
-    def _open(self, decision_id: str) -> None:
+    def _open(self, decision_id: str, obstacles: tuple[Obstacle, ...]) -> None:
         """After a lost grasp: open and back off, so the next attempt starts clean."""
-        self._run(decision_id, self.planner.release)
+        self._run(decision_id, self._checked(self.planner.release, obstacles))
+
+    def _avoiding(
+        self,
+        make: Callable[[GraspPlanner, np.ndarray, float, float], JointTrajectory],
+        grasp: Grasp,
+        target: np.ndarray,
+    ) -> Callable[[np.ndarray], JointTrajectory]:
+        """``make(planner, q, turn, carry_z)`` as planned; if an arm link would touch
+        something, re-planned with the hand turned, the elbow swung aside and higher, until
+        one is clear."""
+        heights = [grasp.carry_z, max(grasp.carry_z, self.planner.config.max_carry_z)]
+        bearing = float(np.arctan2(target[1], target[0]))
+        aside = np.array([-np.sin(bearing), np.cos(bearing), 0.0])
+        planners = [self.planner] + [
+            GraspPlanner(self.model, self.planner.config, elbow_push=tuple(gain * side * aside))
+            for gain in ELBOW_SWING
+            for side in (1.0, -1.0)
+        ]
+        options = [
+            (planner, turn, carry)
+            for carry in heights
+            for planner in planners
+            for turn in (0.0, QUARTER)
+        ]
+
+        def plan(q: np.ndarray) -> JointTrajectory:
+            contact = None
+            failure: SkillError | None = None
+            for planner, turn, carry in options:
+                try:
+                    trajectory = make(planner, q, turn, carry)
+                except SkillError as exc:  # e.g. no IK solution this high or turned
+                    failure = failure or exc
+                    continue
+                found = self._contact(trajectory, grasp.obstacles)
+                if found is None:
+                    if contact is not None:
+                        log.info(
+                            "re-planned around %s: carry %.2f m, turn %.2f, elbow %s",
+                            contact,
+                            carry,
+                            turn,
+                            "as planned" if planner is self.planner else "swung aside",
+                        )
+                    return trajectory
+                contact = contact or found
+            if contact is not None:
+                raise SkillError("collision", f"{contact} (and on every re-plan)")
+            assert failure is not None
+            raise failure
+
+        return plan
+
+    def _checked(
+        self, make: Callable[[np.ndarray], JointTrajectory], obstacles: tuple[Obstacle, ...]
+    ) -> Callable[[np.ndarray], JointTrajectory]:
+        def plan(q: np.ndarray) -> JointTrajectory:
+            trajectory = make(q)
+            found = self._contact(trajectory, obstacles)
+            if found is not None:
+                raise SkillError("collision", str(found))
+            return trajectory
+
+        return plan
+
+    def _contact(
+        self, trajectory: JointTrajectory, obstacles: tuple[Obstacle, ...]
+    ) -> Contact | None:
+        if self.collision is None:
+            return None
+        return self.collision.first_contact(trajectory, obstacles)
 
     def _run(
         self, decision_id: str, plan: Callable[[np.ndarray], JointTrajectory]
     ) -> JointTrajectoryResult:
         """Plan from the arm's joints and execute; plan once more if the arm was elsewhere."""
+        if self._stopped:
+            raise SkillError("stopped", "emergency stop engaged")
         q = self.transport.joint_positions()
         for _attempt in range(2):
             trajectory = plan(q)  # raises SkillError('no_ik_solution') before any motion
@@ -126,7 +259,7 @@ class PandaMotionDriver(RobotDriver):
 
     def _command(self, decision_id: str, trajectory: JointTrajectory) -> JointTrajectoryCommand:
         return JointTrajectoryCommand(
-            command_id=f"{decision_id}.{next(self._ids)}",
+            command_id=derived_id(decision_id, ".", str(next(self._ids))),
             decision_id=decision_id,
             joint_names=list(self.model.joint_names),
             points=[

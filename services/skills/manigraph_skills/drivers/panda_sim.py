@@ -15,11 +15,13 @@ import numpy as np
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
+    EpisodeEvent,
     JointState,
     JointTrajectoryCommand,
     JointTrajectoryResult,
     Scene,
 )
+from manigraph_shared.scene_gate import SceneGate
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
 
@@ -36,8 +38,14 @@ class BusJointTransport:
         #: Stamp of the newest joint knowledge; a sample older than it is stale.
         self._known_at = -1.0
         self._scene: Scene | None = None
+        self._stopped = False
+        self._aborted: dict[str, str] = {}
+        #: Scenes check placements, so a forged one must not land here either (the service
+        #: counts the refusals: it sees the same scenes through its own gate).
+        self._gate = SceneGate()
         bus.subscribe(JointTrajectoryResult, self._on_result)
         bus.subscribe(JointState, self._on_state)
+        bus.subscribe(EpisodeEvent, self._gate.on_episode)
         bus.subscribe(Scene, self._on_scene)
 
     def _on_result(self, result: JointTrajectoryResult) -> None:
@@ -57,24 +65,56 @@ class BusJointTransport:
                 self._lock.notify_all()
 
     def _on_scene(self, scene: Scene) -> None:
+        if self._gate.check(scene) is not None:
+            return
         with self._lock:
             self._scene = scene
             self._lock.notify_all()
 
+    def stop(self) -> None:
+        with self._lock:
+            self._stopped = True
+            self._lock.notify_all()
+
+    def resume(self) -> None:
+        with self._lock:
+            self._stopped = False
+
+    def abort(self, reason: str) -> None:
+        with self._lock:
+            for command_id in self._waiting:
+                self._aborted[command_id] = reason
+            self._lock.notify_all()
+
     def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
         with self._lock:
+            if self._stopped:
+                raise SkillError("stopped", "emergency stop engaged")
             self._waiting.add(command.command_id)
         try:
             self.bus.publish(command)
             with self._lock:
                 if not self._lock.wait_for(
-                    lambda: command.command_id in self._results, self.timeout
+                    lambda: (
+                        command.command_id in self._results
+                        or self._stopped
+                        or command.command_id in self._aborted
+                    ),
+                    self.timeout,
                 ):
                     raise SkillError("driver_timeout", f"no result within {self.timeout} s")
+                if self._stopped:  # the sim halts the arm itself on the same stop message
+                    raise SkillError("stopped", "emergency stop during a trajectory")
+                if command.command_id in self._aborted:
+                    raise SkillError(
+                        self._aborted[command.command_id], "the robot went away mid-trajectory"
+                    )
                 return self._results.pop(command.command_id)
         finally:
             with self._lock:
                 self._waiting.discard(command.command_id)
+                self._results.pop(command.command_id, None)
+                self._aborted.pop(command.command_id, None)
 
     def joint_positions(self) -> np.ndarray:
         with self._lock:

@@ -20,7 +20,14 @@ from manigraph_shared.registry import Registry
 if TYPE_CHECKING:
     from manigraph_skills.drivers.base import RobotDriver
 
-__all__ = ["DRIVERS", "BusGripperOptions", "MotionOptions", "PandaSimOptions", "create_driver"]
+__all__ = [
+    "DRIVERS",
+    "BusGripperOptions",
+    "FrankaOptions",
+    "MotionOptions",
+    "PandaSimOptions",
+    "create_driver",
+]
 
 POSITIVE = Interval(0, None, low_open=True)
 
@@ -57,6 +64,15 @@ class PandaSimOptions(MotionOptions):
     )
 
 
+@dataclass(frozen=True)
+class FrankaOptions(Options):
+    """The rest (address, speed, limits) comes from ``MANIGRAPH_FRANKA_*`` (``FrankaConfig``)."""
+
+    dry_run: bool = option(
+        False, help="plan, validate and log every trajectory; move nothing (a first check)"
+    )
+
+
 DRIVERS: Registry[type[RobotDriver]] = Registry("driver")
 DRIVERS.add_lazy(
     "sim-gripper",
@@ -73,7 +89,8 @@ DRIVERS.add_lazy(
 DRIVERS.add_lazy(
     "franka",
     "manigraph_skills.drivers.franka:FrankaDriver",
-    help="the real Franka Panda (not implemented yet)",
+    options=FrankaOptions,
+    help="the real Franka Panda through franky (MANIGRAPH_FRANKA_ADDRESS; docs/franka.md)",
 )
 
 

@@ -10,6 +10,13 @@ singularities), then clamps ``q`` to the joint limits, so every returned configu
 one the robot can take. A target is reached when the position error is below ``tol_position``
 metres and the rotation error below ``tol_rotation`` radians; otherwise the result says why.
 
+With ``elbow_push`` (a direction in the base frame, its length the gain) every solve also
+swings the elbow that way in the arm's null space (the 7-joint Panda can swing its elbow
+about the shoulder-wrist line without moving the hand): ``elbow_steps`` extra steps of
+``dq = N (J_elbow^T push)`` with the damped projector ``N = I - J^+ J``, then the hand's
+pose is converged again. The planner uses it for the re-plans with the elbow swung up or to
+either side when a forearm would touch a tower beside the path.
+
 A cold start (``restart=True``) that fails from ``seed`` tries once more from the home pose
 turned towards the target (base joint at the target's bearing, wrist at its yaw); a point
 along a path is solved from the previous point only, so the arm never jumps between them.
@@ -43,6 +50,8 @@ class IKSolver:
     max_iterations: int = 200
     tol_position: float = 1e-4
     tol_rotation: float = 1e-3
+    elbow_push: tuple[float, float, float] = (0.0, 0.0, 0.0)  # null-space elbow swing
+    elbow_steps: int = 5
 
     def __post_init__(self) -> None:
         if self.damping <= 0:
@@ -73,17 +82,25 @@ class IKSolver:
         q = model.clamp(np.array(seed, dtype=float))
         damping = np.eye(6) * self.damping**2
         position_error = rotation_error = np.inf
+        push = np.asarray(self.elbow_push, dtype=float)
+        lifts = self.elbow_steps if np.any(push) else 0
         for iteration in range(self.max_iterations + 1):
             jacobian = model.tcp_jacobian(q)
             current = model.data.oMf[model.tcp]
             error = pin.log6(current.actInv(target)).vector
             position_error = float(np.linalg.norm(target.translation - current.translation))
             rotation_error = float(np.linalg.norm(error[3:]))
-            if position_error < self.tol_position and rotation_error < self.tol_rotation:
+            converged = position_error < self.tol_position and rotation_error < self.tol_rotation
+            if converged and lifts == 0:
                 return IKResult(q, True, position_error, rotation_error, iteration)
             if iteration == self.max_iterations:
                 break
-            dq = jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + damping, error)
+            inverse = jacobian.T @ np.linalg.inv(jacobian @ jacobian.T + damping)
+            dq = inverse @ error
+            if lifts > 0:
+                lifts -= 1
+                swing = model.elbow_jacobian(q).T @ push
+                dq = dq + (np.eye(len(q)) - inverse @ jacobian) @ swing
             q = model.clamp(q + self.step * dq)
         return IKResult(q, False, position_error, rotation_error, self.max_iterations)
 

@@ -34,6 +34,7 @@ class PandaModel:
         self.model = pin.buildReducedModel(full, locked, pin.neutral(full))
         self.data = self.model.createData()
         self.tcp = self.model.getFrameId(TCP_FRAME)
+        self.elbow = self.model.getFrameId("panda_link4")
         self.lower = self.model.lowerPositionLimit.copy()
         self.upper = self.model.upperPositionLimit.copy()
         self.velocity_limit = self.model.velocityLimit.copy()
@@ -61,6 +62,13 @@ class PandaModel:
         pin.computeJointJacobians(self.model, self.data, q)  # also runs forward kinematics
         pin.updateFramePlacement(self.model, self.data, self.tcp)
         return pin.getFrameJacobian(self.model, self.data, self.tcp, pin.LOCAL)
+
+    def elbow_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """3x7: how the elbow moves in the base frame per joint; call after
+        :meth:`tcp_jacobian` at ``q`` (the joint Jacobians are ready then)."""
+        pin.updateFramePlacement(self.model, self.data, self.elbow)
+        jacobian = pin.getFrameJacobian(self.model, self.data, self.elbow, pin.LOCAL_WORLD_ALIGNED)
+        return np.asarray(jacobian[:3], dtype=float)
 
 
 def top_down(position: np.ndarray, yaw: float = 0.0) -> pin.SE3:

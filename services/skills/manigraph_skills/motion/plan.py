@@ -68,20 +68,29 @@ def grasp_yaw(quaternion_xyzw: tuple[float, float, float, float]) -> float:
 class GraspPlanner:
     """Plans pick and place trajectories for the Panda from its current joint state."""
 
-    def __init__(self, model: PandaModel, config: PlanConfig | None = None) -> None:
+    def __init__(
+        self,
+        model: PandaModel,
+        config: PlanConfig | None = None,
+        elbow_push: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    ) -> None:
+        """``elbow_push``: every IK solution also swings the elbow that way (``IKSolver``)."""
         self.model = model
-        self.ik = IKSolver(model)
+        self.ik = IKSolver(model, elbow_push=elbow_push)
         self.config = config or PlanConfig()
         self.joint_speed = model.velocity_limit * self.config.joint_speed_fraction
 
-    def pick(self, q: np.ndarray, position: np.ndarray, yaw: float = 0.0) -> JointTrajectory:
-        """From ``q``: pregrasp, grasp at ``position``, close, lift."""
+    def pick(
+        self, q: np.ndarray, position: np.ndarray, yaw: float = 0.0, carry_z: float = 0.0
+    ) -> JointTrajectory:
+        """From ``q``: pregrasp, grasp at ``position``, close, lift; moves across the table
+        at least ``carry_z`` high."""
         c = self.config
         position = np.asarray(position, dtype=float)
         trajectory = JointTrajectory()
         trajectory.add(0.0, q, closed=False)
         pregrasp = position + c.approach * UP
-        self._transit(trajectory, pregrasp, yaw, closed=False, what="pregrasp")
+        self._transit(trajectory, pregrasp, yaw, closed=False, what="pregrasp", carry_z=carry_z)
         self.line(trajectory, position, yaw, False, c.slow_speed, "grasp")
         trajectory.hold(c.grip_time, closed=True)
         self.line(trajectory, position + c.lift * UP, yaw, True, c.slow_speed, "lift")

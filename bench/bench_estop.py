@@ -1,0 +1,122 @@
+"""Emergency-stop latency: from publishing ``EmergencyStop`` to the skill reporting ``stopped``.
+
+A real router, the physics sim (in real time, so a PickAndPlace lasts long enough to be
+interrupted) and the skills service with the Panda driver run as processes on loopback. For
+each sample this client resets a 3-block stack, sends one legal Action, waits until the skill
+is running plus a random delay (so the stop lands while the arm is planning or moving), then
+publishes the stop and times the arrival of the skill's final status, which must be failed
+with reason ``stopped``. It also checks that the arm stands still afterwards (joints moving
+less than 0.01 rad over 0.3 s), then resumes. Prints the median, p90 and max in milliseconds.
+Target (issue 16): skills stopped within 100 ms of the stop message. Not a test.
+"""
+
+from __future__ import annotations
+
+import argparse
+import queue
+import random
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from manigraph_shared.messages import (
+    Action,
+    EmergencyStop,
+    EpisodeEvent,
+    EpisodeRequest,
+    JointState,
+    Scene,
+    SkillState,
+    SkillStatus,
+)
+from manigraph_tools.testing import stack
+
+
+def legal_first_move(scene: Scene) -> tuple[str, str]:
+    block = max(scene.objects, key=lambda o: o.position.z)
+    goal = min((g for g in scene.goals if not g.filled), key=lambda g: g.position.z)
+    return block.id, goal.id
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--samples", type=int, default=10)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--log-dir", type=Path, help="keep the services' logs here")
+    args = parser.parse_args()
+    rng = random.Random(args.seed)
+    latencies: list[float] = []
+    halted = 0
+    with tempfile.TemporaryDirectory() as logs, stack(args.log_dir or Path(logs)) as running:
+        running.start("router")
+        running.start("sim", "sim", "--backend", "physics", "--realtime")
+        running.start("skills", "skills", "--driver", "panda-sim")
+        with running.client() as bus:
+            running.wait_alive(bus, "sim", "skills", timeout=180)
+            scenes: queue.SimpleQueue[Scene] = queue.SimpleQueue()
+            statuses: queue.SimpleQueue[tuple[float, SkillStatus]] = queue.SimpleQueue()
+            joints: list[JointState] = []
+            bus.subscribe(Scene, scenes.put)
+            bus.subscribe(SkillStatus, lambda s: statuses.put((time.perf_counter(), s)))
+            bus.subscribe(JointState, joints.append)
+            time.sleep(0.5)
+            for sample in range(args.samples):
+                episode = f"estop-{sample}"
+                bus.request(
+                    EpisodeRequest(episode_id=episode, task="stack", blocks=3, seed=sample),
+                    EpisodeEvent,
+                    timeout=30.0,
+                )
+                scene = scenes.get(timeout=10.0)
+                while scene.episode_id != episode:
+                    scene = scenes.get(timeout=10.0)
+                block, goal = legal_first_move(scene)
+                decision = f"{episode}:0"
+                bus.publish(
+                    Action(
+                        decision_id=decision,
+                        episode_id=episode,
+                        scene_sequence=scene.sequence,
+                        object_id=block,
+                        goal_id=goal,
+                        policy="bench",
+                        stamp=time.time(),
+                    )
+                )
+                _, status = statuses.get(timeout=10.0)
+                while not (status.decision_id == decision and status.state is SkillState.RUNNING):
+                    _, status = statuses.get(timeout=10.0)
+                time.sleep(rng.uniform(0.1, 0.6))
+                sent = time.perf_counter()
+                bus.publish(EmergencyStop(engaged=True, reason="bench", stamp=time.time()))
+                arrived, status = statuses.get(timeout=10.0)
+                while status.decision_id != decision or not status.state.terminal:
+                    arrived, status = statuses.get(timeout=10.0)
+                if status.reason != "stopped":
+                    print(f"sample {sample}: the skill ended before the stop ({status.state})")
+                else:
+                    latencies.append((arrived - sent) * 1000)
+                    print(f"sample {sample}: {latencies[-1]:.1f} ms", flush=True)
+                    time.sleep(0.2)  # let the sim report the halted arm
+                    before = np.array(joints[-1].positions)
+                    time.sleep(0.3)
+                    after = np.array(joints[-1].positions)
+                    halted += bool(np.max(np.abs(after - before)) < 0.01)
+                bus.publish(EmergencyStop(engaged=False, reason="bench", stamp=time.time()))
+                time.sleep(0.3)
+    if not latencies:
+        raise SystemExit("no stop landed while a skill ran")
+    latencies.sort()
+    p90 = latencies[min(len(latencies) - 1, int(0.9 * len(latencies)))]
+    print(
+        f"emergency stop -> skill reports stopped: median {statistics.median(latencies):.1f} ms, "
+        f"p90 {p90:.1f} ms, max {latencies[-1]:.1f} ms over {len(latencies)} stops "
+        f"(target 100 ms); arm still afterwards in {halted}/{len(latencies)}"
+    )
+
+
+if __name__ == "__main__":
+    main()

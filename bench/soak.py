@@ -1,0 +1,318 @@
+"""The long soak: hostile load on one running stack, then three real episodes on it.
+
+One stack (router, sim, planner with a GNN policy, skills, recorder; real processes on
+loopback) takes, in turn:
+
+* **fuzz**: ``--per-type`` malformed payloads on the key of every message type of the
+  contract (``Message.registry``; query types get a fifth of that as query payloads), drawn
+  by a mutational fuzzer from Hypothesis-generated valid messages;
+* **valid / invalid scene floods**: ``--flood-seconds`` of scenes at ``--flood-rate``/s;
+* **explain bomb**: three explain requests at once, each a 256-object + 256-goal scene;
+* **oversized task file**: a reset request past the 1 MiB payload limit, and one with a
+  64 KiB task file of 256 overlapping blocks;
+
+and after each check it records whether every process is alive and healthy (``doctor``: no
+service missing or stalled), RSS of every service (``--settle`` s after the check) and what the
+recorder lost. It ends with ``manigraph run --blocks 4 --episodes 3`` on the same stack,
+without restarting anything, which must succeed.
+
+    python bench/soak.py                          # the full soak: 100,000 payloads per type
+    python bench/soak.py --per-type 10000 --flood-seconds 10 --settle 20   # a shorter one
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import tempfile
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from soak_stack import SERVICES, SoakStack, soak_stack  # bench/soak_stack.py
+
+from manigraph_shared.mcap_log import read_log
+from manigraph_shared.messages import (
+    Delivery,
+    EpisodeRequest,
+    ExplainRequest,
+    Scene,
+    SceneGoal,
+    SceneObject,
+    Vector3,
+)
+from manigraph_shared.messages.base import MAX_PAYLOAD_BYTES
+from manigraph_tools.flood import concrete_key, flood_scenes, fuzz_stack
+from manigraph_tools.fuzzing import message_types
+
+RSS_TOLERANCE = 0.20
+REPO = Path(__file__).resolve().parents[1]
+
+
+@dataclass
+class Row:
+    check: str
+    held: bool
+    counts: str
+    rss: dict[str, tuple[float, float]] = field(default_factory=dict)
+    lost: str = "-"
+    notes: str = ""
+
+
+class Soak:
+    def __init__(self, soak: SoakStack, settle: float) -> None:
+        self.soak = soak
+        self.settle = settle
+        self.rows: list[Row] = []
+        self._recorded: collections.Counter[str] = collections.Counter()
+
+    def recorded_since_last(self) -> collections.Counter[str]:
+        """Messages per key the recorder wrote since the previous call (flushed chunks)."""
+        total: collections.Counter[str] = collections.Counter()
+        for path in sorted(self.soak.log.parent.glob("soak*.mcap")):
+            total.update(item.topic for item in read_log(path))
+        delta = total - self._recorded
+        self._recorded = total
+        return delta
+
+    def check(self, name: str, run) -> None:  # type: ignore[no-untyped-def]
+        before = self.soak.rss()
+        rejected = self.soak.rejected()
+        self.recorded_since_last()
+        started = time.perf_counter()
+        counts, lost, held, notes = run()
+        seconds = time.perf_counter() - started
+        time.sleep(self.settle)
+        after = self.soak.rss()
+        dead = self.soak.dead()
+        healthy = not dead and self.soak.healthy()
+        rss_ok = all(after[s] <= before[s] * (1 + RSS_TOLERANCE) for s in SERVICES if before[s])
+        newly_rejected = sum(self.soak.rejected()[s] - rejected[s] for s in SERVICES)
+        self.rows.append(
+            Row(
+                check=name,
+                held=held and healthy and rss_ok,
+                counts=f"{counts}; {newly_rejected} rejected by services; {seconds:.0f} s",
+                rss={s: (before[s], after[s]) for s in SERVICES},
+                lost=lost,
+                notes="; ".join(
+                    n
+                    for n in (
+                        notes,
+                        f"dead: {dead}" if dead else "",
+                        "" if healthy else "doctor: unhealthy",
+                        "" if rss_ok else "RSS grew > 20 %",
+                    )
+                    if n
+                ),
+            )
+        )
+        print(f"[soak] {name}: {'held' if self.rows[-1].held else 'BROKE'}", flush=True)
+
+    # --- the checks ---------------------------------------------------------------------
+    def fuzz(self, per_type: int, seed: int):  # type: ignore[no-untyped-def]
+        def run():  # type: ignore[no-untyped-def]
+            counts = fuzz_stack(self.soak.bus, per_type, seed=seed, valid_share=0.0)
+            time.sleep(1.0)  # the last flushes
+            recorded = self.recorded_since_last()
+            lost_reliable = lost_latest = 0
+            for cls in message_types():
+                if cls.delivery is Delivery.QUERY:
+                    continue
+                missing = max(0, counts[cls.__name__].sent - recorded[concrete_key(cls)])
+                if cls.delivery is Delivery.LATEST:
+                    lost_latest += missing
+                else:
+                    lost_reliable += missing
+            sent = sum(c.sent for c in counts.values())
+            per = min(
+                c.sent for n, c in counts.items() if n not in ("EpisodeRequest", "ExplainRequest")
+            )
+            lost = f"recorder: {lost_reliable} reliable, {lost_latest} drop-allowed (scene, joints)"
+            return f"{sent} payloads, >= {per} per published type", lost, True, ""
+
+        return run
+
+    def flood(self, valid: bool, seconds: float, rate: float):  # type: ignore[no-untyped-def]
+        def run():  # type: ignore[no-untyped-def]
+            started = time.perf_counter()
+            sent = flood_scenes(self.soak.bus, seconds, rate, valid)
+            achieved = sent / (time.perf_counter() - started)
+            time.sleep(1.0)
+            kept = self.recorded_since_last()[Scene.key]
+            lost = f"recorder kept {min(kept, sent)} of {sent} (congestion DROP allowed)"
+            return f"{sent} scenes at {achieved:.0f}/s", lost, True, ""
+
+        return run
+
+    def explain_bomb(self, deadline: float = 30.0):  # type: ignore[no-untyped-def]
+        def run():  # type: ignore[no-untyped-def]
+            request = ExplainRequest(scene=big_scene(256, 256)).encode()
+            answers: list[tuple[float, str]] = []
+
+            def ask() -> None:
+                started = time.perf_counter()
+                replies = self.soak.bus.session.get(
+                    ExplainRequest.key, payload=request, timeout=deadline
+                )
+                kind = "no answer"
+                for reply in replies:
+                    if reply.ok is not None:
+                        kind = "explanation"
+                    else:
+                        text = reply.err.payload.to_string() if reply.err is not None else ""
+                        # zenoh answers a query nobody replied to in time with "Timeout"
+                        kind = "timed out" if "timeout" in text.lower() else "error reply"
+                    break
+                answers.append((time.perf_counter() - started, kind))
+
+            threads = [threading.Thread(target=ask) for _ in range(3)]
+            for thread in threads:
+                thread.start()
+            for thread in threads:
+                thread.join()
+            slowest = max(t for t, _ in answers)
+            kinds = collections.Counter(k for _, k in answers)
+            held = not ({"no answer", "timed out"} & set(kinds)) and slowest < deadline
+            counts = (
+                f"3 x {len(request) // 1024} KiB requests; answers: {dict(kinds)}; "
+                f"slowest {slowest:.1f} s"
+            )
+            return counts, "-", held, "" if held else f"no explanation within {deadline:g} s"
+
+        return run
+
+    def oversized_task_file(self):  # type: ignore[no-untyped-def]
+        def run():  # type: ignore[no-untyped-def]
+            too_big = (
+                b'{"episode_id":"big","task":"file","task_file":"'
+                + b"#" * (MAX_PAYLOAD_BYTES + 1)
+                + b'"}'
+            )
+            toml = overlapping_task_file(65_536)
+            at_limit = EpisodeRequest(episode_id="big2", task="file", task_file=toml).encode()
+            results = []
+            for payload in (too_big, at_limit):
+                started = time.perf_counter()
+                kind = "no answer"
+                for reply in self.soak.bus.session.get(
+                    EpisodeRequest.key, payload=payload, timeout=30.0
+                ):
+                    kind = "accepted" if reply.ok is not None else "refused"
+                    text = reply.err.payload.to_string() if reply.err is not None else ""
+                    break
+                results.append((kind, time.perf_counter() - started, text[:80]))
+            held = all(kind == "refused" and t < 10 for kind, t, _ in results)
+            counts = (
+                f"{len(too_big) >> 10} KiB request: {results[0][0]} in {results[0][1]:.2f} s; "
+                f"{len(toml) >> 10} KiB task file of 256 overlapping blocks: {results[1][0]} "
+                f"in {results[1][1]:.2f} s"
+            )
+            return counts, "-", held, results[1][2]
+
+        return run
+
+
+def big_scene(objects: int, goals: int) -> Scene:
+    return Scene(
+        episode_id="bomb",
+        stamp=time.time(),
+        sequence=0,
+        objects=[
+            SceneObject(
+                id=f"block_{i}",
+                category="block",
+                position=Vector3(x=0.3 + 0.02 * (i % 20), y=-0.3 + 0.05 * (i // 20), z=0.02),
+                size=Vector3(x=0.04, y=0.04, z=0.04),
+            )
+            for i in range(objects)
+        ],
+        goals=[
+            SceneGoal(
+                id=f"goal_{i}", category="block", position=Vector3(x=0.5, y=0.2, z=0.02 + 0.04 * i)
+            )
+            for i in range(goals)
+        ],
+    )
+
+
+def overlapping_task_file(size: int) -> str:
+    lines = []
+    for i in range(256):
+        lines += [
+            "[[objects]]",
+            f'id = "block_{i}"',
+            'category = "block"',
+            "position = [0.5, 0.0, 0.02]",
+            "",
+        ]
+    lines += ["[[goals]]", 'id = "g"', 'category = "block"', "position = [0.4, 0.2, 0.02]", ""]
+    text = "\n".join(lines)
+    return (text + "#" * size)[: size - 1] + "\n"
+
+
+def table(rows: list[Row]) -> str:
+    out = [
+        "| check | held/broke | counts | RSS before → after, MiB | lost messages | notes |",
+        "|---|---|---|---|---|---|",
+    ]
+    for row in rows:
+        rss = ", ".join(f"{s} {b:.0f} → {a:.0f}" for s, (b, a) in row.rss.items())
+        out.append(
+            f"| {row.check} | {'held' if row.held else '**BROKE**'} | {row.counts} | {rss} | "
+            f"{row.lost} | {row.notes or '-'} |"
+        )
+    return "\n".join(out)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawTextHelpFormatter
+    )
+    parser.add_argument("--per-type", type=int, default=100_000, help="fuzzed payloads per type")
+    parser.add_argument("--flood-seconds", type=float, default=30.0)
+    parser.add_argument("--flood-rate", type=float, default=10_000.0, help="scenes per second")
+    parser.add_argument("--settle", type=float, default=60.0, help="seconds before RSS readings")
+    parser.add_argument(
+        "--policy", default=str(REPO / "checkpoints" / "sage.pt"), help="the planner's policy"
+    )
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--json", type=Path, help="also write the rows here")
+    args = parser.parse_args()
+    started = time.time()
+    with tempfile.TemporaryDirectory() as tmp, soak_stack(Path(tmp), args.policy) as stack:
+        warm = stack.running.run("run", "--blocks", "4", "--episodes", "1", "--json")
+        if warm.returncode != 0:
+            raise SystemExit(f"the stack cannot run an episode before the soak:\n{warm.stderr}")
+        soak = Soak(stack, args.settle)
+        soak.check(f"fuzz, {args.per_type} per type", soak.fuzz(args.per_type, args.seed))
+        soak.check("valid scene flood", soak.flood(True, args.flood_seconds, args.flood_rate))
+        soak.check("invalid scene flood", soak.flood(False, args.flood_seconds, args.flood_rate))
+        soak.check("explain bomb (256+256 nodes, x3)", soak.explain_bomb())
+        soak.check("oversized task file", soak.oversized_task_file())
+        final = stack.running.run("run", "--blocks", "4", "--episodes", "3", "--json", timeout=600)
+        summary = json.loads(final.stdout.strip().splitlines()[-1]) if final.returncode == 0 else {}
+        episodes_ok = summary.get("success_rate") == 1.0
+        soak.rows.append(
+            Row(
+                check="manigraph run --blocks 4 --episodes 3, after it all",
+                held=episodes_ok,
+                counts=f"success rate {summary.get('success_rate', 'none')}, "
+                f"{summary.get('mean_steps', '-')} steps per episode",
+                notes="" if episodes_ok else final.stderr[-300:].replace("\n", " "),
+            )
+        )
+    print(
+        f"\nsoak of {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime(started))}, "
+        f"{(time.time() - started) / 60:.1f} min, policy {args.policy}"
+    )
+    print(table(soak.rows))
+    if args.json:
+        args.json.write_text(json.dumps([row.__dict__ for row in soak.rows], indent=1))
+    raise SystemExit(0 if all(row.held for row in soak.rows) else 1)
+
+
+if __name__ == "__main__":
+    main()

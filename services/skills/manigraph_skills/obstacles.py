@@ -1,0 +1,88 @@
+"""What the arm must not touch, read off the scene: blocks, covers, towers and box walls.
+
+Every visible object is a box of its size at its pose, except the one being moved (it is
+between the fingers). Objects that *support* the grasp or the goal (directly under the moved
+object, or under the goal it is set down on) are marked: the hand and fingers may come close
+to them, the arm links may not. Boxes are not scene objects: a cover goal marks where a
+box's lid sits, so the box is four walls under it, of the footprint of the covers seen in the
+scene (``WALL`` thick, from the table up to the lid's underside). The table is the collision
+model's own (``motion.collision``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneObject
+
+#: Assumed box wall thickness, metres (the physics world's boxes: 1 cm).
+WALL = 0.01
+#: An object counts as a support when its top is within this of the underside above it.
+SUPPORT_GAP = 0.01
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A box-shaped obstacle in the robot base frame."""
+
+    id: str
+    centre: tuple[float, float, float]  # metres
+    size: tuple[float, float, float]  # full extents, metres
+    quaternion: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)  # x, y, z, w
+    support: bool = False  # under the moved object or its goal: the hand may touch it
+
+
+def scene_obstacles(scene: Scene, moving: SceneObject, at: np.ndarray) -> tuple[Obstacle, ...]:
+    """The obstacles for moving ``moving`` whose centre is (or will be) at ``at``."""
+    bottom = at[2] - moving.size.z / 2
+    half = np.array(moving.size.as_tuple()[:2]) / 2
+    found: list[Obstacle] = []
+    for other in scene.objects:
+        if other.id == moving.id or not other.visible:
+            continue
+        centre = np.array(other.position.as_tuple())
+        size = np.array(other.size.as_tuple())
+        top = centre[2] + size[2] / 2
+        overlaps = bool(np.all(np.abs(centre[:2] - at[:2]) < half + size[:2] / 2))
+        support = overlaps and abs(top - bottom) <= SUPPORT_GAP
+        o = other.orientation
+        found.append(
+            Obstacle(
+                other.id,
+                tuple(centre.tolist()),  # type: ignore[arg-type]
+                tuple(size.tolist()),  # type: ignore[arg-type]
+                (o.x, o.y, o.z, o.w),
+                support,
+            )
+        )
+    found.extend(box_walls(scene))
+    return tuple(found)
+
+
+def box_walls(scene: Scene) -> list[Obstacle]:
+    """Four walls under every cover goal, sized like the scene's covers."""
+    covers = [o for o in scene.objects if o.category is ObjectCategory.COVER]
+    if not covers:
+        return []
+    side_x = max(c.size.x for c in covers)
+    side_y = max(c.size.y for c in covers)
+    thickness = max(c.size.z for c in covers)
+    walls: list[Obstacle] = []
+    for goal in scene.goals:
+        if goal.category is not GoalCategory.COVER:
+            continue
+        x, y, z = goal.position.as_tuple()
+        height = z - thickness / 2
+        if height <= 0:
+            continue
+        mid = height / 2
+        for side, (dx, dy, sx, sy) in {
+            "x-": (-(side_x - WALL) / 2, 0.0, WALL, side_y),
+            "x+": ((side_x - WALL) / 2, 0.0, WALL, side_y),
+            "y-": (0.0, -(side_y - WALL) / 2, side_x, WALL),
+            "y+": (0.0, (side_y - WALL) / 2, side_x, WALL),
+        }.items():
+            walls.append(Obstacle(f"{goal.id}:wall{side}", (x + dx, y + dy, mid), (sx, sy, height)))
+    return walls

@@ -1,0 +1,105 @@
+"""A service's bounded inbox: what the bus hands the service thread, with a stated overflow policy.
+
+Every sample a service subscribes to arrives on a Zenoh thread and waits here for the service
+thread. The bus is a trust boundary, so a flood must not grow this without bound:
+
+* **state streams** (``Delivery.LATEST``: scenes, joint states) are *coalesced*: at most one
+  sample per subscription waits; a newer one replaces it in place (only the newest matters,
+  which is what the publisher's congestion control DROP already says);
+* **every other sample** (decisions, statuses, events) takes a slot; when all ``capacity``
+  slots are taken the *arriving* sample is dropped (tail drop) and counted in ``dropped``,
+  so what already waits keeps its order;
+* work the service schedules for itself (``call_soon``, e.g. a reset query answered on the
+  service thread) is never dropped: its callers are bounded already (one Zenoh thread waits
+  per query).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Hashable
+from typing import Any
+
+Work = tuple[Callable[[Any], None], Any]
+
+#: Slots for samples that are never coalesced; a service at full speed drains it in ~1 s.
+DEFAULT_CAPACITY = 1024
+
+
+class Inbox:
+    """A FIFO of ``(handler, argument)`` pairs, bounded as the module docstring says."""
+
+    def __init__(self, capacity: int = DEFAULT_CAPACITY) -> None:
+        if capacity < 1:
+            raise ValueError(f"capacity: must be >= 1, got {capacity}")
+        self.capacity = capacity
+        self.dropped = 0
+        self.coalesced = 0
+        self._queue: deque[object] = deque()
+        self._latest: dict[Hashable, Work] = {}
+        self._bounded = 0  # entries of _queue that count against capacity
+        self._ready = threading.Condition(threading.Lock())
+
+    def put(self, handler: Callable[[Any], None], argument: Any) -> bool:
+        """Queue one sample; False if the inbox was full and it was dropped."""
+        with self._ready:
+            if self._bounded >= self.capacity:
+                self.dropped += 1
+                return False
+            self._queue.append((handler, argument))
+            self._bounded += 1
+            self._ready.notify()
+            return True
+
+    def put_latest(self, slot: Hashable, handler: Callable[[Any], None], argument: Any) -> None:
+        """Queue ``argument`` for ``slot``, replacing one of the same slot still waiting."""
+        with self._ready:
+            if slot in self._latest:
+                self.coalesced += 1
+            else:
+                self._queue.append(_Slot(slot))
+            self._latest[slot] = (handler, argument)
+            self._ready.notify()
+
+    def put_unbounded(self, handler: Callable[[Any], None], argument: Any) -> None:
+        """Queue the service's own work: never dropped."""
+        with self._ready:
+            self._queue.append(_Own((handler, argument)))
+            self._ready.notify()
+
+    def get(self, timeout: float) -> Work | None:
+        """The oldest waiting work, or None after ``timeout`` seconds."""
+        deadline = time.monotonic() + timeout
+        with self._ready:
+            while not self._queue:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    return None
+                self._ready.wait(remaining)
+            entry = self._queue.popleft()
+            if isinstance(entry, _Slot):
+                return self._latest.pop(entry.slot)
+            if isinstance(entry, _Own):
+                return entry.work
+            self._bounded -= 1
+            return entry  # type: ignore[return-value]  # a bounded (handler, argument)
+
+    def __len__(self) -> int:
+        with self._ready:
+            return len(self._queue)
+
+
+class _Slot:
+    __slots__ = ("slot",)
+
+    def __init__(self, slot: Hashable) -> None:
+        self.slot = slot
+
+
+class _Own:
+    __slots__ = ("work",)
+
+    def __init__(self, work: Work) -> None:
+        self.work = work

@@ -1,0 +1,21 @@
+"""The emergency stop: any authorised client may engage it; skills and the sim obey at once."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from pydantic import Field
+
+from manigraph_shared.messages.base import Delivery, Message, Stamp
+
+
+class EmergencyStop(Message):
+    """Engage (halt the robot, refuse new actions) or release the emergency stop."""
+
+    key: ClassVar[str] = "manigraph/robot/estop"
+    delivery: ClassVar[Delivery] = Delivery.RELIABLE
+    publisher: ClassVar[str] = "any authorised client (`manigraph stop` / `resume`)"
+
+    engaged: bool = Field(description="true: stop now and stay stopped; false: resume")
+    reason: str = Field("", max_length=256, description="why, for the log")
+    stamp: Stamp

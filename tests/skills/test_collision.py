@@ -1,0 +1,220 @@
+"""Arm-link collision checking on constructed scenes: the Panda's URDF collision meshes
+against blocks, towers, box walls and the table, and the driver's re-planning around them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from manigraph_shared.errors import SkillError
+from manigraph_shared.messages import (
+    GoalCategory,
+    JointTrajectoryCommand,
+    JointTrajectoryResult,
+    ObjectCategory,
+    Quaternion,
+    Scene,
+    SceneGoal,
+    SceneObject,
+    Vector3,
+)
+from manigraph_skills.drivers.base import Motion
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+from manigraph_skills.grasp_choice import choose_grasps
+from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, JointTrajectory, PandaModel
+from manigraph_skills.motion.collision import ArmCollisionModel
+from manigraph_skills.motion.model import top_down
+from manigraph_skills.obstacles import Obstacle, box_walls
+
+BLOCK = 0.04
+
+
+class PerfectArm:
+    """Executes every trajectory exactly and holds a block after closing (the hardware
+    boundary of the driver)."""
+
+    def __init__(self) -> None:
+        self.q = HOME_Q.copy()
+        self.sent: list[JointTrajectoryCommand] = []
+
+    def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
+        self.sent.append(command)
+        self.q = np.array(command.points[-1].positions)
+        closed = command.points[-1].gripper.value == "closed"
+        return JointTrajectoryResult(
+            command_id=command.command_id,
+            ok=True,
+            positions=self.q.tolist(),
+            gripper_width=0.04 if closed else 0.08,
+            stamp=1.0,
+        )
+
+    def joint_positions(self) -> np.ndarray:
+        return self.q.copy()
+
+    def object_position(self, object_id: str, after: float) -> np.ndarray | None:
+        return None
+
+
+def block(name: str, x: float, y: float, level: int = 0) -> SceneObject:
+    return SceneObject(
+        id=name,
+        category=ObjectCategory.BLOCK,
+        position=Vector3(x=x, y=y, z=BLOCK / 2 + level * BLOCK),
+        size=Vector3(x=BLOCK, y=BLOCK, z=BLOCK),
+    )
+
+
+def tower(name: str, x: float, y: float, height: int) -> list[SceneObject]:
+    return [block(f"{name}_{i}", x, y, i) for i in range(height)]
+
+
+def scene(*objects: SceneObject, goals: tuple[SceneGoal, ...] = ()) -> Scene:
+    return Scene(episode_id="e", stamp=1.0, sequence=0, objects=list(objects), goals=list(goals))
+
+
+def trajectory_of(command: JointTrajectoryCommand) -> JointTrajectory:
+    trajectory = JointTrajectory()
+    for point in command.points:
+        trajectory.add(point.time_from_start, np.array(point.positions), point.gripper == "closed")
+    return trajectory
+
+
+@pytest.fixture(scope="module")
+def collision() -> ArmCollisionModel:
+    return ArmCollisionModel(PandaModel())
+
+
+def test_a_plain_pick_touches_nothing_not_even_the_table(collision: ArmCollisionModel) -> None:
+    planner = GraspPlanner(collision_model_panda := PandaModel())
+    assert collision_model_panda is not None
+    pick = planner.pick(HOME_Q, np.array([0.5, 0.1, 0.02]), np.pi / 2)
+    assert collision.first_contact(pick) is None
+
+
+def test_a_hand_below_the_table_top_touches_the_table(collision: ArmCollisionModel) -> None:
+    planner = GraspPlanner(PandaModel())
+    pick = planner.pick(HOME_Q, np.array([0.5, 0.1, 0.0]), np.pi / 2)
+    contact = collision.first_contact(pick)
+    assert contact is not None and contact.obstacle == "table"
+
+
+def test_a_tower_on_the_path_is_found_between_the_planned_points(
+    collision: ArmCollisionModel,
+) -> None:
+    # Two configurations on either side of a thin pole: neither touches it, the sweep does.
+    start, end = HOME_Q.copy(), HOME_Q.copy()
+    start[0], end[0] = -0.6, 0.6
+    sweep = JointTrajectory()
+    sweep.add(0.0, start, False)
+    sweep.add(1.0, end, False)
+    hand = PandaModel().tcp_pose(HOME_Q).translation
+    pole = (Obstacle("pole", (hand[0], hand[1], 0.3), (0.01, 0.01, 0.6)),)
+    assert collision.first_contact(JointTrajectory([0.0], [start], [False]), pole) is None
+    assert collision.first_contact(JointTrajectory([0.0], [end], [False]), pole) is None
+    contact = collision.first_contact(sweep, pole)
+    assert contact is not None and contact.obstacle == "pole" and 0.0 < contact.time < 1.0
+
+
+def test_a_tall_tower_beside_the_path_is_passed_higher_or_turned(
+    collision: ArmCollisionModel,
+) -> None:
+    item = block("block_0", 0.5, 0.1)
+    world = scene(item, *tower("tower", 0.3, 0.05, 8))
+    pick, _ = choose_grasps(world, item, Vector3(x=0.4, y=-0.2, z=0.02))
+    planner = GraspPlanner(PandaModel())
+    default = planner.pick(HOME_Q, np.array(item.position.as_tuple()), np.pi / 2)
+    assert collision.first_contact(default, pick.obstacles) is not None  # as planned: a hit
+    arm = PerfectArm()
+    PandaMotionDriver(arm).pick(Motion("e:0", item.id, item.position, item.orientation, pick))
+    (sent,) = arm.sent
+    assert collision.first_contact(trajectory_of(sent), pick.obstacles) is None
+    replanned = trajectory_of(sent)  # a different plan went to the arm: higher or turned
+    assert len(replanned) != len(default) or not np.allclose(replanned.final, default.final)
+
+
+def test_a_target_walled_in_by_towers_is_refused_as_collision_before_any_motion() -> None:
+    item = block("block_0", 0.5, 0.1)
+    walls = [*tower("left", 0.5, 0.1 - 0.045, 12), *tower("right", 0.5, 0.1 + 0.045, 12)]
+    walls += [*tower("front", 0.5 - 0.045, 0.1, 12), *tower("back", 0.5 + 0.045, 0.1, 12)]
+    world = scene(item, *walls)
+    pick, _ = choose_grasps(world, item, Vector3(x=0.4, y=-0.2, z=0.02))
+    arm = PerfectArm()
+    with pytest.raises(SkillError) as caught:
+        PandaMotionDriver(arm).pick(Motion("e:0", item.id, item.position, item.orientation, pick))
+    assert caught.value.reason == "collision"
+    assert "would touch" in caught.value.detail
+    assert arm.sent == []
+
+
+def test_the_moved_block_and_its_support_are_not_obstacles_to_the_hand(
+    collision: ArmCollisionModel,
+) -> None:
+    stack = tower("stack", 0.5, 0.1, 3)
+    item = stack[-1]
+    world = scene(*stack)
+    goal = Vector3(x=0.4, y=-0.2, z=0.02)
+    pick, place = choose_grasps(world, item, goal)
+    ids = {o.id: o for o in pick.obstacles}
+    assert item.id not in ids  # between the fingers
+    assert ids["stack_1"].support and not ids["stack_0"].support
+    arm = PerfectArm()
+    driver = PandaMotionDriver(arm)
+    driver.pick(Motion("e:0", item.id, item.position, item.orientation, pick))
+    driver.place(Motion("e:0", item.id, goal, Quaternion(), place))
+    assert len(arm.sent) == 3
+
+
+def test_boxes_are_walls_under_their_cover_goals() -> None:
+    cover = SceneObject(
+        id="cover_0",
+        category=ObjectCategory.COVER,
+        position=Vector3(x=0.3, y=0.3, z=0.005),
+        size=Vector3(x=0.25, y=0.25, z=0.01),
+    )
+    goal = SceneGoal(
+        id="goal_c", category=GoalCategory.COVER, position=Vector3(x=0.5, y=0, z=0.055)
+    )
+    walls = box_walls(scene(cover, goals=(goal,)))
+    assert len(walls) == 4
+    assert all(abs(w.size[2] - 0.05) < 1e-9 and abs(w.centre[2] - 0.025) < 1e-9 for w in walls)
+    assert {round(w.centre[0], 3) for w in walls} == {0.38, 0.5, 0.62}
+
+
+def test_a_forearm_over_a_tower_before_a_far_low_grasp_swings_its_elbow_aside(
+    collision: ArmCollisionModel,
+) -> None:
+    # Six-block stacking, seed 1: the goal tower stands 15 cm in front of the last block.
+    # Higher or turned, the forearm still sweeps the tower's top; the elbow swung aside clears.
+    item = block("block_0", 0.505, 0.315)
+    world = scene(item, *tower("goal", 0.358, 0.314, 5))
+    pick, _ = choose_grasps(world, item, Vector3(x=0.358, y=0.314, z=0.22))
+    planner = GraspPlanner(PandaModel())
+    planned = planner.pick(HOME_Q, np.array(item.position.as_tuple()), np.pi / 2)
+    contact = collision.first_contact(planned, pick.obstacles)
+    assert contact is not None and contact.link == "panda_link5"
+    arm = PerfectArm()
+    PandaMotionDriver(arm).pick(Motion("e:0", item.id, item.position, item.orientation, pick))
+    (sent,) = arm.sent
+    assert collision.first_contact(trajectory_of(sent), pick.obstacles) is None
+    assert np.allclose(PandaModel().tcp_pose(arm.q).translation, [0.505, 0.315, 0.1], atol=1e-3)
+
+
+def test_from_above_the_tower_a_short_motion_swings_the_elbow_harder(
+    collision: ArmCollisionModel,
+) -> None:
+    # The same episode a move later: the hand has just released on the tower (5 high) and
+    # goes out to the block beside it; a gentle swing adds up too little over so short a path.
+    item = block("block_0", 0.505, 0.315)
+    world = scene(item, *tower("goal", 0.357, 0.314, 5))
+    pick, _ = choose_grasps(world, item, Vector3(x=0.357, y=0.314, z=0.22))
+    model = PandaModel()
+    arm = PerfectArm()
+    arm.q = IKSolver(model).solve_or_raise(
+        top_down(np.array([0.357, 0.314, 0.3]), np.pi / 2), HOME_Q, "start"
+    )
+    planned = GraspPlanner(model).pick(arm.q, np.array(item.position.as_tuple()), np.pi / 2)
+    assert collision.first_contact(planned, pick.obstacles) is not None
+    PandaMotionDriver(arm).pick(Motion("e:0", item.id, item.position, item.orientation, pick))
+    (sent,) = arm.sent
+    assert collision.first_contact(trajectory_of(sent), pick.obstacles) is None

@@ -1,0 +1,73 @@
+"""``manigraph stop`` / ``manigraph resume``: the emergency stop from the command line.
+
+Both publish one ``EmergencyStop`` on ``manigraph/robot/estop`` (any client may, so it lands in
+the MCAP log like every other message) and wait for the skills service to acknowledge it in its
+status. Skills halts the driver and fails the skill under way with reason ``stopped``; the sim
+halts the arm; the planner decides nothing; every action is refused until ``resume``.
+
+A service started after the stop has not seen it: send ``manigraph stop`` again.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import threading
+import time
+
+from manigraph_shared.bus import Bus
+from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
+from manigraph_shared.cli import Command
+from manigraph_shared.messages import EmergencyStop, ServiceStatus
+
+ENGAGED = "emergency stop engaged"
+
+
+def send(bus: Bus, engaged: bool, reason: str, wait: float) -> bool:
+    """Publish the stop (or its release); True once skills has acknowledged it."""
+    acknowledged = threading.Event()
+
+    def on_status(status: ServiceStatus) -> None:
+        if status.service == "skills" and status.detail.startswith(ENGAGED) == engaged:
+            acknowledged.set()
+
+    bus.subscribe(ServiceStatus, on_status, key="manigraph/status/skills")
+    time.sleep(0.05)  # let the subscription reach the router before the answer can
+    bus.publish(EmergencyStop(engaged=engaged, reason=reason, stamp=time.time()))
+    return acknowledged.wait(wait)
+
+
+def _configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--reason", default="", help="why, for the log")
+    parser.add_argument(
+        "--wait", type=float, default=2.0, help="seconds to wait for skills to acknowledge"
+    )
+    add_bus_arguments(parser)
+
+
+def _run(args: argparse.Namespace, engaged: bool) -> int:
+    reason = args.reason or ("manigraph stop" if engaged else "manigraph resume")
+    with Bus.open(bus_config_from_args(args, wait_seconds=5.0)) as bus:
+        ok = send(bus, engaged, reason, args.wait)
+    what = "engaged" if engaged else "released"
+    if ok:
+        print(f"emergency stop {what}; skills acknowledged", file=sys.stderr)
+        return 0
+    print(
+        f"emergency stop {what} (published), but skills did not acknowledge within "
+        f"{args.wait:g} s: is it running?",
+        file=sys.stderr,
+    )
+    return 1
+
+
+stop_command = Command(
+    help="emergency stop: halt the robot now and refuse every action until `manigraph resume`",
+    configure=_configure,
+    run=lambda args: _run(args, engaged=True),
+)
+resume_command = Command(
+    help="release the emergency stop: skills accepts actions again",
+    configure=_configure,
+    run=lambda args: _run(args, engaged=False),
+)
