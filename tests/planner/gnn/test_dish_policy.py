@@ -136,3 +136,34 @@ def test_the_shipped_dishwasher_checkpoints_load_and_act(preference: str) -> Non
     )
     assert wins >= 4
     assert np.isfinite(policy.net.heads_complete(dish_scene_to_graph(scene(2)).x).tray).all()
+
+
+def test_dropping_dishes_keeps_the_demonstrated_decision(demos) -> None:  # type: ignore[no-untyped-def]
+    import random
+
+    from manigraph_planner.training.dishwasher import drop_dishes
+
+    rng = random.Random(0)
+    shrunk = 0
+    for sample in demos.samples:
+        for _ in range(5):
+            copy = drop_dishes(sample, rng)
+            shrunk += copy.num_objects < sample.num_objects
+            assert copy.x.shape[0] == copy.num_objects + sample.num_goals + 2
+            if sample.tray == 2:  # a placement: the same dish, the same slot
+                assert torch.equal(copy.x[copy.object_index], sample.x[sample.object_index])
+                assert copy.goal_index == sample.goal_index
+            dishes = copy.x[: copy.num_objects]
+            for kind in (0, 1):
+                before = (
+                    (sample.x[: sample.num_objects, kind] == 1)
+                    & (sample.x[:, 9][: sample.num_objects] == 0)
+                ).any()
+                after = ((dishes[:, kind] == 1) & (dishes[:, 9] == 0)).any()
+                rack_in = (
+                    sample.tray < 2
+                    and sample.x[sample.num_objects + sample.num_goals + sample.tray, 10] == 0
+                )
+                if rack_in and before:
+                    assert after  # a rack pulled out still has a dish of each kind to load
+    assert shrunk > len(demos.samples)
