@@ -72,20 +72,22 @@ def _eval_run(args: argparse.Namespace) -> int:
     options = options_from_args(EvalOptions, args)
     episodes = options_from_args(EpisodeOptions, args)
     task_file = episodes.task_text()
+    blocks = episodes.blocks
     if task_file is not None:
         from manigraph_sim.tasks.task_file import parse_task_file
 
-        parse_task_file(task_file)  # a bad file stops here, naming the line or field
+        blocks = parse_task_file(task_file).blocks  # a bad file stops here, naming the field
     spec = EvalSpec(
         "file" if task_file else episodes.task,
-        episodes.blocks,
+        blocks,
         episodes.stacks,
         episodes.episodes or 1,
         episodes.seed,
         options.noise,
         task_file,
-        episodes.objects,
-        episodes.preference,
+        episodes.label() if task_file is not None else None,
+        objects=episodes.objects,
+        preference=episodes.preference,
     )
     progress = None if episodes.json else sys.stderr
     summary = evaluate(load_policy(options.policy), spec, progress)

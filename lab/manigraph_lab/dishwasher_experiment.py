@@ -73,7 +73,12 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
             policy = DishwasherGNNPolicy(net)
             for n in TEST_OBJECTS:
                 spec = EvalSpec(
-                    "dishwasher", 4, 1, config.episodes, EVAL_SEED, 0.0, None, n, preference
+                    "dishwasher",
+                    4,
+                    episodes=config.episodes,
+                    seed=EVAL_SEED,
+                    objects=n,
+                    preference=preference,
                 )
                 rate = float(evaluate(policy, spec)["success_rate"])  # type: ignore[arg-type]
                 table[preference][n].append(rate)

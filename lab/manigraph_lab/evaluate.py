@@ -22,13 +22,15 @@ class EvalSpec:
     seed: int = 0
     noise: float = 0.0
     task_file: str | None = None  # TOML text of a user layout
+    task_file_name: str | None = None  # what episodes and the summary are named after
     objects: int | None = None  # dishwasher
     preference: str | None = None  # dishwasher
 
     def requests(self) -> list[EpisodeRequest]:
+        label = self.task_file_name or f"{self.task}-{self.blocks}"
         return [
             EpisodeRequest(
-                episode_id=f"eval-{self.task}-{self.blocks}-{self.seed + i}",
+                episode_id=f"eval-{label}-{self.seed + i}",
                 task="file" if self.task_file is not None else self.task,
                 blocks=self.blocks,
                 stacks=self.stacks,
@@ -46,7 +48,7 @@ def evaluate(policy: Policy, spec: EvalSpec, progress: TextIO | None = None) -> 
     records: list[EpisodeRecord] = []
     started = time.perf_counter()
     decisions = 0
-    label = f"eval {policy.name} {spec.task} K={spec.blocks}"
+    label = f"eval {policy.name} {spec.task_file_name or spec.task} K={spec.blocks}"
     with Progress(spec.episodes, label, unit="episode", stream=progress) as bar:
         for request in spec.requests():
             record = run_episode(policy, request, noise=spec.noise)
@@ -75,6 +77,7 @@ def summarize(
     return {
         "policy": policy,
         "task": spec.task,
+        **({"task_file": spec.task_file_name} if spec.task_file is not None else {}),
         "blocks": spec.blocks,
         "stacks": spec.stacks,
         **({"objects": spec.objects} if spec.objects is not None else {}),

@@ -92,7 +92,7 @@ def load_manifests() -> dict[str, Manifest]:
 #: sim's manifest declares its variants from this table.
 WORLD_ABILITIES: Mapping[str, frozenset[str]] = {
     "geometric": frozenset({"gripper_commands"}),
-    "physics": frozenset({"joint_trajectories"}),
+    "physics": frozenset({"joint_trajectories", "camera"}),
 }
 
 
@@ -123,38 +123,36 @@ def driver_for_world(world: Manifest, backend: str, robot: Manifest) -> str:
 
 
 def mermaid_flow(manifests: Iterable[Manifest]) -> str:
-    """A Mermaid flowchart: an arrow per message from each producer to each consumer, dotted
-    where an ability gates it; queries from client to server; the recorder under everything."""
+    """A Mermaid flowchart: one arrow from each producer to each consumer, labelled with the
+    keys between them (dotted where an ability gates them); queries from client to server;
+    the recorder and the viewer under everything."""
     items = sorted(manifests, key=lambda m: m.service)
     ids = {m.service: m.service.upper().replace("-", "_") for m in items}
     lines = ["flowchart LR"]
     for m in items:
         lines.append(f'  {ids[m.service]}["{m.service}<br/>{m.summary}"]')
-    edges: list[str] = []
+    edges: dict[tuple[str, str, bool], set[str]] = {}
     for producer in items:
         for out in producer.produces:
             for consumer in items:
                 for inp in consumer.consumes:
                     if inp.message is out.message and consumer is not producer:
-                        edges.append(_edge(ids, producer, consumer, out, inp, out.key))
+                        gate = out.ability or inp.ability
+                        label = out.key if gate is None else f"{out.key} ({gate})"
+                        edge = (ids[producer.service], ids[consumer.service], gate is not None)
+                        edges.setdefault(edge, set()).add(label)
         for asked in producer.requests:
             for server in items:
                 if any(s.message is asked.message for s in server.serves):
-                    edges.append(
-                        f'  {ids[producer.service]} -. "query {asked.key}" .-> '
-                        f"{ids[server.service]}"
-                    )
-    lines += sorted(set(edges))
+                    edge = (ids[producer.service], ids[server.service], True)
+                    edges.setdefault(edge, set()).add(f"query {asked.key}")
+    for (source, target, dotted), labels in sorted(edges.items()):
+        text = "<br/>".join(sorted(labels))
+        arrow = f'-. "{text}" .->' if dotted else f'-- "{text}" -->'
+        lines.append(f"  {source} {arrow} {target}")
     watchers = [m for m in items if m.observes_all]
     sources = [m for m in items if m.produces and not m.observes_all]
     for watcher in watchers:
         names = " & ".join(ids[m.service] for m in sources)
         lines.append(f'  {names} -- "manigraph/**" --> {ids[watcher.service]}')
     return "\n".join(lines)
-
-
-def _edge(ids: Mapping[str, str], a: Manifest, b: Manifest, out: Port, inp: Port, key: str) -> str:
-    gate = out.ability or inp.ability
-    if gate is None:
-        return f'  {ids[a.service]} -- "{key}" --> {ids[b.service]}'
-    return f'  {ids[a.service]} -. "{key} ({gate})" .-> {ids[b.service]}'

@@ -60,7 +60,7 @@ def docker_available() -> str | None:
 
 
 class Compose:
-    def __init__(self, project: str, logs: Path, port: int) -> None:
+    def __init__(self, project: str, logs: Path, port: int, profiles: str = "sim") -> None:
         self.command = compose_command() or ["docker", "compose"]
         self.project = project
         self.logs = logs
@@ -68,7 +68,7 @@ class Compose:
         self.env = {
             **os.environ,
             "COMPOSE_PROJECT_NAME": project,
-            "COMPOSE_PROFILES": "sim",
+            "COMPOSE_PROFILES": profiles,
             "MANIGRAPH_ROUTER_PORT": str(port),
         }
 
@@ -245,3 +245,27 @@ def test_a_client_without_a_certificate_cannot_publish_an_action(
         time.sleep(0.5)
     assert seen, "the episode's own decisions reach an authorised reader"
     assert "forged" not in seen
+
+
+@pytest.fixture(scope="module")
+def camera_compose(compose: Compose) -> Iterator[Compose]:
+    """The camera profile (images built by ``compose``), the sim stack stopped first."""
+    compose("stop", check=False)
+    stack = Compose(f"manigraph-camera-{os.getpid()}", compose.logs, free_port(), "camera")
+    try:
+        stack("up", "-d")
+        yield stack
+    finally:
+        stack("down", "--volumes", "--remove-orphans", "--timeout", "20", check=False)
+
+
+def test_an_episode_through_the_camera_profile(camera_compose: Compose) -> None:
+    """Physics sim with its rendered camera, perception the only Scene source, the Panda."""
+    camera_compose.wait_healthy(
+        ["router", "sim-camera", "perception-sim", "planner", "skills-panda"], timeout=400
+    )
+    result = camera_compose.tools(
+        "run", "--blocks", "2", "--episodes", "1", "--seed", "0", timeout=600
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert json.loads(result.stdout.strip().splitlines()[-1])["success_rate"] == 1.0

@@ -105,3 +105,14 @@ def test_a_run_ends_with_one_json_line_and_says_it_in_words_unless_asked_not_to(
     assert summary["episodes"] == 2 and summary["success_rate"] == 1.0
     readable = "2 episodes of stack: success 1.000, goals filled 1.000"
     assert (readable in result.stderr) is not json_only
+
+
+def test_a_task_file_with_spares_and_jitter_runs_under_its_own_name() -> None:
+    example = CHECKPOINTS.parent / "examples" / "spares-and-jitter.toml"
+    result = run_up("--task-file", str(example), "--episodes", "2", "--seed", "3")
+    summary = json.loads(result.stdout.strip().splitlines()[-1])
+    assert summary["task_file"] == "spares-and-jitter" and summary["name"] == "spares and jitter"
+    assert summary["blocks"] == 5 and summary["success_rate"] == 1.0
+    assert all(r["episode_id"].startswith("spares-and-jitter-") for r in summary["results"])
+    assert "2 episodes of spares-and-jitter: success 1.000" in result.stderr
+    assert "spares-and-jitter K=5 seed 3: success" in result.stderr

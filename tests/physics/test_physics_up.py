@@ -7,6 +7,7 @@ import json
 
 import pytest
 
+from manigraph_sim.physics.video import vulkan_available
 from manigraph_tools.testing import run_up
 
 pytestmark = pytest.mark.integration
@@ -32,3 +33,34 @@ def test_a_physics_stacking_episode_through_every_service() -> None:
     assert episode["goals_filled"] == episode["goals_total"] == 2
     assert episode["steps"] == 2
     assert "driver 'panda-sim'" in result.stderr  # up chose the Panda driver for physics
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not vulkan_available(), reason="no Vulkan device (scripts/install-vulkan.sh)")
+def test_a_physics_episode_with_perception_as_the_only_scene_source(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from manigraph_shared.mcap_log import read_log
+    from manigraph_shared.messages import CompressedImage, Scene
+
+    log = tmp_path / "camera.mcap"
+    result = run_up(
+        "--sim",
+        "physics",
+        "--scene-source",
+        "camera",
+        "--task",
+        "stack",
+        "--blocks",
+        "1",
+        "--episodes",
+        "1",
+        "--record",
+        str(log),
+        timeout=300.0,
+    )
+    summary = json.loads(result.stdout.strip().splitlines()[-1])
+    assert summary["success_rate"] == 1.0
+    images = list(read_log(log, ["manigraph/camera/front/image"]))
+    assert images and isinstance(images[0].decode(), CompressedImage)
+    scenes = list(read_log(log, [Scene.key]))
+    # Perception makes at most one Scene per frame; the sim (10 Hz) would have made many more.
+    assert 0 < len(scenes) <= len(images)

@@ -9,8 +9,14 @@ from manigraph_shared.errors import MessageError
 from manigraph_shared.messages import (
     MAX_PAYLOAD_BYTES,
     Action,
+    CameraInfo,
+    CompressedImage,
+    DetectedMarker,
     EpisodeEvent,
     EpisodeRequest,
+    LayoutGoal,
+    LayoutObject,
+    MarkerDetections,
     Message,
     RobotCommand,
     RobotFeedback,
@@ -19,6 +25,7 @@ from manigraph_shared.messages import (
     SceneObject,
     ServiceStatus,
     SkillStatus,
+    TaskLayout,
     Vector3,
     message_type_for_key,
 )
@@ -84,6 +91,32 @@ SAMPLES: list[Message] = [
     ),
     RobotFeedback(command_id="c1", ok=False, reason="object_covered", stamp=NOW),
     ServiceStatus(service="planner", state="error", detail="bad scene", stamp=NOW),
+    CompressedImage(camera="front", stamp=NOW, sequence=2, format="jpeg", data=b"\xff\xd8\x00"),
+    CameraInfo(
+        camera="front",
+        stamp=NOW,
+        width=640,
+        height=480,
+        camera_matrix=[415.7, 0, 319.5, 0, 415.7, 239.5, 0, 0, 1],
+    ),
+    MarkerDetections(
+        camera="front",
+        stamp=NOW,
+        markers=[DetectedMarker(id=4, corners=[1, 2, 3, 4, 5, 6, 7, 8], object_id="block_0")],
+    ),
+    TaskLayout(
+        episode_id="ep-1",
+        stamp=NOW,
+        objects=[
+            LayoutObject(
+                id="block_0",
+                category="block",
+                size=Vector3(x=0.04, y=0.04, z=0.04),
+                position=Vector3(x=0.5, y=0.1, z=0.02),
+            )
+        ],
+        goals=[LayoutGoal(id="goal_0", category="block", position=Vector3(x=0.4, y=0, z=0.02))],
+    ),
 ]
 
 
@@ -211,3 +244,19 @@ def test_schema_is_json_schema_titled_by_type() -> None:
     schema = json.loads(Scene.mcap_schema())
     assert schema["title"] == "manigraph.Scene"
     assert {"objects", "goals", "stamp"} <= set(schema["properties"])
+
+
+def test_a_camera_matrix_that_is_not_pinhole_is_rejected() -> None:
+    bad = CameraInfo(
+        camera="front", stamp=NOW, width=640, height=480, camera_matrix=[1, 0, 0, 0, 1, 0, 0, 0, 1]
+    ).model_dump()
+    bad["camera_matrix"] = [415.7, 3.0, 319.5, 0, 415.7, 239.5, 0, 0, 1]
+    with pytest.raises(MessageError) as error:
+        CameraInfo.decode(json.dumps(bad).encode())
+    assert "camera_matrix" in error.value.fields
+
+
+def test_image_bytes_travel_as_base64() -> None:
+    image = CompressedImage(camera="front", stamp=NOW, sequence=0, format="png", data=b"\x89PNG")
+    assert b"iVBORw" in image.encode()  # base64 of the bytes, not a list of numbers
+    assert CompressedImage.decode(image.encode()).data == b"\x89PNG"

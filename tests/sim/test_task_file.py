@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -87,6 +89,78 @@ def test_bad_files_name_the_line_or_field(text: str, message: str) -> None:
 def test_file_task_without_its_text_is_refused() -> None:
     with pytest.raises(TaskError, match="task_file"):
         GeometricBackend().reset(EpisodeRequest(episode_id="f", task="file"), 0.0)
+
+
+SPARES = Path(__file__).resolve().parents[2] / "examples" / "spares-and-jitter.toml"
+
+
+def test_one_file_describes_a_distribution_of_scenes_seeded_by_the_episode() -> None:
+    task = FileTask(parse_task_file(SPARES.read_text()))
+    draws = [task.layout(np.random.default_rng(seed)) for seed in (1, 1, 2, 3, 4)]
+    where = [{b.id: b.position.round(4).tolist() for b in d.bodies} for d in draws]
+    assert where[0] == where[1]  # the same seed, the same scene
+    assert len({str(w) for w in where}) == 4  # other seeds, other scenes
+    for w in where:
+        base, top = w["tower_base"], w["tower_top"]
+        assert base[:2] == top[:2] and top[2] > base[2]  # the tower moves as one
+        assert w["spare_a"] != w["spare_b"]  # never both on one listed position
+        listed = [[0.35, 0.0, 0.02], [0.4, -0.1, 0.02], [0.65, 0.1, 0.02]]
+        assert w["spare_a"] in listed and w["spare_b"] in listed
+        assert abs(w["loose"][0] - 0.60) <= 0.03 and abs(w["loose"][1] + 0.05) <= 0.03
+    for d in draws:
+        d.validate()
+
+
+def test_spares_belong_to_no_goal_and_the_expert_fills_every_goal_anyway() -> None:
+    text = SPARES.read_text()
+    spec = parse_task_file(text)
+    assert spec.blocks == 5 and sum(o.spare for o in spec.objects) == 2
+    summary = evaluate(
+        load_policy("expert"),
+        EvalSpec("file", 5, episodes=3, task_file=text, task_file_name="spares-and-jitter"),
+        progress=None,
+    )
+    assert summary["success_rate"] == 1.0 and summary["task_file"] == "spares-and-jitter"
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda t: t.replace(
+                "position = [0.60, -0.05, 0.02]",
+                "position = [0.60, -0.05, 0.02]\npositions = [[0.6, 0.0, 0.02]]",
+            ),
+            "objects.2: position: give either position or positions",
+        ),
+        (
+            lambda t: t.replace(
+                'id = "loose"\ncategory = "block"', 'id = "loose"\ncategory = "block"\nspare = true'
+            ),
+            "goals: 3 required block goals but only 2 blocks in objects that are not spares",
+        ),
+        (
+            lambda t: t.replace(
+                "position = [0.45, -0.20, 0.06]", "position = [0.45, -0.20, 0.06]\njitter = 0.01"
+            ),
+            "objects.1: rests on tower_base and moves with it",
+        ),
+        (lambda t: t.replace("jitter = 0.03", "jitter = -1"), "objects.2.jitter"),
+    ],
+)
+def test_bad_randomizations_and_spares_name_the_field(
+    edit: Callable[[str], str], message: str
+) -> None:
+    with pytest.raises(TaskError, match=re.escape(message)):
+        parse_task_file(edit(SPARES.read_text()))
+
+
+def test_a_draw_that_cannot_keep_objects_apart_is_refused_naming_the_object() -> None:
+    text = SPARES.read_text().replace(
+        "[0.35, 0.00, 0.02], [0.40, -0.10, 0.02], [0.65, 0.10, 0.02]", "[0.35, 0.00, 0.02]"
+    )
+    with pytest.raises(TaskError, match=r"objects\.4\.positions: every listed position is taken"):
+        FileTask(parse_task_file(text)).layout(np.random.default_rng(0))
 
 
 TWO_BLOCKS = """

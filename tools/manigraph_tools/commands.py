@@ -16,7 +16,7 @@ from typing import Any
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig, add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
-from manigraph_shared.errors import ManigraphError
+from manigraph_shared.errors import ConfigError, ManigraphError
 from manigraph_shared.manifest import driver_for_world, load_manifests
 from manigraph_shared.mcap_log import LoggedMessage, recover_log
 from manigraph_shared.messages import Action
@@ -37,7 +37,8 @@ def _emit_json(summary: dict[str, object], readable: bool = False) -> None:
     stderr."""
     if readable and "success_rate" in summary:
         print(
-            f"{summary.get('episodes')} episodes of {summary.get('task')}: "
+            f"{summary.get('episodes')} episodes of "
+            f"{summary.get('task_file') or summary.get('task')}: "
             f"success {summary['success_rate']:.3f}, "
             f"goals filled {summary.get('goals_filled_rate', float('nan')):.3f}",
             file=sys.stderr,
@@ -274,7 +275,7 @@ def _episode_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _plan(args: argparse.Namespace, episodes: int) -> EpisodePlan:
     options = options_from_args(EpisodeOptions, args)
-    return options.plan(episodes, run_id=f"{options.task}-{options.blocks}-{int(time.time())}")
+    return options.plan(episodes, run_id=f"{options.label()}-{int(time.time())}")
 
 
 def _run_configure(parser: argparse.ArgumentParser) -> None:
@@ -314,6 +315,18 @@ def _sim_backends() -> Registry[Any] | None:
     return BACKENDS
 
 
+#: Perception of the physics sim's rendered camera: its markers and exact calibration.
+SIM_CAMERA_PERCEPTION = [
+    "perception",
+    "--camera",
+    "bus",
+    "--markers",
+    "sim",
+    "--calibration",
+    str(Path(__file__).resolve().parents[2] / "examples" / "calibration" / "sim-front.yaml"),
+]
+
+
 def _up_configure(parser: argparse.ArgumentParser) -> None:
     _episode_arguments(parser)
     parser.add_argument("--record", type=Path, help="also record everything to this MCAP file")
@@ -323,6 +336,13 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         default="geometric",
         choices=["geometric", "physics"],
         help="sim backend (default: geometric)",
+    )
+    parser.add_argument(
+        "--scene-source",
+        choices=["sim", "camera"],
+        default="sim",
+        help="who publishes Scene: the sim's ground truth (default) or perception reading "
+        "the physics sim's rendered camera (needs Vulkan; docs/perception.md)",
     )
     parser.add_argument(
         "--explain-decisions",
@@ -373,6 +393,10 @@ def _up_run(args: argparse.Namespace) -> int:
     sim_options = (
         backends.argv(args.sim, backends.given_options(args)) if backends is not None else []
     )
+    if args.scene_source == "camera":
+        if args.sim != "physics":
+            raise ConfigError("scene-source", "camera needs --sim physics (it renders)")
+        sim_options += ["--camera", "--no-scenes"]
     plan = _plan(args, args.episodes) if args.episodes is not None else None
     specs = [spec("router", ["router", "--listen", endpoint])]
     if args.record:
@@ -386,6 +410,8 @@ def _up_run(args: argparse.Namespace) -> int:
         ),
         spec("skills", ["skills", "--driver", _skills_driver(args.sim)]),
     ]
+    if args.scene_source == "camera":
+        specs.append(spec("perception", SIM_CAMERA_PERCEPTION))
     supervisor = Supervisor(args.log_dir)
     summary: dict[str, object] | None = None
     client = BusConfig(

@@ -20,10 +20,12 @@ back, so a service restarted by a supervisor (or by hand) takes the next episode
 from __future__ import annotations
 
 import queue
+import re
 import statistics
 import sys
 import threading
 import time
+import tomllib
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TextIO
@@ -80,12 +82,22 @@ class EpisodeOptions(Options):
         """The task file's text (validated later, by the sim), or None without one."""
         return read_task_file(self.task_file)
 
+    def label(self) -> str:
+        """What episodes are named after: the task file's name (its stem, as an identifier),
+        else the task and K."""
+        if self.task_file is None:
+            return f"{self.task}-{self.blocks}"
+        return re.sub(r"[^A-Za-z0-9_.\-]+", "-", self.task_file.stem)[:40] or "task-file"
+
     def plan(self, episodes: int, run_id: str = "run") -> EpisodePlan:
         task_file = self.task_text()
+        about = describe_task_file(task_file) if task_file is not None else None
         return EpisodePlan(
             task="file" if task_file is not None else self.task,
             task_file=task_file,
-            blocks=self.blocks,
+            task_file_name=self.label() if task_file is not None else None,
+            name=about[0] if about else None,
+            blocks=about[1] if about else self.blocks,
             stacks=self.stacks,
             objects=self.objects,
             preference=self.preference,
@@ -119,6 +131,8 @@ class EpisodePlan:
     timeout: float = 120.0
     run_id: str = "run"
     task_file: str | None = None  # TOML text of a user layout
+    task_file_name: str | None = None  # what the file is called (its stem)
+    name: str | None = None  # the file's own ``name``
     #: No decision and no skill status of the episode for this long fails it.
     stall_timeout: float = 30.0
     #: Longest wait for every service to be back before an episode.
@@ -139,6 +153,24 @@ class EpisodePlan:
             seed=seed,
             task_file=self.task_file,
         )
+
+
+def describe_task_file(text: str) -> tuple[str | None, int] | None:
+    """The file's ``name`` and its number of blocks (spares included), read leniently for
+    naming episodes and summaries: the sim validates the file, and refuses it naming the
+    field. None when the text is not TOML."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        return None
+    objects = data.get("objects")
+    blocks = (
+        sum(isinstance(o, dict) and o.get("category") == "block" for o in objects)
+        if isinstance(objects, list)
+        else 0
+    )
+    name = data.get("name")
+    return (name if isinstance(name, str) else None, blocks)
 
 
 def read_task_file(path: Path | None) -> str | None:
@@ -261,7 +293,8 @@ def run_episodes(bus: Bus, plan: EpisodePlan, progress: TextIO = sys.stderr) -> 
             results.append(result)
             mark = "success" if result.success else f"FAILED ({result.reason})"
             print(
-                f"episode {index + 1}/{plan.episodes} {plan.task} K={plan.blocks} "
+                f"episode {index + 1}/{plan.episodes} {plan.task_file_name or plan.task} "
+                f"K={plan.blocks} "
                 f"seed {result.seed}: {mark}, {result.goals_filled}/{result.goals_total} goals, "
                 f"{result.steps} steps, {result.seconds:.2f} s",
                 file=progress,
@@ -333,8 +366,10 @@ def _run_one(
 
 def summarize(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, object]:
     count = len(results)
+    named = {"task_file": plan.task_file_name, "name": plan.name} if plan.task_file else {}
     return {
         "task": plan.task,
+        **named,
         "blocks": plan.blocks,
         "stacks": plan.stacks,
         "seed": plan.seed,

@@ -1,33 +1,73 @@
-"""``manigraph perception``: camera + ArUco markers -> Scene (hardware side).
-
-The camera pipeline arrives with the perception issue; until then the command refuses to
-start with a clear message instead of pretending to observe anything.
-"""
+"""``manigraph perception``: camera + ArUco markers -> Scene."""
 
 from __future__ import annotations
 
 import argparse
 
-from manigraph_shared.bus_config import add_bus_arguments
+from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
-from manigraph_shared.errors import ConfigError
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--camera", default=None, help="camera device or stream URL")
+    parser.add_argument(
+        "--camera",
+        required=True,
+        help="'bus' (images from manigraph/camera/<name>/image, e.g. the sim's --camera), a "
+        "V4L2 device (/dev/video0 or 0), a video file or a stream URL",
+    )
+    parser.add_argument(
+        "--markers",
+        required=True,
+        help="marker map TOML (docs/perception.md), or 'sim' for the sim's printed markers",
+    )
+    parser.add_argument(
+        "--calibration", required=True, help="OpenCV FileStorage YAML with base_T_camera"
+    )
+    parser.add_argument(
+        "--layout", default=None, help="layout TOML (default: the TaskLayout the sim publishes)"
+    )
+    parser.add_argument("--camera-name", default="front", help="camera name on the bus")
+    parser.add_argument(
+        "--stale-after", type=float, default=2.0, help="seconds without a frame (default 2)"
+    )
     add_bus_arguments(parser)
 
 
 def _run(args: argparse.Namespace) -> int:
-    raise ConfigError(
-        "camera",
-        "the ArUco perception pipeline is not implemented yet; run the sim service "
-        "(or `manigraph replay` a recorded log) as the Scene source",
+    from manigraph_perception.calibration import load_calibration
+    from manigraph_perception.layout_file import load_layout
+    from manigraph_perception.pipeline import Perception
+    from manigraph_perception.service import PerceptionService
+    from manigraph_perception.sources import VideoSource
+    from manigraph_perception.world import WorldConfig
+    from manigraph_shared.bus import Bus
+    from manigraph_shared.errors import ConfigError
+    from manigraph_shared.markers import load_marker_map, sim_marker_map
+    from manigraph_shared.service import run_service
+
+    if not 0 < args.stale_after <= 60:
+        raise ConfigError("stale-after", "must be in (0, 60] seconds")
+    markers = sim_marker_map() if args.markers == "sim" else load_marker_map(args.markers)
+    calibration = load_calibration(args.calibration)
+    perception = Perception(
+        markers, calibration, args.camera_name, WorldConfig(stale_after=args.stale_after)
     )
+    layout = None
+    if args.layout is not None:
+        layout = load_layout(args.layout)
+        perception.set_layout(layout)  # refuses an object with no marker, now
+    source = None if args.camera == "bus" else VideoSource(args.camera)
+    services: list[PerceptionService] = []
+
+    def make(bus: Bus) -> PerceptionService:
+        service = PerceptionService(bus, perception, source, layout)
+        services.append(service)
+        return service
+
+    code = run_service(make, bus_config_from_args(args))
+    return 1 if services and services[0].failed else code
 
 
 command = Command(
-    help="run camera perception (not implemented yet: fails clearly)",
-    configure=_configure,
-    run=_run,
+    help="run camera perception: ArUco markers -> Scene", configure=_configure, run=_run
 )

@@ -1,10 +1,26 @@
 """What the perception service consumes and produces (see ``manigraph_shared.manifest``)."""
 
 from manigraph_shared.manifest import Manifest, port
-from manigraph_shared.messages import Scene, ServiceStatus
+from manigraph_shared.messages import (
+    Action,
+    CameraInfo,
+    CompressedImage,
+    JointState,
+    MarkerDetections,
+    Scene,
+    ServiceStatus,
+    TaskLayout,
+)
 
 MANIFEST = Manifest(
     service="perception",
     summary="camera + ArUco markers",
-    produces=(port(Scene), port(ServiceStatus)),
+    consumes=(
+        port(CompressedImage),
+        port(CameraInfo),
+        port(TaskLayout),
+        port(Action),
+        port(JointState),
+    ),
+    produces=(port(Scene), port(MarkerDetections), port(ServiceStatus)),
 )

@@ -7,7 +7,8 @@ import time
 from collections import OrderedDict
 from collections.abc import Callable
 
-from manigraph_planner.policies.base import Policy
+from manigraph_planner.policies.base import Decision, Policy
+from manigraph_planner.recovery import ProgressMonitor
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene, SkillStatus
 
 _REMEMBERED = 1024
@@ -60,6 +61,11 @@ class DecisionMaker:
     kept, and the earliest one observed after the skill ended is decided on as soon as its
     status arrives: the choice depends on stamps, never on arrival order. Decision ids are
     ``<episode>:<step>``; the same log therefore drives a fresh planner to the same decisions.
+
+    Recovery: a decision that made no progress (see :mod:`manigraph_planner.recovery`) is not
+    taken again on the same world; the policy's next most likely compatible pair is, and the
+    ``Action`` says so (``rank``, ``recovery``). Wherever progress is made the decision is the
+    policy's own.
     """
 
     def __init__(
@@ -68,12 +74,14 @@ class DecisionMaker:
         *,
         clock: Callable[[], float] = time.time,
         decision_timeout: float = 30.0,
+        progress: ProgressMonitor | None = None,
     ) -> None:
         if not decision_timeout > 0:
             raise ValueError(f"decision_timeout: must be > 0 seconds, got {decision_timeout}")
         self.policy = policy
         self.clock = clock
         self.decision_timeout = decision_timeout
+        self.progress = progress or ProgressMonitor()
         self.episode_id: str | None = None
         self.step = 0
         self.pending: str | None = None
@@ -82,7 +90,7 @@ class DecisionMaker:
         self.stopped = False
         self.ready_after = 0.0
         self._held: list[Scene] = []  # scenes that arrived while a skill ran
-        self._finished: OrderedDict[str, float] = OrderedDict()
+        self._finished: OrderedDict[str, SkillStatus] = OrderedDict()
         self._ended: OrderedDict[str, None] = OrderedDict()
         self.history = DecisionHistory()
 
@@ -95,9 +103,10 @@ class DecisionMaker:
     def on_status(self, status: SkillStatus) -> Action | None:
         if not status.state.terminal:
             return None
-        _remember(self._finished, status.decision_id, status.stamp)
+        _remember(self._finished, status.decision_id, status)
         if status.decision_id != self.pending:
             return None
+        self.progress.on_status(status)
         self.pending = None
         self.ready_after = status.stamp
         return self._decide_on_held()
@@ -148,18 +157,33 @@ class DecisionMaker:
             return None
         return self._decide(min(fresh, key=lambda s: (s.stamp, s.sequence)))
 
-    def _decide(self, scene: Scene) -> Action | None:
+    def _choose(self, scene: Scene) -> tuple[Decision | None, int, str | None]:
+        """The policy's decision, or its best alternative that is not passed over."""
         decision = self.policy.decide(scene)
+        verdict = self.progress.verdict(scene)
+        if decision is None or verdict.allows(decision.pair):
+            return decision, 0, None
+        for rank, alternative in enumerate(self.policy.ranked(scene)):
+            if verdict.allows(alternative.pair):
+                return alternative, rank, verdict.why(decision.pair)
+        return decision, 0, "exhausted"
+
+    def _decide(self, scene: Scene) -> Action | None:
+        decision, rank, recovery = self._choose(scene)
         if decision is None:
             return None
-        action = decision.to_action(scene, self.step, self.policy.name, self.clock())
+        action = decision.to_action(
+            scene, self.step, self.policy.name, self.clock(), rank=rank, recovery=recovery
+        )
+        self.progress.on_decision(scene, decision.pair)
         self.step += 1
         self.history.add(scene, action)
         self.pending = action.decision_id
         self.pending_since = time.monotonic()
         if action.decision_id in self._finished:  # its result overtook the decision (replay)
             self.pending = None
-            self.ready_after = self._finished[action.decision_id]
+            self.ready_after = self._finished[action.decision_id].stamp
+            self.progress.on_status(self._finished[action.decision_id])
         return action
 
     def _start(self, episode_id: str) -> None:
@@ -168,6 +192,7 @@ class DecisionMaker:
         self.pending = None
         self.ready_after = 0.0
         self._held.clear()
+        self.progress.reset()
 
 
 def _remember(store: OrderedDict, key: str, value: object) -> None:

@@ -61,6 +61,20 @@ class PhysicsOptions(Options):
         help="render each episode to this .gif/.mp4 ({episode}, {seed} allowed; needs Vulkan, "
         "see scripts/install-vulkan.sh)",
     )
+    camera: bool = option(
+        False,
+        help="render the tripod camera (ArUco markers on every body) and publish its images, "
+        "intrinsics and the episode layout (needs Vulkan)",
+    )
+    camera_hz: float = option(
+        2.0, help="camera frames per second", within=Interval(0, 60, low_open=True), unit="Hz"
+    )
+    camera_noise: float = option(
+        0.0, help="Gaussian image noise", within=Interval(0, 64), unit="grey levels"
+    )
+    camera_blur: int = option(
+        0, help="horizontal motion blur", within=Interval(0, 32), unit="pixels"
+    )
 
 
 BACKENDS: Registry[type[SimBackend]] = Registry("backend")

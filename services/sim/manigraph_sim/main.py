@@ -21,6 +21,11 @@ class SimServiceOptions(Options):
     publish_hz: float = option(
         10.0, help="scene rate", within=Interval(0, 1000, low_open=True), unit="Hz"
     )
+    scenes: bool = option(
+        True,
+        help="publish ground-truth scenes (--no-scenes with --camera: perception is the Scene "
+        "source and the sim only referees)",
+    )
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
@@ -35,15 +40,22 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from manigraph_shared.errors import ConfigError
     from manigraph_shared.options import options_from_args
     from manigraph_shared.service import run_service
     from manigraph_sim.service import SimService
 
     service = options_from_args(SimServiceOptions, args)
     options = BACKENDS.options_from_args(args.backend, args)
+    if not service.scenes and not getattr(options, "camera", False):
+        raise ConfigError("no-scenes", "without --camera nothing would observe the world")
     backend = BACKENDS[args.backend].from_options(options)
+    camera_hz = options.camera_hz if getattr(options, "camera", False) else 0.0
     return run_service(
-        lambda bus: SimService(bus, backend, service.publish_hz), bus_config_from_args(args)
+        lambda bus: SimService(
+            bus, backend, service.publish_hz, scenes=service.scenes, camera_hz=camera_hz
+        ),
+        bus_config_from_args(args),
     )
 
 

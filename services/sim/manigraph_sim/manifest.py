@@ -2,6 +2,8 @@
 
 from manigraph_shared.manifest import WORLD_ABILITIES, Manifest, port
 from manigraph_shared.messages import (
+    CameraInfo,
+    CompressedImage,
     EmergencyStop,
     EpisodeEvent,
     EpisodeRequest,
@@ -13,11 +15,14 @@ from manigraph_shared.messages import (
     Scene,
     ServiceStatus,
     SkillStatus,
+    TaskLayout,
 )
 
 #: The geometric world takes Cartesian gripper commands; the physics world moves a jointed arm.
 GRIPPER = "gripper_commands"
 JOINTS = "joint_trajectories"
+#: The physics world can render a tripod camera (``--camera``) for perception.
+CAMERA = "camera"
 
 MANIFEST = Manifest(
     service="sim",
@@ -34,9 +39,12 @@ MANIFEST = Manifest(
         port(RobotFeedback, GRIPPER),
         port(JointTrajectoryResult, JOINTS),
         port(JointState, JOINTS),
+        port(CompressedImage, CAMERA),
+        port(CameraInfo, CAMERA),
+        port(TaskLayout, CAMERA),
         port(ServiceStatus),
     ),
     serves=(port(EpisodeRequest),),
     variant_option="backend",
-    variants=dict(WORLD_ABILITIES),  # geometric: GRIPPER, physics: JOINTS
+    variants=dict(WORLD_ABILITIES),  # geometric: GRIPPER; physics: JOINTS, CAMERA
 )

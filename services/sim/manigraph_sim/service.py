@@ -32,10 +32,22 @@ class SimService(Service):
 
     name = "sim"
 
-    def __init__(self, bus: Bus, backend: SimBackend, publish_hz: float = 10.0) -> None:
+    def __init__(
+        self,
+        bus: Bus,
+        backend: SimBackend,
+        publish_hz: float = 10.0,
+        scenes: bool = True,
+        camera_hz: float = 0.0,
+    ) -> None:
         super().__init__(bus)
         self.backend = backend
         self.tick_period = 1.0 / publish_hz
+        #: False: perception is the Scene source; the sim only referees (episode events).
+        self.scenes = scenes
+        #: Camera frames per second of wall time (besides one right after every change).
+        self.camera_period = 1.0 / camera_hz if camera_hz > 0 else None
+        self._next_frame = 0.0
 
     def setup(self) -> None:
         # The emergency stop acts in the Zenoh thread that delivers it: the service thread may
@@ -133,13 +145,34 @@ class SimService(Service):
         self._publish_end()
 
     def _publish_scene(self) -> None:
-        scene = self.backend.scene(time.time())
-        if scene is not None:
-            self.bus.publish(scene)
+        # The joint state first: perception learns from it that a carried block was let go
+        # before it looks at the frame that may not show where the block landed.
         if isinstance(self.backend, JointedArmBackend):
             state = self.backend.joint_state(time.time())
             if state is not None:
                 self.bus.publish(state)
+        self._publish_frame()
+        scene = self.backend.scene(time.time()) if self.scenes else None
+        if scene is not None:
+            self.bus.publish(scene)
+
+    def _publish_frame(self) -> None:
+        """A camera frame (and the layout it shows, so a late perception learns it too)."""
+        if self.camera_period is None:
+            return
+        stamp = time.time()
+        layout = self.backend.layout_message(stamp)  # type: ignore[attr-defined]
+        frame = self.backend.camera_frame(stamp)  # type: ignore[attr-defined]
+        self._next_frame = time.monotonic() + self.camera_period
+        if layout is None or frame is None:
+            return
+        image, info = frame
+        self.bus.publish(layout)
+        self.bus.publish(info)
+        self.bus.publish(image)
 
     def tick(self) -> None:
-        self._publish_scene()
+        if self.scenes:
+            self._publish_scene()
+        elif self.camera_period is not None and time.monotonic() >= self._next_frame:
+            self._publish_frame()

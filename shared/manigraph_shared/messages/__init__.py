@@ -87,3 +87,29 @@ __all__ += ["ExplainRequest", "ExplainedEdge", "ExplainedNode", "Explanation"]
 from manigraph_shared.messages.estop import EmergencyStop  # noqa: E402  (appended: the e-stop)
 
 __all__ += ["EmergencyStop"]
+
+from manigraph_shared.messages.camera import (  # noqa: E402  (appended: the camera)
+    CameraInfo,
+    CompressedImage,
+    DetectedMarker,
+    ImageFormat,
+    MarkerDetections,
+)
+from manigraph_shared.messages.layout import (  # noqa: E402
+    LayoutContainer,
+    LayoutGoal,
+    LayoutObject,
+    TaskLayout,
+)
+
+__all__ += [
+    "CameraInfo",
+    "CompressedImage",
+    "DetectedMarker",
+    "ImageFormat",
+    "LayoutContainer",
+    "LayoutGoal",
+    "LayoutObject",
+    "MarkerDetections",
+    "TaskLayout",
+]

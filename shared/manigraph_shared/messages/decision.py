@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import ClassVar, Self
+from typing import ClassVar, Literal, Self
 
 from pydantic import Field, model_validator
 
@@ -51,6 +51,15 @@ class Action(Message):
     tray_action: TrayAction = TrayAction.NONE
     policy: str = Field(max_length=128, description="name of the policy that decided")
     stamp: Stamp
+    rank: int = Field(
+        0, ge=0, description="0: the policy's first choice; k: its k-th alternative (recovery)"
+    )
+    recovery: Literal["no_progress", "repeated_pair", "escalated", "exhausted"] | None = Field(
+        None,
+        description="why the first choice was passed over: the world did not change after it, "
+        "it repeated a pair with no goal filled since, its object or goal failed twice; "
+        "exhausted: every alternative failed, the first choice again",
+    )
 
 
 #: Failure reasons of a skill that refused its action before any motion, because the action

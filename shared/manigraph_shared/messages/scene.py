@@ -97,6 +97,10 @@ class Scene(Message):
     episode_ended: bool = Field(
         False, description="the world ended this episode (sim only): planners stop deciding"
     )
+    stale: bool = Field(
+        False,
+        description="perception saw nothing it could use lately: poses are the last known",
+    )
 
     @model_validator(mode="after")
     def _unique_ids(self) -> Self:

@@ -136,10 +136,9 @@ def test_the_explainer_finds_the_edges_that_carry_the_decision() -> None:
         for e in explanation.edges
     )
     assert next(iter(explanation.features)) == "filled"
-    assert explanation.sentence.startswith(
-        "b0 was chosen (for goal g1) because of its relation to g0"
-    )
-    assert "most important feature: filled" in explanation.sentence
+    assert explanation.sentence.startswith("b0 was chosen rather than b")
+    assert "because of the relations g0→b0 and g0→g1" in explanation.sentence
+    assert "most important feature: filled (b0 " in explanation.sentence
     assert explanation.fidelity > 1 / 9  # better than the uniform choice among 3 x 3 pairs
 
 

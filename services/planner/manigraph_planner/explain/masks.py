@@ -20,6 +20,23 @@ binary entropy pushing each mask value to 0 or 1, :math:`c_E, c_F` the budgets o
 The first term is the paper's Eq. (red_mi) with the policy's own choice as the label (the
 cross-entropy form GNNExplainer uses for :math:`H(Y \mid \cdot)`).
 
+That is the ``distribution`` objective. It keeps the pair likely by any means, and with every
+node kept, edges into the *competing* objects and goals move the two softmaxes as much as edges
+into the chosen ones: its top edge often touches neither chosen node. The ``pair`` objective
+(:class:`~manigraph_planner.explain.config.Objective`, the default) explains the choice
+*against its runner-up*: with :math:`m_o = z_{o^*} - \max_{o \ne o^*} z_o` and
+:math:`m_g` alike (node logits :math:`z`), only edges incident to :math:`o^*` or :math:`g^*`
+may enter the explanation, and
+
+.. math::
+    \min\; \mathrm{softplus}(-m_o^{S}) + \mathrm{softplus}(-m_g^{S})
+        + \gamma\,[\mathrm{softplus}(m_o^{C \setminus S}) + \mathrm{softplus}(m_g^{C \setminus S})]
+        + \text{budgets} + \text{entropy}
+
+where :math:`S` is the masked graph and :math:`C \setminus S` its complement (masks
+:math:`1 - \sigma(M)`): the choice should hold on the explanation (fidelity-) and fall
+without it (fidelity+), as PyG's ``fidelity`` measures them.
+
 After ``steps`` Adam steps the explanation keeps the top-:math:`c_E` edges and the
 top-:math:`c_F` features (hard masks); every edge and feature stays ranked. The initial mask
 logits come from a seeded generator and the optimisation is plain CPU arithmetic, so the
@@ -37,7 +54,7 @@ import torch
 from torch import Tensor
 from torch_geometric.explain.algorithm.utils import clear_masks, set_masks
 
-from manigraph_planner.explain.config import ExplainerConfig
+from manigraph_planner.explain.config import ExplainerConfig, Objective
 from manigraph_planner.gnn.models import PolicyNet
 from manigraph_shared.errors import PolicyError
 
@@ -131,6 +148,13 @@ class MaskExplainer:
         std = torch.nn.init.calculate_gain("relu") * math.sqrt(2.0 / (2 * num_nodes))
         edge_logits = torch.randn(num_edges, generator=generator) * std + cfg.initial_edge_logit
         edge_logits.requires_grad_()
+        pair = cfg.objective is not Objective.DISTRIBUTION
+        everything = torch.ones(num_edges, dtype=torch.bool)
+        # pair objectives show only edges incident to the chosen nodes; "pair" also keeps the
+        # rest out of the masked graph, "pair-context" lets them in as (budgeted) context
+        shown = _incident(edge_index, object_index, goal_index) if pair else everything
+        candidates = shown if cfg.objective is Objective.PAIR else everything
+        closed = torch.full((num_edges,), -30.0)
         feature_logits = (torch.randn(num_features, generator=generator) * 0.1).requires_grad_()
         edge_budget = min(cfg.edge_budget, num_edges)
         feature_budget = min(cfg.feature_budget, num_features)
@@ -138,7 +162,6 @@ class MaskExplainer:
         x = x.detach().to(torch.float32)
         loss_value = float("nan")
         with torch.inference_mode(False), torch.enable_grad():
-            set_masks(self.net, edge_logits, edge_index, apply_sigmoid=True)
             try:
                 for step in range(cfg.steps):
                     if deadline is not None and time.monotonic() > deadline:
@@ -147,23 +170,41 @@ class MaskExplainer:
                             f"({num_nodes} nodes, {num_edges} edges)"
                         )
                     optimiser.zero_grad()
-                    edge_mask, feature_mask = edge_logits.sigmoid(), feature_logits.sigmoid()
-                    log_p = self._log_choice(
+                    edge_mask = torch.where(candidates, edge_logits, closed).sigmoid()
+                    feature_mask = feature_logits.sigmoid()
+                    set_masks(self.net, edge_mask, edge_index, apply_sigmoid=False)
+                    choice = (self._margins if pair else self._log_choice)(
                         x * feature_mask, edge_index, num_objects, object_index, goal_index
                     )
-                    over = (edge_mask.sum() - edge_budget).relu() + (
+                    if pair:
+                        set_masks(self.net, 1.0 - edge_mask, edge_index, apply_sigmoid=False)
+                        rest = self._margins(
+                            x * (1.0 - feature_mask),
+                            edge_index,
+                            num_objects,
+                            object_index,
+                            goal_index,
+                        )
+                        fit = torch.nn.functional.softplus(-choice).sum()
+                        fit = fit + cfg.complement_weight * torch.nn.functional.softplus(rest).sum()
+                    else:
+                        fit = -choice
+                    edge_mass = edge_mask[candidates].sum()
+                    over = (edge_mass - edge_budget).relu() + (
                         feature_mask.sum() - feature_budget
                     ).relu()
-                    undecided = _binary_entropy(edge_mask) + _binary_entropy(feature_mask)
-                    loss = -log_p + cfg.budget_weight * over + cfg.entropy_weight * undecided
+                    undecided = _binary_entropy(edge_mask[candidates]) + _binary_entropy(
+                        feature_mask
+                    )
+                    loss = fit + cfg.budget_weight * over + cfg.entropy_weight * undecided
                     loss.backward()
                     optimiser.step()
                     loss_value = float(loss.detach())
             finally:
                 clear_masks(self.net)
-        edge_mask = edge_logits.detach().sigmoid()
+        edge_mask = torch.where(candidates, edge_logits.detach(), closed).sigmoid()
         feature_mask = feature_logits.detach().sigmoid()
-        edge_order = torch.sort(edge_mask, descending=True, stable=True).indices
+        edge_order = torch.sort(edge_mask + shown.float(), descending=True, stable=True).indices
         feature_order = torch.sort(feature_mask, descending=True, stable=True).indices
         kept = (edge_order[:edge_budget], feature_order[:feature_budget])
         fidelity = self._fidelity(x, edge_index, num_objects, object_index, goal_index, *kept)
@@ -190,6 +231,19 @@ class MaskExplainer:
         goal_logp = logits[num_objects:].log_softmax(0)[goal_index - num_objects]
         return object_logp + goal_logp
 
+    def _margins(
+        self, x: Tensor, edge_index: Tensor, num_objects: int, object_index: int, goal_index: int
+    ) -> Tensor:
+        """:math:`(m_o, m_g)`: the chosen object's (goal's) logit over the best other one's
+        (0 when it has no rival)."""
+        logits = self.net(x, edge_index)
+        return torch.stack(
+            [
+                _margin(logits[:num_objects], object_index),
+                _margin(logits[num_objects:], goal_index - num_objects),
+            ]
+        )
+
     def _fidelity(
         self,
         x: Tensor,
@@ -214,6 +268,19 @@ class MaskExplainer:
         finally:
             clear_masks(self.net)
         return min(1.0, max(0.0, float(log_p.exp())))
+
+
+def _margin(logits: Tensor, index: int) -> Tensor:
+    if logits.shape[0] < 2:
+        return logits.new_zeros(())
+    others = torch.cat([logits[:index], logits[index + 1 :]])
+    return logits[index] - others.max()
+
+
+def _incident(edge_index: Tensor, object_index: int, goal_index: int) -> Tensor:
+    """Edges that start or end on the chosen object or goal."""
+    ends = torch.tensor([object_index, goal_index])
+    return torch.isin(edge_index[0], ends) | torch.isin(edge_index[1], ends)
 
 
 def _binary_entropy(mask: Tensor) -> Tensor:

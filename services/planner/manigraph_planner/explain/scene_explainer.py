@@ -5,6 +5,8 @@ from __future__ import annotations
 import threading
 import time
 
+from torch import Tensor
+
 from manigraph_planner.explain.config import ExplainerConfig
 from manigraph_planner.explain.masks import MaskExplainer, MaskExplanation
 from manigraph_planner.gnn.features import FEATURE_SPEC, GraphState, scene_to_graph
@@ -107,7 +109,12 @@ class SceneExplainer:
             )
         finally:
             self._lock.release()
-        return to_message(result, graph, scene, self.policy.name, decision_id, seed)
+        logits = self.policy.node_logits(graph)
+        rivals = (
+            _runner_up(logits[: graph.num_objects], object_index, graph.object_ids),
+            _runner_up(logits[graph.num_objects :], goal_index - graph.num_objects, graph.goal_ids),
+        )
+        return to_message(result, graph, scene, self.policy.name, decision_id, seed, rivals)
 
 
 def to_message(
@@ -117,8 +124,10 @@ def to_message(
     policy: str,
     decision_id: str | None,
     seed: int,
+    rivals: tuple[str | None, str | None] = (None, None),
 ) -> Explanation:
-    """The contract message for ``result``: node indices become the scene's ids."""
+    """The contract message for ``result``: node indices become the scene's ids; ``rivals``
+    (the runner-up object and goal) make the sentence contrastive."""
     ids = [*graph.object_ids, *graph.goal_ids]
     edges = [
         ExplainedEdge(
@@ -154,7 +163,14 @@ def to_message(
         edges=edges,
         features=features,
         nodes=nodes,
-        sentence=sentence(chosen_object, chosen_goal, edges, top_features),
+        sentence=sentence(
+            chosen_object,
+            chosen_goal,
+            edges,
+            top_features,
+            rivals,
+            {node: graph.x[i].tolist() for i, node in enumerate(ids)},
+        ),
         fidelity=result.fidelity,
         seed=seed,
         stamp=time.time(),
@@ -162,23 +178,55 @@ def to_message(
 
 
 def sentence(
-    chosen_object: str, chosen_goal: str, edges: list[ExplainedEdge], top_features: list[str]
+    chosen_object: str,
+    chosen_goal: str,
+    edges: list[ExplainedEdge],
+    top_features: list[str],
+    rivals: tuple[str | None, str | None] = (None, None),
+    values: dict[str, list[float]] | None = None,
 ) -> str:
-    """The paper's reading: "node i was chosen because of its relationship with nodes j, k;
-    the most important feature was z"."""
-    related: list[str] = []
-    for edge in edges:
-        for node in (edge.src, edge.dst):
-            if node != chosen_object and node not in related:
-                related.append(node)
-    because = f"because of its relation to {_join(related)}" if related else "on its own features"
-    words = list(top_features)
-    text = f"{chosen_object} was chosen (for goal {chosen_goal}) {because}"
-    if words:
-        text += f"; most important feature: {words[0]}"
-        if len(words) > 1:
-            text += f" (then {_join(words[1:])})"
+    """A contrastive reading: "block_0 was chosen rather than block_3 (for goal_8 rather than
+    goal_2), because of the relations block_0→goal_8 and goal_7→goal_8; z: block_0 0.02 vs
+    block_3 0.30, goal_8 0.34 vs goal_2 0.10 (then filled: ...)". ``values`` holds each
+    node's features (``FEATURE_SPEC`` order)."""
+    rival_object, rival_goal = rivals
+    text = f"{chosen_object} was chosen"
+    if rival_object:
+        text += f" rather than {rival_object}"
+    text += f" (for goal {chosen_goal}" + (f" rather than {rival_goal})" if rival_goal else ")")
+    relations = [f"{e.src}→{e.dst}" for e in edges]
+    if relations:
+        noun = "relation" if len(relations) == 1 else "relations"
+        text += f", because of the {noun} {_join(relations)}"
+    else:
+        text += ", on its own features"
+    for rank, name in enumerate(top_features):
+        column = FEATURE_SPEC.names.index(name)
+        pairs = [(chosen_object, rival_object), (chosen_goal, rival_goal)]
+        shown = [
+            f"{a} {_value(values, a, column)} vs {b} {_value(values, b, column)}"
+            if b
+            else f"{a} {_value(values, a, column)}"
+            for a, b in pairs
+        ]
+        lead = "; most important feature: " if rank == 0 else "; then "
+        text += f"{lead}{name}" + (f" ({', '.join(shown)})" if values else "")
     return text[:1024]
+
+
+def _value(values: dict[str, list[float]] | None, node: str, column: int) -> str:
+    if values is None or node not in values:
+        return "?"
+    return f"{values[node][column]:.3g}"
+
+
+def _runner_up(logits: Tensor, chosen: int, ids: list[str]) -> str | None:
+    """The node with the highest logit after the chosen one (None when it has no rival)."""
+    if len(ids) < 2:
+        return None
+    others = logits.clone()
+    others[chosen] = float("-inf")
+    return ids[int(others.argmax())]
 
 
 def _join(items: list[str]) -> str:

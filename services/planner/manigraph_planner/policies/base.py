@@ -20,10 +20,23 @@ class Decision:
     orientation_index: int | None = None
     tray_action: TrayAction = TrayAction.NONE
 
-    def to_action(self, scene: Scene, step: int, policy: str, stamp: float) -> Action:
+    @property
+    def pair(self) -> tuple[str, str]:
+        return (self.object_id, self.goal_id)
+
+    def to_action(
+        self,
+        scene: Scene,
+        step: int,
+        policy: str,
+        stamp: float,
+        rank: int = 0,
+        recovery: str | None = None,
+    ) -> Action:
         """The contract message for this decision, step ``step`` of the scene's episode; the id
         ``<episode>:<step>`` is what lets a recorded log drive a fresh planner to the same ids
-        (an episode id too long for that is shortened with a hash: ``manigraph_shared.ids``)."""
+        (an episode id too long for that is shortened with a hash: ``manigraph_shared.ids``).
+        ``rank`` and ``recovery`` say that the policy's first choice was passed over, and why."""
         return Action(
             decision_id=derived_id(scene.episode_id, ":", str(step)),
             episode_id=scene.episode_id,
@@ -34,6 +47,8 @@ class Decision:
             tray_action=self.tray_action,
             policy=policy,
             stamp=stamp,
+            rank=rank,
+            recovery=recovery,
         )
 
 
@@ -43,6 +58,13 @@ class Policy(ABC):
     @abstractmethod
     def decide(self, scene: Scene) -> Decision | None:
         """The next decision, or None when there is nothing left to do."""
+
+    def ranked(self, scene: Scene) -> list[Decision]:
+        """Every decision this policy would consider on ``scene``, most likely first; the first
+        is :meth:`decide`'s. The planner takes a later one only when the first made no
+        progress. A policy without alternatives returns its one decision."""
+        decision = self.decide(scene)
+        return [] if decision is None else [decision]
 
 
 #: Policies by name; a policy takes no options (a learned one comes from its checkpoint).

@@ -30,6 +30,27 @@ class ExpertPolicy(Policy):
     nothing to do (box rearrangement is a test of the learned policy, not of the expert).
     """
 
+    def ranked(self, scene: Scene) -> list[Decision]:
+        """Its decision first, then every other movable block (highest first) to every open
+        block goal (lowest first): what a planner tries when the first made no progress."""
+        first = self.decide(scene)
+        if first is None:
+            return []
+        objects = [o for o in scene.objects if o.visible]
+        goals = [g for g in scene.goals if g.visible and g.category is GoalCategory.BLOCK]
+        movable = [
+            o
+            for o in objects
+            if o.category is ObjectCategory.BLOCK and not o.filled and not is_covered(scene, o)
+        ]
+        open_goals = [g for g in goals if not g.filled and not objects_above_goal(scene, g)]
+        movable.sort(key=lambda o: (-round(o.position.z, 4), o.id))
+        open_goals.sort(key=lambda g: (round(g.position.z, 4), g.id))
+        others = [
+            Decision(o.id, g.id) for o in movable for g in open_goals if (o.id, g.id) != first.pair
+        ]
+        return [first, *others]
+
     def decide(self, scene: Scene) -> Decision | None:
         objects = [o for o in scene.objects if o.visible]
         goals = [g for g in scene.goals if g.visible]

@@ -14,7 +14,13 @@ from manigraph_planner.gnn.models import PolicyNet
 from manigraph_planner.policies.base import Decision, Policy
 from manigraph_shared.messages import Scene
 
-__all__ = ["GNNPolicy", "Probabilities", "decision_from_logits", "load_gnn_policy"]
+__all__ = [
+    "GNNPolicy",
+    "Probabilities",
+    "decision_from_logits",
+    "load_gnn_policy",
+    "ranked_compatible_pairs",
+]
 
 
 @dataclass(frozen=True)
@@ -89,6 +95,19 @@ class GNNPolicy(Policy):
             return None
         return decision_from_logits(graph, self.node_logits(graph))
 
+    def ranked(self, scene: Scene) -> list[Decision]:
+        """Every compatible pair by ``log p(o) + log p(g)``, most likely first (the first is
+        :meth:`decide`'s; ties in scene order)."""
+        graph = scene_to_graph(scene)
+        k = graph.num_objects
+        if k == 0 or k == graph.num_nodes:
+            return []
+        logits = self.node_logits(graph)
+        pairs = ranked_compatible_pairs(
+            logits[:k].log_softmax(0), logits[k:].log_softmax(0), graph.x[:k, 0], graph.x[k:, 0]
+        )
+        return [Decision(graph.object_ids[o], graph.goal_ids[g]) for o, g in pairs]
+
 
 def decision_from_logits(graph: GraphState, node_logits: Tensor) -> Decision | None:
     """The most likely compatible (object, goal) pair of ``graph`` under ``node_logits``
@@ -125,6 +144,22 @@ def best_compatible_pair(
     scores = scores.masked_fill(~compatible, float("-inf"))
     flat = int(scores.flatten().argmax())  # the first maximal index: deterministic
     return flat // scores.shape[1], flat % scores.shape[1]
+
+
+def ranked_compatible_pairs(
+    object_logp: Tensor, goal_logp: Tensor, object_codes: Tensor, goal_codes: Tensor
+) -> list[tuple[int, int]]:
+    """Every category-compatible (object, goal) index pair, by ``object_logp[o] +
+    goal_logp[g]`` from the most likely; equal scores keep row-major order, so the first pair
+    is :func:`best_compatible_pair`'s."""
+    compatible = goal_codes.round().unsqueeze(0) == _GOAL_CODE_FOR[
+        object_codes.round().long()
+    ].unsqueeze(1)
+    scores = (object_logp.unsqueeze(1) + goal_logp.unsqueeze(0)).flatten()
+    order = torch.sort(scores, descending=True, stable=True).indices
+    width = goal_logp.shape[0]
+    flat = compatible.flatten()
+    return [(int(i) // width, int(i) % width) for i in order if bool(flat[i])]
 
 
 #: Object category code -> the code of the goals it can fill (paper: cover 0 -> 3, block 1 -> 2).

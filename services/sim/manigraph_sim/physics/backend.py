@@ -19,7 +19,7 @@ budget is spent.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -41,13 +41,18 @@ from manigraph_shared.messages import (
 )
 from manigraph_sim.backend import EpisodeBackend, JointedArmBackend
 from manigraph_sim.geometric.world import GeometricWorld
-from manigraph_sim.manifest import JOINTS
+from manigraph_sim.manifest import CAMERA, JOINTS
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig
 from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
 from manigraph_sim.tasks.from_request import episode_layout
 from manigraph_sim.world_model import Body, Layout
+
+if TYPE_CHECKING:
+    from manigraph_shared.markers import MarkerMap
+    from manigraph_shared.messages import CameraInfo, CompressedImage, TaskLayout
+    from manigraph_sim.physics.camera import CameraConfig, TripodCamera
 
 #: A body whose grasp point (a block's centre, a cover's handle) is this close to the TCP
 #: while the gripper is closed is held.
@@ -60,7 +65,7 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
     """Runs as fast as it can, or in real time with ``realtime=True``. Registered as
     ``physics`` (options: ``manigraph_sim.backends.PhysicsOptions``)."""
 
-    abilities = frozenset({JOINTS})
+    abilities = frozenset({JOINTS, CAMERA})
 
     def __init__(
         self,
@@ -68,12 +73,22 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         realtime: bool = False,
         config: PhysicsConfig | None = None,
         video: VideoConfig | None = None,
+        camera: CameraConfig | None = None,
+        markers: MarkerMap | None = None,
     ) -> None:
         super().__init__()
         self.goal_tolerance = goal_tolerance
         self.realtime = realtime
         self.video_config = video
         self.video: EpisodeVideo | None = None
+        #: The tripod camera (``--camera``) and the markers printed on the bodies it sees.
+        self.camera_config = camera
+        self.camera: TripodCamera | None = None
+        if camera is not None and markers is None:
+            from manigraph_shared.markers import sim_marker_map
+
+            markers = sim_marker_map()
+        self.markers = markers
         #: Files written by the video recorder, one per ended episode.
         self.videos_written: list[Path] = []
         self.config = config or PhysicsConfig()
@@ -82,29 +97,65 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         #: Boxes seen open in this episode: their contents stay observed (partial observability).
         self.revealed: set[str] = set()
         self.physics_steps = 0
+        self._warm_world: PhysicsWorld | None = None
+        if camera is not None:
+            self._warm_up()
 
     @classmethod
     def from_options(cls, options: Any) -> PhysicsBackend:
         video = VideoConfig(str(options.video)) if options.video else None
-        return cls(options.goal_tolerance, options.realtime, video=video)
+        camera = None
+        if options.camera:
+            from manigraph_sim.physics.camera import CameraConfig
+
+            camera = CameraConfig(
+                hz=options.camera_hz,
+                noise_sigma=options.camera_noise,
+                blur_pixels=options.camera_blur,
+            )
+        return cls(options.goal_tolerance, options.realtime, video=video, camera=camera)
 
     # --- episodes ---------------------------------------------------------------------------
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
         episode = episode_layout(request, boxes=PHYSICS_BOXES)
         layout = episode.layout
+        if self.markers is not None and self.camera_config is not None:
+            self.markers.check_objects((body.id, body.category) for body in layout.bodies)
         self.world = PhysicsWorld(
             layout.bodies,
             self.config,
-            render=self.video_config is not None,
+            render=self.video_config is not None or self.camera_config is not None,
             containers=layout.containers,
+            markers=self.markers if self.camera_config is not None else None,
         )
+        self._warm_world = None
         self.revealed = set()
         if self.video_config is not None:
             self.video = EpisodeVideo(self.video_config, self.world.scene, self.config.timestep)
             self.world.on_step.append(self.video.on_step)
             self.video.capture()
+        if self.camera_config is not None:
+            from manigraph_sim.physics.camera import TripodCamera, light
+
+            if self.video_config is None:
+                light(self.world.scene)
+            sequence = self.camera.sequence if self.camera is not None else 0
+            self.camera = TripodCamera(self.camera_config, self.world.scene)
+            self.camera.sequence = sequence
         self.layout = layout
         return self.begin(request, layout.required_goals(), episode.max_steps, stamp)
+
+    def _warm_up(self) -> None:
+        """Render one frame of a one-block episode: the first frame of a process compiles the
+        shaders (10-40 s on a busy CPU), better before the service says it is ready than
+        inside a reset someone is waiting for."""
+        self.reset(EpisodeRequest(episode_id="warm-up", task="stack", blocks=1), 0.0)
+        self.camera_frame(0.0)
+        # Kept until the next episode's world exists: SAPIEN frees the compiled shaders
+        # with the last scene.
+        self._warm_world = self.world
+        self.world = self.layout = self.request = self.camera = None
+        self.ended = True
 
     def _geometric_view(self) -> GeometricWorld:
         """The simulated poses as a geometric world, to apply its goal and visibility rules."""
@@ -154,6 +205,21 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
             self.ended,
             orientations,
         )
+
+    def layout_message(self, stamp: float) -> TaskLayout | None:
+        """The running episode's objects, goals and boxes (for a Scene source that cannot
+        see goals: perception)."""
+        if self.layout is None or self.request is None:
+            return None
+        from manigraph_sim.layout_message import layout_message
+
+        return layout_message(self.layout, self.request.episode_id, stamp)
+
+    def camera_frame(self, stamp: float) -> tuple[CompressedImage, CameraInfo] | None:
+        """The tripod camera's view now, with its intrinsics; None without ``--camera``."""
+        if self.camera is None:
+            return None
+        return self.camera.capture(stamp), self.camera.info(stamp)
 
     def joint_state(self, stamp: float) -> JointState | None:
         if self.world is None:

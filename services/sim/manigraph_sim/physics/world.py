@@ -13,6 +13,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import sapien
@@ -22,6 +23,9 @@ from manigraph_shared.errors import ConfigError
 from manigraph_shared.grasp_points import COVER_HANDLE_SIZE, handle_offset
 from manigraph_shared.panda import ARM_JOINTS, FINGER_OPEN, HOME_Q, panda_urdf_path
 from manigraph_sim.world_model import Body, Container
+
+if TYPE_CHECKING:
+    from manigraph_shared.markers import MarkerMap
 
 #: Where an episode starts: Franka's "ready" pose with the hand turned a quarter, TCP at
 #: (0.31, 0, 0.49) m, high and close to the base so it clears every stack of a layout.
@@ -98,7 +102,8 @@ class PhysicsWorld:
 
     Boxes (``containers``) are static: four walls standing on the table, open at the top.
     With ``render=True`` the robot and bodies also get visual shapes (for a video camera);
-    that needs a Vulkan device. ``on_step`` callbacks run after every physics step.
+    that needs a Vulkan device; with ``markers`` too, bodies carry their printed ArUco
+    markers. ``on_step`` callbacks run after every physics step.
     """
 
     def __init__(
@@ -107,10 +112,12 @@ class PhysicsWorld:
         config: PhysicsConfig | None = None,
         render: bool = False,
         containers: list[Container] | None = None,
+        markers: MarkerMap | None = None,
     ) -> None:
         self.config = config or PhysicsConfig()
         c = self.config
         self.render = render
+        self.markers = markers if render else None
         self.on_step: list[Callable[[], None]] = []
         self.scene = sapien.Scene() if render else sapien.Scene([physx.PhysxCpuSystem()])
         self.scene.set_timestep(c.timestep)
@@ -148,7 +155,20 @@ class PhysicsWorld:
             builder.add_box_collision(pose, half, material=self.material, density=density)
             if self.render:
                 builder.add_box_visual(pose, half, material=COVER_COLOUR if cover else colour)
-        entity = builder.build(name=body.id)
+        if self.markers is None:
+            entity = builder.build(name=body.id)
+        else:
+            from manigraph_sim.physics.camera import marker_shapes
+
+            # Shapes can only join a render body before it joins an entity.
+            render_body = builder.build_render_component()
+            for shape in marker_shapes(self.markers, body.id, body.size):
+                render_body.attach(shape)
+            entity = sapien.Entity()
+            entity.name = body.id
+            entity.add_component(render_body)
+            entity.add_component(builder.build_physx_component())
+            self.scene.add_entity(entity)
         entity.set_pose(sapien.Pose(body.position))
         return entity
 

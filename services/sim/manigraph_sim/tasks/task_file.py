@@ -10,6 +10,13 @@ id = "block_0"
 category = "block"
 position = [0.50, -0.10, 0.02]      # centre, metres, robot frame
 size = [0.04, 0.04, 0.04]           # full extents, metres
+jitter = 0.01                       # metres: this object shifts by up to this in x, y, per seed
+
+[[objects]]
+id = "block_1"
+category = "block"
+positions = [[0.40, -0.20, 0.02], [0.60, -0.20, 0.02]]  # one of these, chosen per seed
+spare = true                        # belongs to no goal: the goals are filled without it
 
 [[goals]]                           # category: block | cover (what fills it)
 id = "goal_0"
@@ -25,6 +32,12 @@ wall = 0.01
 height = 0.06
 ```
 
+An object gives ``position`` or ``positions`` (not both). An object listed directly above
+another one (same x, y within 1 mm, higher) rests on it and moves with it, so a tower jitters
+as one; its own ``jitter`` and ``positions`` are refused. Objects choosing among listed
+positions never take one another's place (a draw that cannot avoid it is refused, naming the
+object). Every required goal needs an object of its category that is not a spare.
+
 A syntax error names the line and column; a bad value names the field
 (``goals.0.position.2: ...``). Layouts that cannot happen are refused too, naming the object
 or goal: objects that overlap one another, objects below the table, objects or goals outside
@@ -34,6 +47,7 @@ goals closer than a block's width, and more required block (cover) goals than bl
 
 from __future__ import annotations
 
+import itertools
 import tomllib
 from typing import Annotated, Literal
 
@@ -64,11 +78,31 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
 
 
+Position = tuple[Coordinate, Coordinate, Coordinate]
+
+
 class ObjectSpec(_Strict):
     id: Name
     category: Literal["block", "cover"]
-    position: tuple[Coordinate, Coordinate, Coordinate]
+    position: Position | None = None
+    positions: list[Position] | None = Field(None, min_length=1, max_length=64)
     size: tuple[Extent, Extent, Extent] = (0.04, 0.04, 0.04)
+    jitter: float = Field(0.0, ge=0.0, le=0.2, description="metres, uniform in x and y")
+    spare: bool = False
+
+    @model_validator(mode="after")
+    def _one_position(self) -> ObjectSpec:
+        if (self.position is None) == (self.positions is None):
+            raise ValueError("position: give either position or positions (a list), not both")
+        return self
+
+    @property
+    def anchor(self) -> Position:
+        """Where the object stands without randomization (its first listed position)."""
+        if self.position is not None:
+            return self.position
+        assert self.positions is not None
+        return self.positions[0]
 
 
 class GoalSpec(_Strict):
@@ -102,6 +136,13 @@ class TaskFile(_Strict):
             raise ValueError(f"id: used twice: {', '.join(duplicates)}")
         if all(goal.optional for goal in self.goals):
             raise ValueError("goals: at least one goal must not be optional")
+        for index, item in enumerate(self.objects):
+            base = self.support_of(index)
+            if base is not None and (item.jitter > 0 or item.positions is not None):
+                raise ValueError(
+                    f"objects.{index}: rests on {self.objects[base].id} and moves with it; "
+                    "give it neither jitter nor positions"
+                )
         problems = [
             *self._outside_reach(),
             *self._overlapping_objects(),
@@ -115,11 +156,16 @@ class TaskFile(_Strict):
         return self
 
     def _outside_reach(self) -> list[str]:
-        margin = (self.randomize_xy, self.randomize_xy, 0.0)
-        places = [(f"objects.{i}", o.id, o.position) for i, o in enumerate(self.objects)]
-        places += [(f"goals.{i}", g.id, g.position) for i, g in enumerate(self.goals)]
+        places = [
+            (f"objects.{i}", o.id, position, jitter)
+            for i, o in enumerate(self.objects)
+            for position, jitter in self.placements(i)
+        ]
+        places += [(f"goals.{i}", g.id, g.position, 0.0) for i, g in enumerate(self.goals)]
         problems = []
-        for field, name, position in places:
+        for field, name, position, jitter in places:
+            shift_xy = self.randomize_xy + jitter
+            margin = (shift_xy, shift_xy, 0.0)
             for axis, (value, (low, high), shift) in enumerate(
                 zip(position, REACH, margin, strict=True)
             ):
@@ -127,10 +173,10 @@ class TaskFile(_Strict):
                     problems.append(
                         f"{field}.position.{axis}: {name} at {value:g} m is outside the "
                         f"robot's reach [{low:g}, {high:g}]"
-                        + (f" (with randomize_xy {shift:g})" if shift else "")
+                        + (f" (with randomize_xy and jitter {shift:g})" if shift else "")
                     )
         for i, o in enumerate(self.objects):
-            bottom = o.position[2] - o.size[2] / 2
+            bottom = o.anchor[2] - o.size[2] / 2
             if bottom < -OVERLAP_TOLERANCE:
                 problems.append(
                     f"objects.{i}.position.2: {o.id} reaches {-bottom:g} m below the table"
@@ -138,13 +184,21 @@ class TaskFile(_Strict):
         return problems
 
     def _overlapping_objects(self) -> list[str]:
+        """Objects that overlap in some draw (jitter at its worst; two objects choosing the
+        same listed position never both take it)."""
         problems = []
         for i, a in enumerate(self.objects):
             for j in range(i + 1, len(self.objects)):
                 b = self.objects[j]
-                depth = min(
-                    (sa + sb) / 2 - abs(pa - pb)
-                    for pa, pb, sa, sb in zip(a.position, b.position, a.size, b.size, strict=True)
+                depth = max(
+                    (
+                        self._depth(pa, pb, a.size, b.size, ja + jb)
+                        for (pa, ja), (pb, jb) in itertools.product(
+                            self.placements(i), self.placements(j)
+                        )
+                        if not self._exclusive(i, j, pa, pb)
+                    ),
+                    default=0.0,
                 )
                 if depth > OVERLAP_TOLERANCE:
                     problems.append(
@@ -168,14 +222,73 @@ class TaskFile(_Strict):
     def _too_many_goals(self) -> list[str]:
         problems = []
         for category in ("block", "cover"):
-            have = sum(o.category == category for o in self.objects)
+            have = sum(o.category == category and not o.spare for o in self.objects)
             need = sum(g.category == category and not g.optional for g in self.goals)
             if need > have:
                 problems.append(
                     f"goals: {need} required {category} goals but only {have} "
-                    f"{category}{'s' if have != 1 else ''} in objects"
+                    f"{category}{'s' if have != 1 else ''} in objects that are not spares"
                 )
         return problems
+
+    def support_of(self, index: int) -> int | None:
+        """The object that object ``index`` rests on (same x, y within 1 mm, the highest one
+        below it), or None when it stands on the table."""
+        x, y, z = self.objects[index].anchor
+        below = [
+            (other.anchor[2], j)
+            for j, other in enumerate(self.objects)
+            if j != index
+            and abs(other.anchor[0] - x) < 1e-3
+            and abs(other.anchor[1] - y) < 1e-3
+            and other.anchor[2] < z
+        ]
+        return max(below)[1] if below else None
+
+    @property
+    def blocks(self) -> int:
+        """Blocks in the file, spares included."""
+        return sum(o.category == "block" for o in self.objects)
+
+    def root_of(self, index: int) -> int:
+        """The object at the bottom of the tower that object ``index`` belongs to."""
+        base = self.support_of(index)
+        return index if base is None else self.root_of(base)
+
+    def placements(self, index: int) -> list[tuple[Position, float]]:
+        """Where object ``index`` may stand before the whole-layout shift: each listed position
+        of its tower's bottom object, moved as the tower moves, with that object's jitter."""
+        root = self.objects[self.root_of(index)]
+        offset = [a - b for a, b in zip(self.objects[index].anchor, root.anchor, strict=True)]
+        bases = root.positions if root.positions is not None else [root.anchor]
+        return [
+            (
+                (base[0] + offset[0], base[1] + offset[1], base[2] + offset[2]),
+                root.jitter,
+            )
+            for base in bases
+        ]
+
+    def _exclusive(self, i: int, j: int, pa: Position, pb: Position) -> bool:
+        """Objects ``i`` and ``j`` could stand there only by taking one listed position."""
+        ri, rj = self.root_of(i), self.root_of(j)
+        if ri == rj or self.objects[ri].positions is None or self.objects[rj].positions is None:
+            return False
+        ai, aj = self.objects[i].anchor, self.objects[j].anchor
+        base_i = [p - a + b for p, a, b in zip(pa, ai, self.objects[ri].anchor, strict=True)]
+        base_j = [p - a + b for p, a, b in zip(pb, aj, self.objects[rj].anchor, strict=True)]
+        return max(abs(x - y) for x, y in zip(base_i, base_j, strict=True)) < 1e-3
+
+    @staticmethod
+    def _depth(
+        pa: Position, pb: Position, sa: tuple[float, ...], sb: tuple[float, ...], slack: float
+    ) -> float:
+        """How deep two boxes can overlap when each may move by its jitter (``slack``, x, y)."""
+        margins = (slack, slack, 0.0)
+        return min(
+            (da + db) / 2 - max(0.0, abs(a - b) - m)
+            for a, b, da, db, m in zip(pa, pb, sa, sb, margins, strict=True)
+        )
 
 
 def parse_task_file(text: str) -> TaskFile:
@@ -199,7 +312,9 @@ def parse_task_file(text: str) -> TaskFile:
 class FileTask(Task):
     """A layout from a task file.
 
-    **Randomizations**: the whole layout moves by up to ``randomize_xy`` in x and y, seeded.
+    **Randomizations** (all seeded by the episode seed): each object stands at one of its
+    listed ``positions`` (no two on the same one) and moves by up to its ``jitter`` in x and y;
+    objects resting on it move with it; then the whole layout moves by up to ``randomize_xy``.
 
     **Success Conditions**: every goal not marked ``optional`` holds an object of its category.
     """
@@ -208,14 +323,14 @@ class FileTask(Task):
 
     def __init__(self, spec: TaskFile) -> None:
         self.spec = spec
-        super().__init__(TaskParams(blocks=sum(o.category == "block" for o in spec.objects)))
+        super().__init__(TaskParams(blocks=spec.blocks))
 
     def layout(self, rng: np.random.Generator) -> Layout:
         r = self.spec.randomize_xy
         shift = np.array([*rng.uniform(-r, r, 2), 0.0]) if r > 0 else np.zeros(3)
         bodies = [
-            Body(o.id, o.category, np.array(o.size), np.array(o.position) + shift)
-            for o in self.spec.objects
+            Body(o.id, o.category, np.array(o.size), position + shift)
+            for o, position in zip(self.spec.objects, self._positions(rng), strict=True)
         ]
         goals = [Goal(g.id, g.category, np.array(g.position) + shift) for g in self.spec.goals]
         containers = [
@@ -224,3 +339,35 @@ class FileTask(Task):
         ]
         optional = {g.id for g in self.spec.goals if g.optional}
         return Layout(bodies, goals, containers, optional, self.spec.partially_observable)
+
+    def _positions(self, rng: np.random.Generator) -> list[np.ndarray]:
+        """Each object's drawn position before the whole-layout shift: its listed choice (none
+        taken twice, nor where a fixed object stands) plus its jitter; objects resting on
+        another move with it."""
+        objects = self.spec.objects
+        offsets = [np.zeros(3) for _ in objects]
+        taken = [np.array(o.anchor) for o in objects if o.positions is None]
+        for index, item in enumerate(objects):
+            if self.spec.support_of(index) is not None:
+                continue
+            if item.positions is not None:
+                free = [
+                    np.array(p)
+                    for p in item.positions
+                    if all(np.abs(np.array(p) - t).max() > 1e-3 for t in taken)
+                ]
+                if not free:
+                    raise TaskError(
+                        f"task file: objects.{index}.positions: every listed position is taken "
+                        "by another object in this draw; list more"
+                    )
+                choice = free[int(rng.integers(len(free)))]
+                taken.append(choice)
+                offsets[index] = choice - np.array(item.anchor)
+            if item.jitter > 0:
+                offsets[index][:2] += rng.uniform(-item.jitter, item.jitter, 2)
+        return [np.array(o.anchor) + self._offset(i, offsets) for i, o in enumerate(objects)]
+
+    def _offset(self, index: int, offsets: list[np.ndarray]) -> np.ndarray:
+        base = self.spec.support_of(index)
+        return offsets[index] if base is None else self._offset(base, offsets)

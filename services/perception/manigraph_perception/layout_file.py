@@ -1,0 +1,73 @@
+"""A real lab's layout: a TOML file in the task file's format (``[[objects]]`` with id,
+category, position, size; ``[[goals]]`` with id, category, position, optional;
+``[[containers]]`` with id, centre, inner, height; ``partially_observable``), read into the
+contract's ``TaskLayout``. See docs/perception.md."""
+
+from __future__ import annotations
+
+import time
+import tomllib
+from pathlib import Path
+
+from pydantic import ValidationError
+
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.messages import TaskLayout
+
+
+def _xyz(values: list[float], default_z: float = 0.0) -> dict[str, float]:
+    x, y, *rest = values
+    return {"x": x, "y": y, "z": rest[0] if rest else default_z}
+
+
+def load_layout(path: str | Path, episode_id: str = "live") -> TaskLayout:
+    try:
+        data = tomllib.loads(Path(path).read_text())
+    except OSError as exc:
+        raise ConfigError("layout", f"cannot read '{path}': {exc.strerror}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError("layout", f"'{path}': {exc}") from None
+    try:
+        objects = [
+            {
+                "id": o["id"],
+                "category": o["category"],
+                "position": _xyz(o["position"]),
+                "size": _xyz(o.get("size", [0.04, 0.04, 0.04])),
+            }
+            for o in data.get("objects", [])
+        ]
+        goals = [
+            {
+                "id": g["id"],
+                "category": g["category"],
+                "position": _xyz(g["position"]),
+                "optional": g.get("optional", False),
+            }
+            for g in data.get("goals", [])
+        ]
+        containers = [
+            {
+                "id": c["id"],
+                "centre": _xyz(c["centre"]),
+                "inner": _xyz(c["inner"], c.get("height", 0.06)),
+            }
+            for c in data.get("containers", [])
+        ]
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ConfigError("layout", f"'{path}': missing or malformed entry {exc}") from None
+    try:
+        return TaskLayout.model_validate(
+            {
+                "episode_id": episode_id,
+                "stamp": time.time(),
+                "objects": objects,
+                "goals": goals,
+                "containers": containers,
+                "partially_observable": data.get("partially_observable", False),
+            }
+        )
+    except ValidationError as exc:
+        error = exc.errors(include_url=False)[0]
+        field = ".".join(str(part) for part in error["loc"])
+        raise ConfigError(f"layout.{field}", error["msg"].removeprefix("Value error, ")) from None

@@ -1,0 +1,147 @@
+"""Perception as a plain class: an image in, a ``Scene`` and the detected markers out.
+
+No bus here (the service wires it): every step takes and returns values or contract
+messages, so it is tested on rendered images directly.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from manigraph_perception.calibration import Calibration
+from manigraph_perception.detection import ObjectPoser, detect, detector_for
+from manigraph_perception.world import WorldConfig, WorldModel
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.markers import MarkerMap
+from manigraph_shared.messages import (
+    CompressedImage,
+    DetectedMarker,
+    MarkerDetections,
+    Scene,
+    TaskLayout,
+)
+
+log = logging.getLogger("manigraph.perception")
+
+
+@dataclass
+class Counters:
+    """What the service reports in its status."""
+
+    frames: int = 0
+    corrupt: int = 0
+    stale: int = 0
+    unknown_markers: set[int] = field(default_factory=set)
+
+    def summary(self) -> str:
+        return (
+            f"frames {self.frames}, corrupt {self.corrupt} skipped, stale {self.stale}, "
+            f"unknown marker ids {sorted(self.unknown_markers)[:10]}"
+        )
+
+
+class Perception:
+    """Detects markers, poses objects, keeps the world model."""
+
+    def __init__(
+        self,
+        markers: MarkerMap,
+        calibration: Calibration,
+        camera: str = "front",
+        world: WorldConfig | None = None,
+    ) -> None:
+        if calibration.base_T_camera is None:
+            raise ConfigError("calibration.base_T_camera", "missing: run calibrate extrinsics")
+        self.markers = markers
+        self.calibration = calibration
+        self.camera = camera
+        self.detector = detector_for(markers)
+        self.world = WorldModel(world)
+        self.poser: ObjectPoser | None = None
+        self.known_ids = set(markers.by_id())
+        self.counters = Counters()
+
+    def set_layout(self, layout: TaskLayout) -> None:
+        """Take a new episode's layout; ``ConfigError`` names an object with no marker."""
+        if self.world.layout is not None and layout.episode_id == self.world.layout.episode_id:
+            return
+        self.markers.check_objects((o.id, o.category.value) for o in layout.objects)
+        sizes = {o.id: np.array(o.size.as_tuple()) for o in layout.objects}
+        self.poser = ObjectPoser(self.markers, self.calibration, sizes)
+        self.world.set_layout(layout)
+
+    @property
+    def layout(self) -> TaskLayout | None:
+        return self.world.layout
+
+    def decode(self, image: CompressedImage) -> np.ndarray | None:
+        """The grey image, or None (counted) if it does not decode or has the wrong size."""
+        grey = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_GRAYSCALE)
+        if grey is None or grey.shape != (self.calibration.height, self.calibration.width):
+            self.counters.corrupt += 1
+            shape = None if grey is None else grey.shape
+            log.warning(
+                "frame %d skipped: undecodable or not the calibrated size (%s)",
+                image.sequence,
+                shape,
+            )
+            return None
+        return grey
+
+    def process(
+        self, grey: np.ndarray, stamp: float, now: float
+    ) -> tuple[Scene | None, MarkerDetections]:
+        """One frame: the Scene (None before a layout) and what was detected."""
+        self.counters.frames += 1
+        found = detect(self.detector, grey)
+        for marker in found:
+            if marker.id not in self.known_ids and marker.id not in self.counters.unknown_markers:
+                self.counters.unknown_markers.add(marker.id)
+                log.warning("marker id %d is not in the marker map: ignored", marker.id)
+        specs = self.markers.by_id()
+        detections = MarkerDetections(
+            camera=self.camera,
+            stamp=stamp,
+            markers=[
+                DetectedMarker(
+                    id=m.id,
+                    corners=[float(v) for v in m.corners.ravel()],
+                    object_id=specs[m.id].object if m.id in specs else "",
+                )
+                for m in found
+            ],
+        )
+        if self.poser is None:
+            return None, detections
+        self.world.update(self.poser.poses(found), stamp)
+        scene = self.world.scene(stamp, now)
+        if scene is not None and scene.stale:
+            self.counters.stale += 1
+        return scene, detections
+
+    def process_image(
+        self, image: CompressedImage, now: float
+    ) -> tuple[Scene | None, MarkerDetections | None]:
+        grey = self.decode(image)
+        if grey is None:
+            return None, None
+        return self.process(grey, image.stamp, now)
+
+
+def draw_detections(bgr: np.ndarray, detections: MarkerDetections) -> np.ndarray:
+    """``bgr`` with every detected marker outlined and labelled (its object, or its id)."""
+    out = bgr.copy()
+    for marker in detections.markers:
+        corners = np.array(marker.corners).reshape(4, 2)
+        colour = (40, 220, 40) if marker.object_id else (40, 40, 230)
+        cv2.polylines(out, [np.round(corners).astype(np.int32)], True, colour, 1, cv2.LINE_AA)
+        label = marker.object_id.replace("block_", "b").replace("cover_", "c") or str(marker.id)
+        x, y = corners.min(axis=0)
+        cv2.putText(
+            out, label, (int(x), int(y) - 2), cv2.FONT_HERSHEY_SIMPLEX, 0.35, colour, 1, cv2.LINE_AA
+        )
+    return out

@@ -1,0 +1,239 @@
+"""A camera on a tripod in the physics world, rendered by SAPIEN, and the ArUco markers
+printed on the bodies it looks at.
+
+The tripod stands in front of the table (opposite the robot) and above it, like the paper's
+hardware camera, 640 x 480 with a 60 degree vertical field of view. Rendering needs a Vulkan
+device (Mesa lavapipe on CPU, ``scripts/install-vulkan.sh``): the first frame of a process
+compiles shaders (~10-30 s), later ones take ~0.1-0.3 s on a busy 2-core machine.
+
+Frames are encoded (JPEG by default) into ``CompressedImage`` messages; ``CameraInfo``
+carries the rendered camera's exact intrinsics (no distortion); :func:`ideal_calibration`
+gives them with its exact pose, the ground truth the calibration commands are checked against
+(``examples/calibration/sim-front.yaml``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+import sapien
+
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.markers import MarkerMap, MarkerSpec, marker_in_object
+from manigraph_shared.messages import CameraInfo, CompressedImage, ImageFormat
+from manigraph_sim.physics.video import look_at
+
+#: Tripod in front of the table and above it, looking at the middle of the workspace.
+TRIPOD_EYE = (0.92, 0.0, 0.45)
+TRIPOD_TARGET = (0.5, 0.0, 0.02)
+#: Pixels per marker cell in the printed textures (a 4x4 marker is 6 cells with its border).
+_CELL_PIXELS = 16
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """The rendered camera: where it stands, its image, and how often it is published."""
+
+    name: str = "front"
+    width: int = 640
+    height: int = 480
+    fovy_degrees: float = 60.0
+    eye: tuple[float, float, float] = TRIPOD_EYE
+    target: tuple[float, float, float] = TRIPOD_TARGET
+    hz: float = 2.0
+    format: ImageFormat = ImageFormat.JPEG
+    jpeg_quality: int = 95
+    #: Image noise: Gaussian, this many grey levels (0: none), and motion blur length (px).
+    noise_sigma: float = 0.0
+    blur_pixels: int = 0
+    seed: int = 0
+    #: Rendered at this many times the size and averaged down: a real sensor integrates
+    #: light over each pixel, so edges fall between pixels as they should (subpixel corners).
+    supersample: int = 2
+
+    def __post_init__(self) -> None:
+        if not (16 <= self.width <= 4096 and 16 <= self.height <= 4096):
+            raise ConfigError("camera.size", "width and height must be in [16, 4096]")
+        if not 10 <= self.fovy_degrees <= 120:
+            raise ConfigError("camera.fovy_degrees", "must be in [10, 120]")
+        if not 0 < self.hz <= 30:
+            raise ConfigError("camera-hz", "must be in (0, 30]")
+        if not 1 <= self.jpeg_quality <= 100:
+            raise ConfigError("camera.jpeg_quality", "must be in [1, 100]")
+        if not (0 <= self.noise_sigma <= 50 and 0 <= self.blur_pixels <= 31):
+            raise ConfigError("camera.noise", "sigma in [0, 50] grey levels, blur in [0, 31] px")
+        if np.linalg.norm(np.subtract(self.eye, self.target)) < 0.05:
+            raise ConfigError("camera.eye", "must be at least 5 cm from the target")
+
+
+class TripodCamera:
+    """A fixed camera in a rendering SAPIEN scene."""
+
+    def __init__(self, config: CameraConfig, scene: sapien.Scene) -> None:
+        self.config = config
+        self.scene = scene
+        self.camera = scene.add_camera(
+            config.name,
+            config.width * config.supersample,
+            config.height * config.supersample,
+            float(np.deg2rad(config.fovy_degrees)),
+            0.01,
+            10.0,
+        )
+        self.camera.entity.set_pose(look_at(np.array(config.eye), np.array(config.target)))
+        self.sequence = 0
+        self._rng = np.random.default_rng(config.seed)
+
+    def camera_matrix(self) -> np.ndarray:
+        """K of the published image in OpenCV's convention (pixel i's centre at i; SAPIEN's
+        projection puts it at i + 0.5)."""
+        k = np.asarray(self.camera.get_intrinsic_matrix(), dtype=float)
+        k[:2] /= self.config.supersample
+        k[0, 2] -= 0.5
+        k[1, 2] -= 0.5
+        return k
+
+    def base_T_camera(self) -> np.ndarray:
+        """The camera's optical frame (OpenCV: x right, y down, z forward) in the robot base
+        frame, 4 x 4."""
+        extrinsic = np.eye(4)
+        extrinsic[:3] = np.asarray(self.camera.get_extrinsic_matrix(), dtype=float)
+        return np.linalg.inv(extrinsic)
+
+    def render(self) -> np.ndarray:
+        """The current view as an RGB uint8 image, with the configured noise and blur."""
+        self.scene.update_render()
+        self.camera.take_picture()
+        rgba = self.camera.get_picture("Color")
+        rgb = (np.clip(rgba[..., :3], 0, 1) * 255).astype(np.uint8)
+        if self.config.supersample > 1:
+            size = (self.config.width, self.config.height)
+            rgb = cv2.resize(rgb, size, interpolation=cv2.INTER_AREA)
+        return degrade(rgb, self.config, self._rng)
+
+    def capture(self, stamp: float) -> CompressedImage:
+        rgb = self.render()
+        message = encode_image(rgb, self.config, stamp, self.sequence)
+        self.sequence += 1
+        return message
+
+    def info(self, stamp: float) -> CameraInfo:
+        return CameraInfo(
+            camera=self.config.name,
+            stamp=stamp,
+            width=self.config.width,
+            height=self.config.height,
+            camera_matrix=[float(v) for v in self.camera_matrix().ravel()],
+        )
+
+
+def degrade(rgb: np.ndarray, config: CameraConfig, rng: np.random.Generator) -> np.ndarray:
+    """Horizontal motion blur then Gaussian noise, as configured (none by default)."""
+    if config.blur_pixels > 1:
+        kernel = np.zeros((config.blur_pixels, config.blur_pixels), np.float32)
+        kernel[config.blur_pixels // 2, :] = 1.0 / config.blur_pixels
+        rgb = cv2.filter2D(rgb, -1, kernel)
+    if config.noise_sigma > 0:
+        noisy = rgb.astype(np.float32) + rng.normal(0, config.noise_sigma, rgb.shape)
+        rgb = np.clip(noisy, 0, 255).astype(np.uint8)
+    return rgb
+
+
+def encode_image(
+    rgb: np.ndarray, config: CameraConfig, stamp: float, sequence: int
+) -> CompressedImage:
+    bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
+    if config.format is ImageFormat.JPEG:
+        ok, data = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, config.jpeg_quality])
+    else:
+        ok, data = cv2.imencode(".png", bgr)
+    if not ok:
+        raise ConfigError("camera.format", f"OpenCV cannot encode {config.format}")
+    return CompressedImage(
+        camera=config.name,
+        stamp=stamp,
+        sequence=sequence,
+        format=config.format,
+        data=data.tobytes(),
+    )
+
+
+def ideal_calibration(config: CameraConfig) -> tuple[np.ndarray, np.ndarray]:
+    """The rendered camera's exact K (OpenCV convention) and optical frame in the robot base
+    frame, computed from its configuration without rendering."""
+    fy = config.height / 2 / np.tan(np.deg2rad(config.fovy_degrees) / 2)
+    k = np.array([[fy, 0, config.width / 2 - 0.5], [0, fy, config.height / 2 - 0.5], [0, 0, 1]])
+    pose = look_at(np.array(config.eye, dtype=float), np.array(config.target, dtype=float))
+    forward, left, up = pose.to_transformation_matrix()[:3, :3].T
+    base_T_camera = np.eye(4)
+    base_T_camera[:3, :3] = np.stack([-left, -up, forward], axis=1)
+    base_T_camera[:3, 3] = config.eye
+    return k, base_T_camera
+
+
+def write_calibration(path: str | Path, config: CameraConfig) -> None:
+    """The rendered camera's exact calibration, in the file format perception reads (OpenCV
+    FileStorage YAML: ``camera_matrix``, ``distortion_coefficients``, ``image_width``,
+    ``image_height``, ``base_T_camera``)."""
+    k, base_T_camera = ideal_calibration(config)
+    storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
+    storage.write("image_width", config.width)
+    storage.write("image_height", config.height)
+    storage.write("camera_matrix", k)
+    storage.write("distortion_coefficients", np.zeros((1, 5)))
+    storage.write("base_T_camera", base_T_camera)
+    storage.release()
+
+
+def light(scene: sapien.Scene) -> None:
+    """Even light from above (the video recorder's)."""
+    scene.set_ambient_light([0.45, 0.45, 0.45])
+    scene.add_directional_light([0.3, 0.5, -1.0], [0.8, 0.8, 0.8])
+
+
+# --- printed markers --------------------------------------------------------------------------
+def marker_shapes(
+    markers: MarkerMap, object_id: str, object_size: np.ndarray
+) -> list[sapien.render.RenderShapeTriangleMesh]:
+    """One textured square per marker of ``object_id``, lying 0.2 mm above its face, with a
+    white quiet zone of one cell round the marker where the face has room."""
+    dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, markers.dictionary))
+    return [_marker_quad(dictionary, spec, object_size) for spec in markers.for_object(object_id)]
+
+
+def _marker_quad(
+    dictionary: cv2.aruco.Dictionary, spec: MarkerSpec, object_size: np.ndarray
+) -> sapien.render.RenderShapeTriangleMesh:
+    pose = marker_in_object(spec, object_size)
+    right, up, normal = pose[:3, 0], pose[:3, 1], pose[:3, 2]
+    centre = pose[:3, 3] + normal * 2e-4
+    face_extent = min(
+        float(np.abs(right) @ object_size), float(np.abs(up) @ object_size), spec.size * 8 / 6
+    )
+    side = max(face_extent, spec.size)
+    marker_pixels = 6 * _CELL_PIXELS
+    texture_pixels = round(marker_pixels * side / spec.size)
+    image = np.full((texture_pixels, texture_pixels), 255, np.uint8)
+    start = (texture_pixels - marker_pixels) // 2
+    image[start : start + marker_pixels, start : start + marker_pixels] = (
+        cv2.aruco.generateImageMarker(dictionary, spec.id, marker_pixels)
+    )
+    rgba = np.dstack([image, image, image, np.full_like(image, 255)])
+    texture = sapien.render.RenderTexture2D(rgba, "R8G8B8A8Unorm", 1, "linear")
+    h = side / 2
+    corners = [
+        centre - right * h - up * h,
+        centre + right * h - up * h,
+        centre + right * h + up * h,
+        centre - right * h + up * h,
+    ]
+    vertices = np.array(corners, dtype=np.float32)
+    uvs = np.array([[0, 1], [1, 1], [1, 0], [0, 0]], dtype=np.float32)
+    triangles = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
+    normals = np.tile(normal, (4, 1)).astype(np.float32)
+    material = sapien.render.RenderMaterial(base_color=[1.0, 1.0, 1.0, 1.0], roughness=0.9)
+    material.base_color_texture = texture
+    return sapien.render.RenderShapeTriangleMesh(vertices, triangles, normals, uvs, material)

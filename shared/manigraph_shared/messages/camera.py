@@ -1,0 +1,92 @@
+"""Camera images, intrinsics and the markers detected in them (sim camera or a real one).
+
+Images travel encoded (JPEG or PNG bytes, base64 in the JSON), so a 640 x 480 frame is
+~50-150 kB on the wire, well under the payload limit. In MCAP logs the conversion in
+``manigraph_tools.foxglove_camera`` shows them in Foxglove's Image panel
+(``foxglove.CompressedImage``, ``foxglove.CameraCalibration``, ``foxglove.ImageAnnotations``).
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Annotated, ClassVar, Self
+
+from pydantic import ConfigDict, Field, model_validator
+
+from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp, Struct
+
+#: Largest encoded image accepted (the message must stay under ``MAX_PAYLOAD_BYTES`` after
+#: base64's 4/3).
+MAX_IMAGE_BYTES = 700_000
+
+Pixels = Annotated[float, Field(ge=-1e5, le=1e5, description="pixels")]
+
+
+class ImageFormat(StrEnum):
+    JPEG = "jpeg"
+    PNG = "png"
+
+
+class CompressedImage(Message):
+    """One encoded camera frame."""
+
+    key: ClassVar[str] = "manigraph/camera/{camera}/image"
+    delivery: ClassVar[Delivery] = Delivery.LATEST
+    publisher: ClassVar[str] = "sim (--camera) or a camera driver"
+    model_config = ConfigDict(ser_json_bytes="base64", val_json_bytes="base64")
+
+    camera: Identifier = Field(description="camera name (also its optical frame id)")
+    stamp: Stamp = Field(description="when the frame was exposed")
+    sequence: int = Field(ge=0, description="increases by one per frame")
+    format: ImageFormat
+    data: bytes = Field(max_length=MAX_IMAGE_BYTES, description="encoded image, base64 in JSON")
+
+
+class CameraInfo(Message):
+    """A camera's intrinsics: pinhole matrix and distortion, OpenCV conventions."""
+
+    key: ClassVar[str] = "manigraph/camera/{camera}/info"
+    delivery: ClassVar[Delivery] = Delivery.LATEST
+    publisher: ClassVar[str] = "sim (--camera) or a camera driver"
+
+    camera: Identifier
+    stamp: Stamp
+    width: int = Field(ge=1, le=8192, description="pixels")
+    height: int = Field(ge=1, le=8192, description="pixels")
+    camera_matrix: list[Pixels] = Field(
+        min_length=9, max_length=9, description="K, row-major 3 x 3 (fx 0 cx; 0 fy cy; 0 0 1)"
+    )
+    distortion: list[float] = Field(
+        default_factory=lambda: [0.0] * 5,
+        max_length=14,
+        description="OpenCV distortion coefficients (k1 k2 p1 p2 k3 ...)",
+    )
+
+    @model_validator(mode="after")
+    def _pinhole(self) -> Self:
+        k = self.camera_matrix
+        if k[0] <= 0 or k[4] <= 0 or k[8] != 1.0 or k[1] != 0 or k[3] != 0 or k[6:8] != [0, 0]:
+            raise ValueError("camera_matrix: must be [fx 0 cx; 0 fy cy; 0 0 1], fx, fy > 0")
+        return self
+
+
+class DetectedMarker(Struct):
+    """One square marker found in an image."""
+
+    id: int = Field(ge=0, le=4095, description="marker id in the dictionary")
+    corners: list[Pixels] = Field(
+        min_length=8, max_length=8, description="x, y of the 4 corners, clockwise from top-left"
+    )
+    object_id: str = Field("", max_length=64, description="object it belongs to ('' unknown)")
+
+
+class MarkerDetections(Message):
+    """The markers perception found in one camera frame (for viewers and logs)."""
+
+    key: ClassVar[str] = "manigraph/camera/{camera}/markers"
+    delivery: ClassVar[Delivery] = Delivery.LATEST
+    publisher: ClassVar[str] = "perception"
+
+    camera: Identifier
+    stamp: Stamp = Field(description="stamp of the image they were found in")
+    markers: list[DetectedMarker] = Field(max_length=1024)

@@ -1,0 +1,99 @@
+"""The world model's rules on hand-made observations: filling with hysteresis, staleness."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from manigraph_perception.detection import ObjectPose
+from manigraph_perception.world import WorldConfig, WorldModel, quaternion_of
+from manigraph_shared.messages import LayoutGoal, LayoutObject, TaskLayout, Vector3
+
+BLOCK = Vector3(x=0.04, y=0.04, z=0.04)
+
+
+def _layout() -> TaskLayout:
+    return TaskLayout(
+        episode_id="e1",
+        stamp=0.0,
+        objects=[
+            LayoutObject(id="block_0", category="block", size=BLOCK, position=BLOCK),
+        ],
+        goals=[LayoutGoal(id="goal_0", category="block", position=Vector3(x=0.5, y=0.0, z=0.02))],
+    )
+
+
+def _seen_at(dx: float) -> list[ObjectPose]:
+    pose = np.eye(4)
+    pose[:3, 3] = [0.5 + dx, 0.0, 0.02]
+    return [ObjectPose("block_0", pose, 1, 0.1)]
+
+
+def test_filled_has_hysteresis() -> None:
+    world = WorldModel(WorldConfig(fill_enter=0.02, fill_exit=0.03))  # as in the sim
+    world.set_layout(_layout())
+    filled = []
+    for t, dx in enumerate([0.025, 0.015, 0.025, 0.029, 0.035, 0.025, 0.01]):
+        world.update(_seen_at(dx), float(t))
+        scene = world.scene(float(t), float(t))
+        assert scene is not None
+        filled.append(scene.goal("goal_0").filled)
+    assert filled == [False, True, True, True, False, False, True]
+
+
+def test_a_world_without_frames_goes_stale() -> None:
+    world = WorldModel(WorldConfig(stale_after=2.0))
+    world.set_layout(_layout())
+    world.update(_seen_at(0.0), 10.0)
+    assert not world.stale(11.0)
+    assert world.stale(12.5)
+
+
+def test_a_new_episode_forgets_the_old_world() -> None:
+    world = WorldModel()
+    world.set_layout(_layout())
+    world.update(_seen_at(0.0), 1.0)
+    assert not world.set_layout(_layout())  # the same episode again: kept
+    assert world.filled_by == {"goal_0": "block_0"}
+    assert world.set_layout(_layout().model_copy(update={"episode_id": "e2"}))
+    assert world.filled_by == {} and world.stale(1.0)
+
+
+def test_quaternion_of_a_rotation() -> None:
+    angle = 0.3
+    rotation = np.array(
+        [[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]]
+    )
+    assert np.allclose(quaternion_of(rotation), [0, 0, np.sin(angle / 2), np.cos(angle / 2)])
+
+
+def test_a_carried_block_lands_on_its_goal_until_seen_elsewhere() -> None:
+    world = WorldModel()
+    world.set_layout(_layout())
+    start = world.beliefs["block_0"].position.copy()
+    world.on_action("other-episode", "block_0", "goal_0")  # not this episode: ignored
+    world.on_gripper(0.04)
+    world.on_gripper(0.08)
+    assert np.array_equal(world.beliefs["block_0"].position, start)
+    world.on_action("e1", "block_0", "goal_0")
+    world.on_gripper(0.08)  # opening before holding: nothing moved
+    assert np.array_equal(world.beliefs["block_0"].position, start)
+    world.on_gripper(0.04)  # closed on the block
+    world.on_gripper(0.08)  # let go at the goal
+    assert np.allclose(world.beliefs["block_0"].position, [0.5, 0.0, 0.02])
+    assert world.filled_by == {"goal_0": "block_0"}
+    world.update(_seen_at(0.1), 5.0)  # a marker says it is elsewhere: the marker wins
+    assert np.isclose(world.beliefs["block_0"].position[0], 0.6)
+
+
+def test_a_grasp_that_closes_on_nothing_moves_nothing() -> None:
+    world = WorldModel()
+    world.set_layout(_layout())
+    start = world.beliefs["block_0"].position.copy()
+    world.on_action("e1", "block_0", "goal_0")
+    world.on_gripper(0.0)  # closed on nothing (grasp slipped)
+    world.on_gripper(0.08)
+    assert np.array_equal(world.beliefs["block_0"].position, start)
+    world.on_gripper(0.04)
+    world.on_gripper(0.0)  # held, then lost on the way
+    world.on_gripper(0.08)
+    assert np.array_equal(world.beliefs["block_0"].position, start)
