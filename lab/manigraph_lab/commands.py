@@ -86,6 +86,8 @@ def _eval_run(args: argparse.Namespace) -> int:
         options.noise,
         task_file,
         episodes.label() if task_file is not None else None,
+        objects=episodes.objects,
+        preference=episodes.preference,
     )
     progress = None if episodes.json else sys.stderr
     summary = evaluate(load_policy(options.policy), spec, progress)

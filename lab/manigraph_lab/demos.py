@@ -27,6 +27,9 @@ class DemoProtocol:
     blocks: tuple[int, ...] = (3, 4)
     trajectories: int = 20
     seed: int = 0
+    #: The dishwasher task's dishes and preference (other tasks ignore them).
+    objects: int | None = None
+    preference: str | None = None
 
     def requests(self) -> list[EpisodeRequest]:
         combos = [(t, k) for t in self.tasks for k in self.blocks]
@@ -35,6 +38,8 @@ class DemoProtocol:
                 episode_id=f"demo-{i:03d}-{combos[i % len(combos)][0]}",
                 task=combos[i % len(combos)][0],
                 blocks=combos[i % len(combos)][1],
+                objects=self.objects,
+                preference=self.preference,
                 seed=self.seed + i,
             )
             for i in range(self.trajectories)

@@ -23,6 +23,8 @@ class EvalSpec:
     noise: float = 0.0
     task_file: str | None = None  # TOML text of a user layout
     task_file_name: str | None = None  # what episodes and the summary are named after
+    objects: int | None = None  # dishwasher
+    preference: str | None = None  # dishwasher
 
     def requests(self) -> list[EpisodeRequest]:
         label = self.task_file_name or f"{self.task}-{self.blocks}"
@@ -32,6 +34,8 @@ class EvalSpec:
                 task="file" if self.task_file is not None else self.task,
                 blocks=self.blocks,
                 stacks=self.stacks,
+                objects=self.objects,
+                preference=self.preference,
                 seed=self.seed + i,
                 task_file=self.task_file,
             )
@@ -76,6 +80,8 @@ def summarize(
         **({"task_file": spec.task_file_name} if spec.task_file is not None else {}),
         "blocks": spec.blocks,
         "stacks": spec.stacks,
+        **({"objects": spec.objects} if spec.objects is not None else {}),
+        **({"preference": spec.preference} if spec.preference is not None else {}),
         "noise": spec.noise,
         "seed": spec.seed,
         "episodes": count,

@@ -24,8 +24,8 @@ def handle_offset(cover_size: np.ndarray) -> float:
 
 def grasp_height(category: str, size: np.ndarray) -> float:
     """How far above an object's centre the TCP is put to grasp it, metres."""
-    if category == "block":
+    if category in ("block", "plate", "bowl"):  # dishes: at the centre, as a block
         return 0.0
     if category == "cover":
         return handle_offset(size)
-    raise ConfigError("category", f"'{category}' is not 'block' or 'cover'")
+    raise ConfigError("category", f"'{category}' is not 'block', 'cover', 'plate' or 'bowl'")

@@ -24,7 +24,10 @@ def checkpoint_of(log: Path) -> Path:
 
 
 def test_every_shipped_checkpoint_has_golden_logs() -> None:
-    shipped = {p.stem for p in (REPO / "checkpoints").glob("*.pt")}
+    # The dishwasher checkpoints are checked by tests/planner/gnn/test_dish_policy.py.
+    shipped = {
+        p.stem for p in (REPO / "checkpoints").glob("*.pt") if not p.stem.startswith("dishwasher-")
+    }
     assert shipped == {"gcn", "sage", "gated", "gat"}
     assert {log.stem.split("-")[0] for log in GOLDEN} == shipped
 

@@ -55,6 +55,12 @@ class EpisodeOptions(Options):
     task_file: Path | None = option(None, help="your own TOML layout (docs/running.md)")
     blocks: int = option(4, help="blocks per stack K", within=AT_LEAST_ONE)
     stacks: int = option(1, help="number of stacks s", within=AT_LEAST_ONE)
+    objects: int | None = option(
+        None, help="dishes (dishwasher: half plates, half bowls; default 10)", within=AT_LEAST_ONE
+    )
+    preference: str | None = option(
+        None, help="how to load the dishwasher: top-bottom (default) or left-right"
+    )
     episodes: int | None = option(
         None,
         help="run N episodes, then exit (up without it: keep the stack running)",
@@ -93,6 +99,8 @@ class EpisodeOptions(Options):
             name=about[0] if about else None,
             blocks=about[1] if about else self.blocks,
             stacks=self.stacks,
+            objects=self.objects,
+            preference=self.preference,
             episodes=episodes,
             seed=self.seed,
             timeout=self.timeout,
@@ -130,6 +138,8 @@ class EpisodePlan:
     #: Longest wait for every service to be back before an episode.
     recover_timeout: float = 60.0
     services: tuple[str, ...] = RUN_SERVICES
+    objects: int | None = None  # dishwasher
+    preference: str | None = None  # dishwasher
 
     def request(self, index: int) -> EpisodeRequest:
         seed = self.seed + index
@@ -138,6 +148,8 @@ class EpisodePlan:
             task="file" if self.task_file is not None else self.task,
             blocks=self.blocks,
             stacks=self.stacks,
+            objects=self.objects,
+            preference=self.preference,
             seed=seed,
             task_file=self.task_file,
         )

@@ -1,4 +1,6 @@
-"""PickAndPlace(object, goal): the primitive the policy's decisions are executed with."""
+"""PickAndPlace(object, goal): the primitive the policy's decisions are executed with; with a
+tray action (dishwasher), ToggleTray(rack) instead, and an ``orientation_index`` turns the
+object to that orientation as it is placed."""
 
 from __future__ import annotations
 
@@ -7,6 +9,7 @@ from collections.abc import Callable
 
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus, TrayAction
+from manigraph_shared.orientations import orientation
 from manigraph_skills.drivers.base import Motion, RobotDriver
 from manigraph_skills.grasp_choice import choose_grasps
 from manigraph_skills.workspace import Workspace
@@ -41,10 +44,12 @@ class PickAndPlace:
 
         status(SkillState.ACCEPTED)
         try:
-            if action.tray_action is not TrayAction.NONE:
-                raise SkillError("unsupported", f"{action.tray_action} needs a tray driver")
             if scene is None or scene.episode_id != action.episode_id:
                 raise SkillError("no_scene", f"no observation of episode {action.episode_id}")
+            if action.tray_action is not TrayAction.NONE:
+                self._toggle_tray(action, scene, status)
+                return status(SkillState.SUCCEEDED)
+
             try:
                 item = scene.object(action.object_id)
             except KeyError:
@@ -60,7 +65,25 @@ class PickAndPlace:
             pick, place = choose_grasps(scene, item, goal.position)
             decision = action.decision_id
             self.driver.pick(Motion(decision, item.id, item.position, item.orientation, pick))
-            self.driver.place(Motion(decision, item.id, goal.position, goal.orientation, place))
+            turn = goal.orientation
+            if action.orientation_index is not None:
+                turn = orientation(action.orientation_index)
+            self.driver.place(Motion(decision, item.id, goal.position, turn, place))
         except SkillError as exc:
             return status(SkillState.FAILED, exc.reason, exc.detail)
         return status(SkillState.SUCCEEDED)
+
+    def _toggle_tray(
+        self, action: Action, scene: Scene, status: Callable[[SkillState], SkillStatus]
+    ) -> None:
+        """ToggleTray: the rack the tray action names, if the scene has it."""
+        rack_id = action.tray_action.rack_id
+        assert rack_id is not None
+        try:
+            rack = scene.rack(rack_id)
+        except KeyError:
+            raise SkillError("unknown_rack", f"the scene has no {rack_id}") from None
+        if not self.workspace.contains(rack.position):
+            raise SkillError("outside_workspace", f"{rack_id} handle at {rack.position.as_tuple()}")
+        status(SkillState.RUNNING)
+        self.driver.toggle_tray(action.decision_id, rack_id, rack.position)

@@ -11,6 +11,7 @@ from manigraph_shared.messages.base import (
 )
 from manigraph_shared.messages.decision import (
     REFUSAL_REASONS,
+    TRAY_RACKS,
     Action,
     SkillState,
     SkillStatus,
@@ -24,12 +25,14 @@ from manigraph_shared.messages.scene import (
     Scene,
     SceneGoal,
     SceneObject,
+    SceneRack,
 )
 from manigraph_shared.messages.status import ServiceState, ServiceStatus
 
 __all__ = [
     "MAX_PAYLOAD_BYTES",
     "REFUSAL_REASONS",
+    "TRAY_RACKS",
     "Action",
     "Delivery",
     "EpisodeEvent",
@@ -45,6 +48,7 @@ __all__ = [
     "Scene",
     "SceneGoal",
     "SceneObject",
+    "SceneRack",
     "ServiceState",
     "ServiceStatus",
     "SkillState",

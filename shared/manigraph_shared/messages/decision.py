@@ -17,9 +17,24 @@ class TrayAction(StrEnum):
     TOGGLE_TOP = "toggle_top"
     TOGGLE_BOTTOM = "toggle_bottom"
 
+    @property
+    def rack_id(self) -> str | None:
+        """The id of the rack this action toggles (``SceneRack.id``), None for NONE."""
+        return TRAY_RACKS.get(self)
+
+
+#: The dishwasher's racks by the tray action that toggles them.
+TRAY_RACKS: dict[TrayAction, str] = {
+    TrayAction.TOGGLE_TOP: "rack_top",
+    TrayAction.TOGGLE_BOTTOM: "rack_bottom",
+}
+
 
 class Action(Message):
-    """Move ``object_id`` to ``goal_id`` (PickAndPlace), or toggle a tray."""
+    """Move ``object_id`` to ``goal_id`` (PickAndPlace), or toggle a tray.
+
+    A placement turns the object to ``orientation_index`` (``manigraph_shared.orientations``)
+    when set; a tray toggle names its rack (``TrayAction.rack_id``) as object and goal."""
 
     key: ClassVar[str] = "manigraph/planner/action"
     delivery: ClassVar[Delivery] = Delivery.RELIABLE
@@ -31,7 +46,7 @@ class Action(Message):
     object_id: Identifier
     goal_id: Identifier
     orientation_index: int | None = Field(
-        None, ge=0, le=5, description="one of six discrete orientations"
+        None, ge=0, le=5, description="one of six discrete orientations (orientations.py)"
     )
     tray_action: TrayAction = TrayAction.NONE
     policy: str = Field(max_length=128, description="name of the policy that decided")

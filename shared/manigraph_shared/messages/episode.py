@@ -21,6 +21,12 @@ class EpisodeRequest(Message):
     task: str = Field(max_length=64, description="registered task name, e.g. stack")
     blocks: int = Field(4, ge=1, le=64, description="blocks per stack (K)")
     stacks: int = Field(1, ge=1, le=16, description="number of stacks (s)")
+    objects: int | None = Field(
+        None, ge=1, le=64, description="dishes (dishwasher task): half plates, half bowls"
+    )
+    preference: str | None = Field(
+        None, max_length=64, description="how to load (dishwasher task): top-bottom, left-right"
+    )
     seed: int = Field(0, ge=0, le=2**32 - 1)
     max_steps: int | None = Field(None, ge=1, le=10_000, description="default: 2 x goals + 4")
     task_file: str | None = Field(

@@ -20,8 +20,10 @@ from manigraph_shared.messages.base import (
 class GripperOp(StrEnum):
     #: Close on ``object_id`` at ``position`` and lift it clear.
     PICK = "pick"
-    #: Lower the held object to ``position`` and open.
+    #: Lower the held object to ``position``, turned to ``orientation``, and open.
     PLACE = "place"
+    #: Grasp rack ``object_id``'s handle and pull it out, or push it in (dishwasher).
+    TOGGLE_TRAY = "toggle_tray"
 
 
 class RobotCommand(Message):
@@ -36,7 +38,9 @@ class RobotCommand(Message):
     op: GripperOp
     object_id: Identifier
     position: Vector3 = Field(description="grasp or release position of the object centre")
-    orientation: Quaternion = Quaternion()
+    orientation: Quaternion = Field(
+        Quaternion(), description="the object's orientation at grasp or at release"
+    )
     stamp: Stamp
 
 

@@ -25,13 +25,19 @@ class ObjectCategory(StrEnum):
 
     COVER = "cover"
     BLOCK = "block"
+    #: Dishes of the dishwasher task (docs/dishwasher.md).
+    PLATE = "plate"
+    BOWL = "bowl"
 
 
 class GoalCategory(StrEnum):
-    """Which category of object a goal accepts (the paper's node categories 2 and 3)."""
+    """Which category of object a goal accepts (the paper's node categories 2 and 3; a
+    dishwasher rack's slots take a plate or a bowl)."""
 
     BLOCK = "block"
     COVER = "cover"
+    PLATE = "plate"
+    BOWL = "bowl"
 
 
 class SceneObject(Struct):
@@ -61,6 +67,15 @@ class SceneGoal(Struct):
     orientation: Quaternion = Quaternion()
     filled: bool = Field(False, description="an object of the right category occupies it")
     visible: bool = Field(True, description="observed now (false: inside a closed box)")
+    rack: Identifier | None = Field(None, description="the dishwasher rack holding this slot")
+
+
+class SceneRack(Struct):
+    """A dishwasher rack that slides out (open) and in along its rail."""
+
+    id: Identifier
+    position: Vector3 = Field(description="centre of the rack's handle, metres")
+    open: bool = Field(description="pulled out: it can be loaded")
 
 
 class Scene(Message):
@@ -76,6 +91,9 @@ class Scene(Message):
     sequence: int = Field(ge=0, description="increases by one per published scene")
     objects: list[SceneObject] = Field(max_length=MAX_ENTITIES)
     goals: list[SceneGoal] = Field(max_length=MAX_ENTITIES)
+    racks: list[SceneRack] = Field(
+        default_factory=list, max_length=8, description="dishwasher racks (dishwasher task)"
+    )
     episode_ended: bool = Field(
         False, description="the world ended this episode (sim only): planners stop deciding"
     )
@@ -87,7 +105,11 @@ class Scene(Message):
     @model_validator(mode="after")
     def _unique_ids(self) -> Self:
         seen: set[str] = set()
-        entities: list[SceneObject | SceneGoal] = [*self.objects, *self.goals]
+        entities: list[SceneObject | SceneGoal | SceneRack] = [
+            *self.objects,
+            *self.goals,
+            *self.racks,
+        ]
         for entity in entities:
             if entity.id in seen:
                 raise ValueError(f"id: '{entity.id}' is used twice")
@@ -105,3 +127,9 @@ class Scene(Message):
             if item.id == goal_id:
                 return item
         raise KeyError(goal_id)
+
+    def rack(self, rack_id: str) -> SceneRack:
+        for item in self.racks:
+            if item.id == rack_id:
+                return item
+        raise KeyError(rack_id)

@@ -44,7 +44,7 @@ def mixed_scene(num_objects: int, num_goals: int, seed: int) -> Scene:
     objects = [
         SceneObject(
             id=f"o{i}",
-            category=rng.choice(list(ObjectCategory)),
+            category=rng.choice([ObjectCategory.COVER, ObjectCategory.BLOCK]),  # the block tasks'
             position=position(),
             size=SIZE,
             filled=rng.random() < 0.3,
@@ -55,7 +55,7 @@ def mixed_scene(num_objects: int, num_goals: int, seed: int) -> Scene:
     goals = [
         SceneGoal(
             id=f"g{i}",
-            category=rng.choice(list(GoalCategory)),
+            category=rng.choice([GoalCategory.BLOCK, GoalCategory.COVER]),
             position=position(),
             filled=rng.random() < 0.3,
             visible=rng.random() < 0.9,

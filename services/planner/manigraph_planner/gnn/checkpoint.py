@@ -32,8 +32,9 @@ from typing import Any, NamedTuple
 
 import torch
 
-from manigraph_planner.gnn.features import FEATURE_SPEC
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
+from manigraph_planner.gnn.models.config import feature_spec_for
+from manigraph_planner.gnn.models.dish_net import policy_net_for
 from manigraph_shared.errors import ConfigError, PolicyError
 
 __all__ = ["CheckpointInfo", "LoadedCheckpoint", "load_checkpoint", "save_checkpoint"]
@@ -106,7 +107,7 @@ def save_checkpoint(
         "format_version": FORMAT_VERSION,
         "manigraph_version": manigraph_version(),
         "model": net.config.to_dict(),
-        "feature_spec": FEATURE_SPEC.to_dict(),
+        "feature_spec": feature_spec_for(net.config.heads).to_dict(),
         "training_config": training_config,
         "data_hash": data_hash,
         "metrics": metrics,
@@ -144,9 +145,9 @@ def load_checkpoint(path: str | os.PathLike[str]) -> LoadedCheckpoint:
             f"checkpoint: {path} is not a readable manigraph checkpoint ({why})"
         ) from exc
     _check_envelope(payload, path)
-    _check_feature_spec(payload["feature_spec"])
     model = _model_config(payload["model"])
-    net = PolicyNet(model)
+    _check_feature_spec(payload["feature_spec"], model.heads)
+    net = policy_net_for(model)
     problem = _state_dict_problem(net, payload["state_dict"])
     if problem:
         raise PolicyError(
@@ -195,8 +196,9 @@ def _check_envelope(payload: Any, path: str | os.PathLike[str]) -> None:
             )
 
 
-def _check_feature_spec(stored: dict[str, Any]) -> None:
-    expected = FEATURE_SPEC.to_dict()
+def _check_feature_spec(stored: dict[str, Any], heads: str) -> None:
+    """``stored`` must be the spec this code builds for a policy with ``heads``."""
+    expected = feature_spec_for(heads).to_dict()
     for key in sorted(set(stored) | set(expected)):
         if key not in expected:
             raise PolicyError(f"checkpoint feature_spec.{key}: unexpected key")

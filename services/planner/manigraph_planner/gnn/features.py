@@ -29,6 +29,7 @@ from typing import Any
 import torch
 from torch import Tensor
 
+from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene
 
 __all__ = [
@@ -164,6 +165,12 @@ def scene_to_graph(scene: Scene) -> GraphState:
     rows: list[tuple[float, float, float, float, float]] = []
     object_ids: list[str] = []
     goal_ids: list[str] = []
+    for entity in [*scene.objects, *scene.goals]:
+        if entity.category not in _OBJECT_CODE and entity.category not in _GOAL_CODE:
+            raise PolicyError(
+                f"scene: '{entity.id}' is a {entity.category}; this policy knows blocks and "
+                "covers (a dishwasher scene needs a checkpoint with dishwasher heads)"
+            )
     for obj in scene.objects:
         if obj.visible:
             p = obj.position

@@ -166,6 +166,13 @@ def ranked_compatible_pairs(
 _GOAL_CODE_FOR = torch.tensor([3.0, 2.0])
 
 
-def load_gnn_policy(path: Path) -> GNNPolicy:
-    """The ``.pt`` policy file loader (registered in ``policies.base.POLICY_FILE_LOADERS``)."""
-    return GNNPolicy.from_checkpoint(path)
+def load_gnn_policy(path: Path) -> Policy:
+    """The ``.pt`` policy file loader (registered in ``policies.base.POLICY_FILE_LOADERS``):
+    a :class:`GNNPolicy`, or a dishwasher policy for a checkpoint with ``dishwasher`` heads."""
+    from manigraph_planner.gnn.models.dish_net import DishPolicyNet
+    from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
+
+    net, info = load_checkpoint(path)
+    if isinstance(net, DishPolicyNet):
+        return DishwasherGNNPolicy(net, info)
+    return GNNPolicy(net, info)

@@ -15,8 +15,12 @@ from manigraph_shared.messages import (
     RobotFeedback,
     Scene,
 )
+from manigraph_shared.orientations import nearest_orientation
 from manigraph_shared.workspace import Workspace
 from manigraph_sim.backend import EpisodeBackend
+from manigraph_sim.dishwasher.model import DishwasherLayout
+from manigraph_sim.dishwasher.scene import dishwasher_scene
+from manigraph_sim.dishwasher.world import DishwasherWorld
 from manigraph_sim.geometric.world import GeometricWorld
 from manigraph_sim.manifest import GRIPPER
 from manigraph_sim.observation import observed_scene
@@ -42,6 +46,8 @@ class GeometricBackend(EpisodeBackend):
         #: The box tasks' geometry (None: the default, the demonstrations').
         self.boxes = boxes
         self.world: GeometricWorld | None = None
+        #: The dishwasher task's world (then ``world`` is None).
+        self.dishwasher: DishwasherWorld | None = None
 
     @classmethod
     def from_options(cls, options: Any) -> GeometricBackend:
@@ -56,6 +62,12 @@ class GeometricBackend(EpisodeBackend):
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
         episode = episode_layout(request, self.boxes)
         layout = episode.layout
+        if isinstance(layout, DishwasherLayout):
+            self.world, self.dishwasher = None, DishwasherWorld(layout)
+            # Success: every dish loaded as preferred, and both racks pushed in.
+            required = {dish.id for dish in layout.dishes} | {rack.id for rack in layout.racks}
+            return self.begin(request, required, episode.max_steps, stamp)
+        self.dishwasher = None
         self.world = GeometricWorld(
             layout.bodies,
             layout.goals,
@@ -66,7 +78,14 @@ class GeometricBackend(EpisodeBackend):
         return self.begin(request, layout.required_goals(), episode.max_steps, stamp)
 
     def scene(self, stamp: float) -> Scene | None:
-        if self.world is None or self.request is None:
+        if self.request is None:
+            return None
+        if self.dishwasher is not None:
+            self.sequence += 1
+            return dishwasher_scene(
+                self.dishwasher, self.request.episode_id, stamp, self.sequence, self.ended
+            )
+        if self.world is None:
             return None
         self.sequence += 1
         return observed_scene(self.world, self.request.episode_id, stamp, self.sequence, self.ended)
@@ -75,11 +94,15 @@ class GeometricBackend(EpisodeBackend):
         try:
             if self.halted.is_set():
                 raise SkillError("stopped", "emergency stop engaged")
-            if self.world is None or self.ended:
-                raise SkillError("no_episode", "no episode is running")
             if not self.workspace.contains(command.position):
                 raise SkillError("outside_workspace", f"{command.position.as_tuple()}")
-            if command.op is GripperOp.PICK:
+            if self.dishwasher is not None and not self.ended:
+                self._execute_dishwasher(self.dishwasher, command)
+            elif self.world is None or self.ended:
+                raise SkillError("no_episode", "no episode is running")
+            elif command.op is GripperOp.TOGGLE_TRAY:
+                raise SkillError("unsupported", "this task has no trays")
+            elif command.op is GripperOp.PICK:
                 # Refused before counting: a pick of nothing is not a step of the episode.
                 if command.object_id not in self.world.bodies:
                     raise SkillError("unknown_object", command.object_id)
@@ -99,12 +122,34 @@ class GeometricBackend(EpisodeBackend):
         self._check_end()
         return RobotFeedback(command_id=command.command_id, ok=True, stamp=stamp)
 
+    def _execute_dishwasher(self, world: DishwasherWorld, command: RobotCommand) -> None:
+        """Picks and rack toggles count against the step budget."""
+        if command.op is GripperOp.PLACE:
+            position = np.array(command.position.as_tuple())
+            world.place(command.object_id, position, nearest_orientation(command.orientation))
+            return
+        self.steps += 1
+        if command.op is GripperOp.PICK:
+            world.pick(command.object_id)
+        else:
+            world.toggle(command.object_id)
+
     def _check_end(self) -> None:
+        if self.dishwasher is not None:
+            if self.ended or self.dishwasher.held is not None:
+                return
+            if self.dishwasher.done() or self.steps >= self.max_steps:
+                self.ended = True
+            return
         if self.world is None or self.ended or self.world.held is not None:
             return
         if self.required_filled() == len(self.required) or self.steps >= self.max_steps:
             self.ended = True
 
     def occupied_goals(self) -> set[str]:
+        if self.dishwasher is not None:
+            world = self.dishwasher
+            loaded = {d.id for d in world.dishes.values() if world.loaded_as_preferred(d)}
+            return loaded | {r.id for r in world.racks.values() if not r.open}
         assert self.world is not None
         return set(self.world.occupancy())

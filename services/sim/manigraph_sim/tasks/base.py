@@ -19,6 +19,9 @@ class TaskParams:
     stacks: int = 1
     #: The box tasks' geometry; None: the geometric world's (``BoxGeometry()``).
     boxes: BoxGeometry | None = None
+    #: The dishwasher task's dishes (None: its default) and loading preference.
+    objects: int | None = None
+    preference: str | None = None
 
 
 class Task(ABC):

@@ -8,6 +8,7 @@ import numpy as np
 
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest
+from manigraph_sim.dishwasher.model import DishwasherLayout
 from manigraph_sim.tasks.base import Task, TaskParams, get_task
 from manigraph_sim.tasks.box_geometry import BoxGeometry
 from manigraph_sim.tasks.task_file import FileTask, parse_task_file
@@ -31,8 +32,15 @@ def episode_layout(request: EpisodeRequest, boxes: BoxGeometry | None = None) ->
             raise TaskError("task_file: task 'file' needs the task file's text")
         task: Task = FileTask(parse_task_file(request.task_file))
     else:
-        params = TaskParams(blocks=request.blocks, stacks=request.stacks, boxes=boxes)
+        params = TaskParams(
+            blocks=request.blocks,
+            stacks=request.stacks,
+            boxes=boxes,
+            objects=request.objects,
+            preference=request.preference,
+        )
         task = get_task(request.task, params)
     layout = task.layout(np.random.default_rng(request.seed))
     layout.validate()
-    return EpisodeLayout(layout, request.max_steps or task.max_steps(len(layout.goals)))
+    size = len(layout.dishes) if isinstance(layout, DishwasherLayout) else len(layout.goals)
+    return EpisodeLayout(layout, request.max_steps or task.max_steps(size))

@@ -11,6 +11,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any
 
+from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Quaternion, Vector3
 from manigraph_skills.obstacles import Obstacle
 
@@ -66,6 +67,12 @@ class RobotDriver(ABC):
     @abstractmethod
     def place(self, motion: Motion) -> None:
         """Carry the held object to the motion's position and release it."""
+
+    def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3) -> None:
+        """Grasp rack ``rack_id``'s handle (at ``handle``) and pull the rack out or push it in
+        (dishwasher). A driver that cannot refuses with reason ``unsupported``."""
+        name = getattr(self, "name", type(self).__name__)
+        raise SkillError("unsupported", f"the {name} driver cannot toggle a tray yet")
 
     @abstractmethod
     def stop(self) -> None:

@@ -13,7 +13,13 @@ from typing import Protocol
 
 from manigraph_shared.errors import SkillError
 from manigraph_shared.ids import derived_id
-from manigraph_shared.messages import GripperOp, RobotCommand, RobotFeedback
+from manigraph_shared.messages import (
+    GripperOp,
+    Quaternion,
+    RobotCommand,
+    RobotFeedback,
+    Vector3,
+)
 from manigraph_skills.drivers.base import Motion, RobotDriver
 
 
@@ -67,3 +73,7 @@ class GripperDriver(RobotDriver):
 
     def place(self, motion: Motion) -> None:
         self._send(GripperOp.PLACE, motion)
+
+    def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3) -> None:
+        """One ``toggle_tray`` command naming the rack, at its handle."""
+        self._send(GripperOp.TOGGLE_TRAY, Motion(decision_id, rack_id, handle, Quaternion()))

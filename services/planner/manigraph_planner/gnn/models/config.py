@@ -6,11 +6,23 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from manigraph_planner.gnn.features import FEATURE_SPEC
+from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC
+from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec
 from manigraph_planner.gnn.models.backbone import ARCHITECTURES
 from manigraph_shared.errors import ConfigError
 
-__all__ = ["ModelConfig"]
+__all__ = ["HEADS", "ModelConfig", "feature_spec_for"]
+
+#: The policy's output heads -> the feature spec its graph states are built with.
+#: ``object-goal``: the paper's node logits (object and goal); ``dishwasher``: those plus an
+#: orientation per object node and a tray action per graph (four heads).
+HEADS: dict[str, FeatureSpec] = {"object-goal": FEATURE_SPEC, "dishwasher": DISH_FEATURE_SPEC}
+
+
+def feature_spec_for(heads: str) -> FeatureSpec:
+    if heads not in HEADS:
+        raise ConfigError("heads", f"'{heads}' is not one of {', '.join(HEADS)}")
+    return HEADS[heads]
 
 
 @dataclass(frozen=True)
@@ -21,11 +33,13 @@ class ModelConfig:
         architecture: a registered architecture (``gcn``, ``sage``, ``gated``, ``gat``).
         hidden_channels: units per hidden layer (the paper: 64).
         num_layers: message-passing layers (the paper: 3).
-        in_channels: node feature size; must match the feature spec (5).
+        in_channels: node feature size; must match the heads' feature spec (5 for
+            ``object-goal``; default: that size).
         feature_scale: fixed, non-learned per-feature multipliers applied before the first
             layer. All ones (the default) feeds the paper's raw features; e.g.
             ``(1, 10, 10, 10, 1)`` would express positions in decimetres. Recorded in the
-            checkpoint so inference scales exactly like training.
+            checkpoint so inference scales exactly like training. Default: all ones.
+        heads: ``object-goal`` (the block tasks) or ``dishwasher`` (:data:`HEADS`).
 
     Raises:
         ConfigError: (a ``ValueError``) naming the offending field.
@@ -34,21 +48,28 @@ class ModelConfig:
     architecture: str
     hidden_channels: int = 64
     num_layers: int = 3
-    in_channels: int = FEATURE_SPEC.num_features
-    feature_scale: tuple[float, ...] = (1.0,) * FEATURE_SPEC.num_features
+    in_channels: int | None = None
+    feature_scale: tuple[float, ...] | None = None
+    heads: str = "object-goal"
 
     def __post_init__(self) -> None:
         ARCHITECTURES.check(self.architecture)  # ConfigError naming the registered ones
+        spec = feature_spec_for(self.heads)
+        if self.in_channels is None:
+            object.__setattr__(self, "in_channels", spec.num_features)
+        if self.feature_scale is None:
+            object.__setattr__(self, "feature_scale", (1.0,) * spec.num_features)
         for name in ("hidden_channels", "num_layers", "in_channels"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 4096:
                 raise ConfigError(name, f"must be an integer in [1, 4096], got {value!r}")
-        if self.in_channels != FEATURE_SPEC.num_features:
+        if self.in_channels != spec.num_features:
             raise ConfigError(
                 "in_channels",
-                f"must equal the feature spec's {FEATURE_SPEC.num_features} features, "
+                f"must equal the feature spec's {spec.num_features} features, "
                 f"got {self.in_channels}",
             )
+        assert self.feature_scale is not None
         scale = tuple(self.feature_scale)
         if len(scale) != self.in_channels or not all(
             isinstance(s, int | float) and math.isfinite(s) and s != 0 for s in scale
@@ -66,7 +87,8 @@ class ModelConfig:
             "hidden_channels": self.hidden_channels,
             "num_layers": self.num_layers,
             "in_channels": self.in_channels,
-            "feature_scale": list(self.feature_scale),
+            "feature_scale": list(self.feature_scale or ()),
+            "heads": self.heads,
         }
 
     @classmethod

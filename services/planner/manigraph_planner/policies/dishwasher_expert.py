@@ -1,0 +1,121 @@
+"""The dishwasher's scripted expert: what the five demonstrations of a preference show."""
+
+from __future__ import annotations
+
+import zlib
+
+from manigraph_planner.policies.base import Decision, Policy, register_policy
+from manigraph_shared.messages import (
+    TRAY_RACKS,
+    GoalCategory,
+    ObjectCategory,
+    Scene,
+    SceneGoal,
+    SceneObject,
+    TrayAction,
+)
+from manigraph_shared.orientations import nearest_orientation
+
+TOP, BOTTOM = TRAY_RACKS[TrayAction.TOGGLE_TOP], TRAY_RACKS[TrayAction.TOGGLE_BOTTOM]
+_TOGGLE = {rack: action for action, rack in TRAY_RACKS.items()}
+_DISHES = (ObjectCategory.PLATE, ObjectCategory.BOWL)
+#: Slots nearer than this (metres) to a dish hold it.
+_IN_SLOT = 1e-3
+
+
+def preferred(preference: str, dish: ObjectCategory, slot: SceneGoal) -> bool:
+    """Whether ``preference`` lets ``dish`` stand in ``slot`` (the sim's rule, read off the
+    scene: a slot's rack, its category, and its side, left being y < 0)."""
+    if slot.category.value != dish.value:
+        return False
+    if preference == "top-bottom":
+        return slot.rack == (TOP if dish is ObjectCategory.BOWL else BOTTOM)
+    return slot.rack == TOP and (slot.position.y < 0) == (dish is ObjectCategory.PLATE)
+
+
+class DishwasherExpert(Policy):
+    """Loads the top rack first (the bottom one is loaded only with the top one in):
+
+    1. while a dish whose preferred rack is the top one is not loaded as preferred: pull the
+       top rack out if it is in, else put the dish with the smallest id into a free preferred
+       slot (:meth:`_free_slot`), in that slot's orientation;
+    2. push the top rack in;
+    3. the same for the bottom rack, then push it in. Then there is nothing left to do.
+    """
+
+    preference: str
+
+    def decide(self, scene: Scene) -> Decision | None:
+        racks = {rack.id: rack for rack in scene.racks}
+        if TOP not in racks or BOTTOM not in racks:
+            return None
+        pending = {TOP: [], BOTTOM: []}  # type: dict[str, list[SceneObject]]
+        for dish in sorted(scene.objects, key=lambda o: o.id):
+            if dish.category not in _DISHES or self._loaded(scene, dish):
+                continue
+            pending[self._rack_for(dish.category)].append(dish)
+        for rack_id in (TOP, BOTTOM):
+            rack = racks[rack_id]
+            if pending[rack_id]:
+                if not rack.open:
+                    return self._toggle(rack_id)
+                dish = pending[rack_id][0]
+                slot = self._free_slot(scene, dish)
+                if slot is None:
+                    return None
+                return Decision(dish.id, slot.id, nearest_orientation(slot.orientation))
+            if rack.open:
+                return self._toggle(rack_id)
+        return None
+
+    def _rack_for(self, dish: ObjectCategory) -> str:
+        if self.preference == "top-bottom" and dish is ObjectCategory.PLATE:
+            return BOTTOM
+        return TOP
+
+    def _loaded(self, scene: Scene, dish: SceneObject) -> bool:
+        for slot in scene.goals:
+            if slot.category is GoalCategory.BLOCK or slot.category is GoalCategory.COVER:
+                continue
+            gap = max(
+                abs(a - b)
+                for a, b in zip(slot.position.as_tuple(), dish.position.as_tuple(), strict=True)
+            )
+            if gap < _IN_SLOT:
+                return preferred(self.preference, dish.category, slot) and nearest_orientation(
+                    dish.orientation
+                ) == nearest_orientation(slot.orientation)
+        return False
+
+    def _free_slot(self, scene: Scene, dish: SceneObject) -> SceneGoal | None:
+        """A free preferred slot, drawn by a hash of episode, dish and slot: deterministic,
+        yet over demonstrations every slot is shown, so a policy learns 'any free slot on
+        the preferred rack and side' rather than one slot order it cannot extend."""
+        free = [
+            g for g in scene.goals if not g.filled and preferred(self.preference, dish.category, g)
+        ]
+        key = f"{scene.episode_id}/{dish.id}/"
+        return min(free, key=lambda g: (zlib.crc32((key + g.id).encode()), g.id)) if free else None
+
+    @staticmethod
+    def _toggle(rack_id: str) -> Decision:
+        return Decision(rack_id, rack_id, None, _TOGGLE[rack_id])
+
+
+@register_policy("dishwasher-top-bottom")
+class TopBottomExpert(DishwasherExpert):
+    """The expert for bowls in the top rack, plates in the bottom rack."""
+
+    preference = "top-bottom"
+
+
+@register_policy("dishwasher-left-right")
+class LeftRightExpert(DishwasherExpert):
+    """The expert for everything on top: bowls on the right, plates on the left."""
+
+    preference = "left-right"
+
+
+def dishwasher_expert(preference: str) -> DishwasherExpert:
+    """The expert of ``preference`` (``top-bottom`` or ``left-right``)."""
+    return TopBottomExpert() if preference == "top-bottom" else LeftRightExpert()

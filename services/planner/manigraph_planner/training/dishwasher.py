@@ -1,0 +1,245 @@
+"""Imitation for the dishwasher's four-headed policy: the sum of four cross-entropies.
+
+Samples come from any MCAP log with scenes and actions (``manigraph demos --task dishwasher``
+or a recorded run), paired as in :mod:`~manigraph_planner.training.dataset`. The loss of one
+decision is
+
+.. math::
+    \\mathcal{L} = \\mathrm{CE}(t) + [t = \\text{none}]\\,\\big(\\mathrm{CE}(o) + \\mathrm{CE}(g)
+    + \\mathrm{CE}(r)\\big)
+
+tray action :math:`t`, object :math:`o` (softmax over dish nodes), goal :math:`g` (over slot
+nodes) and orientation :math:`r` (at the object's node): a rack toggle names no dish, so only
+its tray term counts.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import random
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import torch
+import torch.nn.functional as F
+from torch import Tensor
+
+from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC, TRAY_ACTIONS, dish_scene_to_graph
+from manigraph_planner.gnn.models import ModelConfig
+from manigraph_planner.gnn.models.dish_net import DishPolicyNet
+from manigraph_shared.errors import ConfigError, LogError
+from manigraph_shared.mcap_log import read_log
+from manigraph_shared.messages import Action, Scene, TrayAction
+
+_NONE = TRAY_ACTIONS.index(TrayAction.NONE)
+
+__all__ = ["DishSample", "DishTrainConfig", "dish_loss", "load_dish_demonstrations", "train_dish"]
+
+
+@dataclass(frozen=True)
+class DishSample:
+    x: Tensor  # (N, 17)
+    num_objects: int
+    num_goals: int
+    object_index: int  # among the dish nodes (0 for a toggle)
+    goal_index: int  # among the slot nodes (0 for a toggle)
+    orientation: int  # 0 for a toggle
+    tray: int  # index into TRAY_ACTIONS
+
+
+@dataclass(frozen=True)
+class DishDemos:
+    samples: list[DishSample]
+    data_hash: str
+    episodes: int
+
+
+def load_dish_demonstrations(paths: Iterable[Path]) -> DishDemos:
+    scenes: dict[tuple[str, int], Scene] = {}
+    actions: list[Action] = []
+    for path in sorted(paths):
+        if not path.is_file():
+            raise LogError(f"demonstrations: no such file: {path}")
+        for item in read_log(path, [Scene.key, Action.key]):
+            message = item.decode()
+            if isinstance(message, Scene):
+                scenes[(message.episode_id, message.sequence)] = message
+            elif isinstance(message, Action):
+                actions.append(message)
+    digest = hashlib.sha256()
+    samples, episodes = [], set()
+    for action in actions:
+        scene = scenes.get((action.episode_id, action.scene_sequence))
+        if scene is None:
+            continue
+        graph = dish_scene_to_graph(scene)
+        tray = TRAY_ACTIONS.index(action.tray_action)
+        if action.tray_action is TrayAction.NONE:
+            if action.object_id not in graph.object_ids or action.goal_id not in graph.goal_ids:
+                continue
+            o, g = graph.object_ids.index(action.object_id), graph.goal_ids.index(action.goal_id)
+            r = action.orientation_index or 0
+        else:
+            o = g = r = 0
+        samples.append(DishSample(graph.x, graph.num_objects, graph.num_goals, o, g, r, tray))
+        episodes.add(action.episode_id)
+        digest.update(scene.encode())
+        digest.update(action.encode())
+    if not samples:
+        raise LogError("demonstrations: no dishwasher action could be paired with its scene")
+    return DishDemos(samples, digest.hexdigest()[:16], len(episodes))
+
+
+_FILLED = DISH_FEATURE_SPEC.names.index("filled")
+_OPEN = DISH_FEATURE_SPEC.names.index("open")
+_XYZ = slice(DISH_FEATURE_SPEC.names.index("x"), DISH_FEATURE_SPEC.names.index("z") + 1)
+
+
+def drop_dishes(sample: DishSample, rng: random.Random) -> DishSample:
+    """A copy of ``sample`` with a random subset of its dishes removed, where that cannot
+    change the demonstrated decision: a placement keeps its dish; a toggle that pulls a rack
+    out (it is in now) keeps one dish still to load of each kind, as whichever preference
+    it serves, that rack is pulled out for one of them; anything else may go. A removed
+    dish frees the slot it stood in. This shows the network fewer dishes than the
+    demonstrations held, without any further expert label."""
+    k = sample.num_objects
+    x = sample.x
+    keep = [rng.random() < 0.5 for _ in range(k)]
+    if sample.tray == _NONE:
+        keep[sample.object_index] = True
+    elif bool(x[k + sample.num_goals + sample.tray, _OPEN] == 0):  # pulls the rack out
+        for kind in (0, 1):  # the plate and bowl one-hot columns
+            pending = [i for i in range(k) if x[i, kind] == 1 and x[i, _FILLED] == 0]
+            if pending:
+                keep[rng.choice(pending)] = True
+    if all(keep):
+        return sample
+    x = x.clone()
+    slots = x[k : k + sample.num_goals]
+    for i in range(k):
+        if not keep[i] and x[i, _FILLED] == 1:
+            near = (slots[:, _XYZ] - x[i, _XYZ]).abs().amax(dim=1) < 1e-3
+            slots[near, _FILLED] = 0.0
+    rows = [i for i in range(k) if keep[i]] + list(range(k, x.shape[0]))
+    new_index = sum(keep[: sample.object_index]) if sample.tray == _NONE else 0
+    return DishSample(
+        x[rows],
+        sum(keep),
+        sample.num_goals,
+        new_index,
+        sample.goal_index,
+        sample.orientation,
+        sample.tray,
+    )
+
+
+@dataclass(frozen=True)
+class DishTrainConfig:
+    architecture: str = "sage"
+    seed: int = 0
+    epochs: int = 300
+    learning_rate: float = 3e-3
+    hidden_channels: int = 64
+    num_layers: int = 3
+    #: Positions in decimetres: the racks' and sides' differences become O(1).
+    position_scale: float = 10.0
+    #: Copies of each sample with dishes dropped (:func:`drop_dishes`), drawn once.
+    copies: int = 4
+
+    def __post_init__(self) -> None:
+        if self.epochs < 1:
+            raise ConfigError("epochs", "must be >= 1")
+        if self.learning_rate <= 0:
+            raise ConfigError("learning_rate", "must be > 0")
+        self.model_config()
+
+    def model_config(self) -> ModelConfig:
+        scale = [1.0] * DISH_FEATURE_SPEC.num_features
+        for name in ("x", "y", "z"):
+            scale[DISH_FEATURE_SPEC.names.index(name)] = self.position_scale
+        return ModelConfig(
+            architecture=self.architecture,
+            hidden_channels=self.hidden_channels,
+            num_layers=self.num_layers,
+            feature_scale=tuple(scale),
+            heads="dishwasher",
+        )
+
+    def to_dict(self) -> dict[str, object]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class _Batch:
+    x: Tensor
+    mask: Tensor
+    objects: Tensor  # (B, N) bool
+    goals: Tensor  # (B, N) bool
+    object_node: Tensor
+    goal_node: Tensor
+    orientation: Tensor
+    tray: Tensor
+    place: Tensor  # (B,) bool: a PickAndPlace sample
+
+
+def _batch(samples: list[DishSample]) -> _Batch:
+    n = max(int(s.x.shape[0]) for s in samples)
+    b = len(samples)
+    x = torch.zeros(b, n, DISH_FEATURE_SPEC.num_features)
+    mask = torch.zeros(b, n, dtype=torch.bool)
+    objects = torch.zeros(b, n, dtype=torch.bool)
+    goals = torch.zeros(b, n, dtype=torch.bool)
+    for i, s in enumerate(samples):
+        x[i, : s.x.shape[0]] = s.x
+        mask[i, : s.x.shape[0]] = True
+        objects[i, : s.num_objects] = True
+        goals[i, s.num_objects : s.num_objects + s.num_goals] = True
+    return _Batch(
+        x,
+        mask,
+        objects,
+        goals,
+        torch.tensor([s.object_index for s in samples]),
+        torch.tensor([s.num_objects + s.goal_index for s in samples]),
+        torch.tensor([s.orientation for s in samples]),
+        torch.tensor([s.tray for s in samples]),
+        torch.tensor([s.tray == TRAY_ACTIONS.index(TrayAction.NONE) for s in samples]),
+    )
+
+
+def dish_loss(net: DishPolicyNet, samples: list[DishSample]) -> Tensor:
+    """The mean over ``samples`` of the sum of the four cross-entropies (module docstring)."""
+    batch = _batch(samples)
+    heads = net.heads_complete(batch.x, batch.mask)
+    loss = F.cross_entropy(heads.tray, batch.tray, reduction="none")
+    rows = torch.arange(len(samples))
+    object_logits = heads.node.masked_fill(~batch.objects, float("-inf"))
+    goal_logits = heads.node.masked_fill(~batch.goals, float("-inf"))
+    orientation_logits = heads.orientation[rows, batch.object_node]
+    place_terms = (
+        F.cross_entropy(object_logits, batch.object_node, reduction="none")
+        + F.cross_entropy(goal_logits, batch.goal_node, reduction="none")
+        + F.cross_entropy(orientation_logits, batch.orientation, reduction="none")
+    )
+    return (loss + torch.where(batch.place, place_terms, torch.zeros_like(loss))).mean()
+
+
+def train_dish(demos: DishDemos, config: DishTrainConfig) -> tuple[DishPolicyNet, dict]:
+    """Full-batch Adam on the demonstrations; returns the net and its final metrics."""
+    torch.manual_seed(config.seed)
+    random.seed(config.seed)
+    net = DishPolicyNet(config.model_config())
+    rng = random.Random(config.seed)
+    samples = list(demos.samples)
+    samples += [drop_dishes(s, rng) for _ in range(config.copies) for s in demos.samples]
+    optimiser = torch.optim.Adam(net.parameters(), lr=config.learning_rate)
+    net.train()
+    loss = torch.tensor(0.0)
+    for _ in range(config.epochs):
+        optimiser.zero_grad()
+        loss = dish_loss(net, samples)
+        loss.backward()
+        optimiser.step()
+    net.eval()
+    return net, {"final_loss": float(loss.detach()), "samples": len(samples)}

@@ -1,0 +1,62 @@
+"""The six discrete orientations of the dishwasher task (paper, section 'Dishwasher loading').
+
+An action's ``orientation_index`` names one of them; a placed object takes it. Declared once
+here so the sim, the skills and the planner read an index the same way. Index ``i`` says which
+of the object's axes points up (world +z):
+
+====  ==================  ======================================================
+ i    object axis up      e.g.
+====  ==================  ======================================================
+ 0    +z                  lying as modelled: a plate flat, a bowl opening up
+ 1    -z                  upside down (flipped about x): a bowl in its rack slot
+ 2    +y                  on its rim (+90 deg about x): a plate standing in its slot
+ 3    -y                  on its rim, the other way (-90 deg about x)
+ 4    +x                  on its side (-90 deg about y)
+ 5    -x                  on its side, the other way (+90 deg about y)
+====  ==================  ======================================================
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Final
+
+from manigraph_shared.messages.base import Quaternion
+
+_H = math.sqrt(0.5)
+
+#: Index -> quaternion (x, y, z, w) that takes the object's frame to the world's.
+ORIENTATIONS: Final[tuple[Quaternion, ...]] = (
+    Quaternion(),
+    Quaternion(x=1.0, w=0.0),
+    Quaternion(x=_H, w=_H),
+    Quaternion(x=-_H, w=_H),
+    Quaternion(y=-_H, w=_H),
+    Quaternion(y=_H, w=_H),
+)
+NUM_ORIENTATIONS: Final = len(ORIENTATIONS)
+#: Names for logs and docs.
+ORIENTATION_NAMES: Final = (
+    "up",
+    "upside-down",
+    "rim-y",
+    "rim-y-flipped",
+    "side-x",
+    "side-x-flipped",
+)
+#: What the dishwasher task asks of each dish type in its slot.
+UPRIGHT: Final = 2
+UPSIDE_DOWN: Final = 1
+
+
+def orientation(index: int) -> Quaternion:
+    """The quaternion of orientation ``index``; ``ValueError`` naming the field if unknown."""
+    if not 0 <= index < NUM_ORIENTATIONS:
+        raise ValueError(f"orientation_index: must be in 0..{NUM_ORIENTATIONS - 1}, got {index}")
+    return ORIENTATIONS[index]
+
+
+def nearest_orientation(q: Quaternion) -> int:
+    """The index of the discrete orientation closest to ``q`` (largest |dot product|)."""
+    dots = [abs(q.x * o.x + q.y * o.y + q.z * o.z + q.w * o.w) for o in ORIENTATIONS]
+    return max(range(NUM_ORIENTATIONS), key=lambda i: (dots[i], -i))

@@ -1,0 +1,170 @@
+"""The dishwasher's graph state, four-headed net, its checkpoints and its training."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import torch
+
+from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_planner.gnn.checkpoint import load_checkpoint, save_checkpoint
+from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC, dish_scene_to_graph
+from manigraph_planner.gnn.models.dish_net import DishPolicyNet
+from manigraph_planner.policies import load_policy
+from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
+from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
+from manigraph_planner.training.dishwasher import (
+    DishTrainConfig,
+    dish_loss,
+    load_dish_demonstrations,
+)
+from manigraph_shared.errors import PolicyError
+from manigraph_shared.messages import EpisodeRequest
+from manigraph_sim.geometric.backend import GeometricBackend
+
+CHECKPOINTS = Path(__file__).parents[3] / "checkpoints"
+
+
+def scene(objects: int = 4):  # type: ignore[no-untyped-def]
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=objects), 0.0)
+    return backend.scene(1.0)
+
+
+def test_the_graph_has_dishes_slots_and_racks_with_their_flags() -> None:
+    graph = dish_scene_to_graph(scene(4))
+    assert graph.num_objects == 4 and graph.num_goals == 48
+    assert graph.rack_ids == ["rack_top", "rack_bottom"]
+    assert graph.x.shape == (4 + 48 + 2, DISH_FEATURE_SPEC.num_features)
+    names = DISH_FEATURE_SPEC.names
+    assert graph.x[:, :6].sum(dim=1).eq(1).all()  # one category each
+    assert graph.x[-2:, names.index("open")].tolist() == [0.0, 0.0]
+    slots = graph.x[4:52]
+    assert slots[:, [names.index(f"orientation-{i}") for i in range(6)]].sum(dim=1).eq(1).all()
+
+
+def dish_net(seed: int = 0) -> DishPolicyNet:
+    torch.manual_seed(seed)
+    return DishPolicyNet(DishTrainConfig("sage", hidden_channels=16).model_config())
+
+
+def test_a_checkpoint_of_an_older_feature_spec_is_refused_naming_the_field(
+    tmp_path: Path,
+) -> None:
+    path = save_checkpoint(tmp_path / "d.pt", dish_net(), training_config={}, data_hash="x")
+    assert isinstance(load_checkpoint(path).net, DishPolicyNet)
+    payload = torch.load(path, weights_only=True)
+    payload["feature_spec"]["names"] = payload["feature_spec"]["names"][:-6]  # no orientations
+    payload["feature_spec"]["version"] = "dishwasher-0"
+    torch.save(payload, path)
+    with pytest.raises(PolicyError, match=r"feature_spec\.names"):
+        load_checkpoint(path)
+
+
+def test_a_block_checkpoint_still_loads_as_the_two_headed_policy() -> None:
+    policy = load_policy(str(CHECKPOINTS / "sage.pt"))
+    assert not isinstance(policy, DishwasherGNNPolicy)
+    assert load_checkpoint(CHECKPOINTS / "sage.pt").info.model.heads == "object-goal"
+
+
+@pytest.fixture(scope="module")
+def demos(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
+    path = tmp_path_factory.mktemp("dw") / "demos.mcap"
+    protocol = DemoProtocol(("dishwasher",), (4,), 2, 0, 4, "top-bottom")
+    summary = record_demos(dishwasher_expert("top-bottom"), protocol, path)
+    assert summary["trajectories"] == 2
+    return load_dish_demonstrations([path])
+
+
+def test_demonstrations_carry_all_four_targets(demos) -> None:  # type: ignore[no-untyped-def]
+    trays = [s.tray for s in demos.samples]
+    assert trays.count(2) == 8  # four placements per episode, tray "none"
+    assert trays.count(0) == 4 and trays.count(1) == 4  # out and in, each rack, each episode
+    assert {s.orientation for s in demos.samples if s.tray == 2} == {1, 2}
+
+
+def test_training_steps_reduce_the_sum_of_the_four_cross_entropies(demos) -> None:  # type: ignore[no-untyped-def]
+    net = dish_net()
+    optimiser = torch.optim.Adam(net.parameters(), lr=1e-2)
+    losses = []
+    for _ in range(30):
+        optimiser.zero_grad()
+        loss = dish_loss(net, demos.samples)
+        loss.backward()
+        optimiser.step()
+        losses.append(float(loss.detach()))
+    assert losses[1] < losses[0]
+    assert losses[-1] < 0.85 * losses[0]
+
+
+def test_the_policy_decodes_a_tray_action_or_a_feasible_placement() -> None:
+    policy = DishwasherGNNPolicy(dish_net(1))
+    s = scene(4)
+    decision = policy.decide(s)
+    assert decision is not None
+    if decision.tray_action.value == "none":
+        dish, slot = s.object(decision.object_id), s.goal(decision.goal_id)
+        assert dish.category.value == slot.category.value and not slot.filled
+        assert decision.orientation_index is not None
+    else:
+        assert decision.object_id == decision.goal_id == decision.tray_action.rack_id
+
+
+@pytest.mark.skipif(
+    not (CHECKPOINTS / "dishwasher-top-bottom-sage.pt").is_file(), reason="not shipped yet"
+)
+@pytest.mark.parametrize("preference", ["top-bottom", "left-right"])
+def test_the_shipped_dishwasher_checkpoints_load_and_act(preference: str) -> None:
+    from manigraph_lab.episode_loop import run_episode
+
+    policy = load_policy(str(CHECKPOINTS / f"dishwasher-{preference}-sage.pt"))
+    assert isinstance(policy, DishwasherGNNPolicy)
+    wins = sum(
+        run_episode(
+            policy,
+            EpisodeRequest(
+                episode_id=f"e{seed}",
+                task="dishwasher",
+                objects=12,
+                preference=preference,
+                seed=20_000 + seed,
+            ),
+        ).success
+        for seed in range(5)
+    )
+    assert wins >= 4
+    with torch.no_grad():
+        heads = policy.net.heads_complete(dish_scene_to_graph(scene(2)).x)
+    assert torch.isfinite(heads.tray).all() and heads.orientation.shape == (2 + 48 + 2, 6)
+
+
+def test_dropping_dishes_keeps_the_demonstrated_decision(demos) -> None:  # type: ignore[no-untyped-def]
+    import random
+
+    from manigraph_planner.training.dishwasher import drop_dishes
+
+    rng = random.Random(0)
+    shrunk = 0
+    for sample in demos.samples:
+        for _ in range(5):
+            copy = drop_dishes(sample, rng)
+            shrunk += copy.num_objects < sample.num_objects
+            assert copy.x.shape[0] == copy.num_objects + sample.num_goals + 2
+            if sample.tray == 2:  # a placement: the same dish, the same slot
+                assert torch.equal(copy.x[copy.object_index], sample.x[sample.object_index])
+                assert copy.goal_index == sample.goal_index
+            dishes = copy.x[: copy.num_objects]
+            for kind in (0, 1):
+                before = (
+                    (sample.x[: sample.num_objects, kind] == 1)
+                    & (sample.x[:, 9][: sample.num_objects] == 0)
+                ).any()
+                after = ((dishes[:, kind] == 1) & (dishes[:, 9] == 0)).any()
+                rack_in = (
+                    sample.tray < 2
+                    and sample.x[sample.num_objects + sample.num_goals + sample.tray, 10] == 0
+                )
+                if rack_in and before:
+                    assert after  # a rack pulled out still has a dish of each kind to load
+    assert shrunk > len(demos.samples)

@@ -1,0 +1,84 @@
+"""PickAndPlace executes tray actions and oriented placements through the gripper driver."""
+
+from __future__ import annotations
+
+import pytest
+
+from manigraph_lab.episode_loop import StepClock, gripper_driver
+from manigraph_shared.errors import SkillError
+from manigraph_shared.messages import (
+    Action,
+    EpisodeRequest,
+    SkillState,
+    SkillStatus,
+    TrayAction,
+    Vector3,
+)
+from manigraph_shared.orientations import UPSIDE_DOWN, nearest_orientation
+from manigraph_sim.geometric.backend import GeometricBackend
+from manigraph_skills.drivers.base import Motion, RobotDriver
+from manigraph_skills.pick_and_place import PickAndPlace
+from manigraph_skills.workspace import Workspace
+
+
+def action(step: int, obj: str, goal: str, **extra: object) -> Action:
+    return Action(
+        decision_id=f"e:{step}",
+        episode_id="e",
+        scene_sequence=0,
+        object_id=obj,
+        goal_id=goal,
+        policy="test",
+        stamp=0.0,
+        **extra,  # type: ignore[arg-type]
+    )
+
+
+def test_a_toggle_then_an_oriented_placement_through_the_gripper_driver() -> None:
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
+    skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
+    reports: list[SkillStatus] = []
+
+    closed = skill.execute(action(0, "bowl_0", "top_bowl_00"), backend.scene(1.0), reports.append)
+    assert closed.state is SkillState.FAILED and closed.reason == "rack_closed"
+
+    toggle = action(1, "rack_top", "rack_top", tray_action=TrayAction.TOGGLE_TOP)
+    assert skill.execute(toggle, backend.scene(2.0), reports.append).state is SkillState.SUCCEEDED
+    scene = backend.scene(3.0)
+    assert scene is not None and scene.rack("rack_top").open
+
+    place = action(2, "bowl_0", "top_bowl_00", orientation_index=UPSIDE_DOWN)
+    assert skill.execute(place, scene, reports.append).state is SkillState.SUCCEEDED
+    after = backend.scene(4.0)
+    assert after is not None
+    assert nearest_orientation(after.object("bowl_0").orientation) == UPSIDE_DOWN
+    assert after.goal("top_bowl_00").filled
+    assert backend.steps == 3  # two picks and a toggle count against the budget
+
+
+def test_a_tray_action_on_a_block_task_is_refused_by_name() -> None:
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="stack", blocks=2), 0.0)
+    skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
+    toggle = action(0, "rack_top", "rack_top", tray_action=TrayAction.TOGGLE_TOP)
+    status = skill.execute(toggle, backend.scene(1.0), lambda _: None)
+    assert status.state is SkillState.FAILED and status.reason == "unknown_rack"
+
+
+class ArmWithoutTrays(RobotDriver):
+    name = "arm"
+
+    def pick(self, motion: Motion) -> None: ...
+
+    def place(self, motion: Motion) -> None: ...
+
+    def stop(self) -> None: ...
+
+    def resume(self) -> None: ...
+
+
+def test_a_driver_without_tray_support_refuses_as_unsupported() -> None:
+    with pytest.raises(SkillError) as refused:
+        ArmWithoutTrays().toggle_tray("e:0", "rack_top", Vector3(x=0.5, y=0.0, z=0.3))
+    assert refused.value.reason == "unsupported"
