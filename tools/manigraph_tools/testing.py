@@ -106,7 +106,7 @@ class Stack:
         for name in reversed(list(self.processes)):
             self.stop(name)
 
-    def bus_config(self, identity: str = "client", wait_seconds: float = 20.0) -> BusConfig:
+    def bus_config(self, identity: str = "client", wait_seconds: float = 60.0) -> BusConfig:
         return BusConfig(
             connect=(self.endpoint,),
             wait_seconds=wait_seconds,
@@ -115,14 +115,16 @@ class Stack:
         )
 
     @contextmanager
-    def client(self, wait_seconds: float = 20.0, identity: str = "client") -> Iterator[Bus]:
+    def client(self, wait_seconds: float = 60.0, identity: str = "client") -> Iterator[Bus]:
         bus = Bus.open(self.bus_config(identity, wait_seconds))
         try:
             yield bus
         finally:
             bus.close()
 
-    def wait_alive(self, bus: Bus, *names: str, timeout: float = 30.0) -> set[str]:
+    # Generous waits: on a loaded 2-core machine the planner's torch import alone has taken
+    # 40-60 s; a service that never comes up still fails the test, only later.
+    def wait_alive(self, bus: Bus, *names: str, timeout: float = 90.0) -> set[str]:
         deadline = time.monotonic() + timeout
         while True:
             alive = bus.alive_services(timeout=1.0)
