@@ -170,7 +170,8 @@ def describe_task_file(text: str) -> tuple[str | None, int] | None:
         else 0
     )
     name = data.get("name")
-    return (name if isinstance(name, str) else None, blocks)
+    # A file without blocks is still the sim's to refuse, naming the field: K stays >= 1 here.
+    return (name if isinstance(name, str) else None, max(blocks, 1))
 
 
 def read_task_file(path: Path | None) -> str | None:
