@@ -34,7 +34,7 @@ from manigraph_shared.messages import (
 from manigraph_shared.panda import FINGER_OPEN
 from manigraph_skills.drivers.franka_config import FrankaConfig
 from manigraph_skills.drivers.franka_limits import TrajectoryLimits
-from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver, object_seen_after
 from manigraph_skills.motion import HOME_Q, PandaModel
 
 log = logging.getLogger("manigraph.skills.franka")
@@ -198,17 +198,7 @@ class FrankaJointTransport:
     def object_position(self, object_id: str, after: float) -> np.ndarray | None:
         if self.config.dry_run:
             return None  # nothing moved, so nothing can be where it was planned to go
-        with self._lock:
-            self._lock.wait_for(
-                lambda: self._scene is not None and self._scene.stamp >= after, timeout=1.0
-            )
-            scene = self._scene
-        if scene is None or scene.stamp < after:
-            return None
-        try:
-            return np.array(scene.object(object_id).position.as_tuple())
-        except KeyError:
-            return None
+        return object_seen_after(self._lock, lambda: self._scene, object_id, after)
 
     # --- pieces -------------------------------------------------------------------------------
     def _on_scene(self, scene: Scene) -> None:

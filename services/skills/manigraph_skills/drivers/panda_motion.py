@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import itertools
 import logging
+import threading
 import time
 from collections.abc import Callable
 from typing import Protocol
@@ -30,6 +31,7 @@ from manigraph_shared.messages import (
     JointTrajectoryCommand,
     JointTrajectoryPoint,
     JointTrajectoryResult,
+    Scene,
 )
 from manigraph_skills.drivers.base import Grasp, Motion, RobotDriver
 from manigraph_skills.drivers.registry import MotionOptions
@@ -78,6 +80,29 @@ class JointTransport(Protocol):
     def abort(self, reason: str) -> None:
         """The robot went away: make a running ``execute`` raise ``SkillError(reason)``."""
         ...
+
+
+def object_seen_after(
+    lock: threading.Condition,
+    latest_scene: Callable[[], Scene | None],
+    object_id: str,
+    after: float,
+    timeout: float = 1.0,
+) -> np.ndarray | None:
+    """Where ``object_id`` is in the newest scene stamped at or after ``after`` (waiting up to
+    ``timeout`` for one on ``lock``, which the scene's writer notifies); None if none came or
+    the object is not in it. Shared by the transports that cache streamed scenes."""
+    with lock:
+        lock.wait_for(
+            lambda: (scene := latest_scene()) is not None and scene.stamp >= after, timeout
+        )
+        scene = latest_scene()
+    if scene is None or scene.stamp < after:
+        return None
+    try:
+        return np.array(scene.object(object_id).position.as_tuple())
+    except KeyError:
+        return None
 
 
 class PandaMotionDriver(RobotDriver):

@@ -22,7 +22,7 @@ from manigraph_shared.messages import (
     Scene,
 )
 from manigraph_shared.scene_gate import SceneGate
-from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver, object_seen_after
 
 
 class BusJointTransport:
@@ -124,17 +124,7 @@ class BusJointTransport:
             return self._positions.copy()
 
     def object_position(self, object_id: str, after: float) -> np.ndarray | None:
-        with self._lock:
-            self._lock.wait_for(
-                lambda: self._scene is not None and self._scene.stamp >= after, timeout=1.0
-            )
-            scene = self._scene
-        if scene is None or scene.stamp < after:
-            return None
-        try:
-            return np.array(scene.object(object_id).position.as_tuple())
-        except KeyError:
-            return None
+        return object_seen_after(self._lock, lambda: self._scene, object_id, after)
 
 
 class PandaSimDriver(PandaMotionDriver):
