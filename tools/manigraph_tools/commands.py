@@ -416,7 +416,9 @@ def _up_run(args: argparse.Namespace) -> int:
     summary: dict[str, object] | None = None
     client = BusConfig(
         connect=(endpoint,),
-        wait_seconds=30.0,
+        # The router is a process started just now: on a loaded 2-core machine (load 25-40,
+        # the stack niced) its start took over 90 s.
+        wait_seconds=300.0,
         tls_dir=tls_dir,
         tls_identity="client" if tls_dir else None,
     )
