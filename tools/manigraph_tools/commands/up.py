@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import shutil
 import signal
+import socket
 import sys
 import tempfile
 import time
@@ -90,6 +91,19 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         )
 
 
+def _refuse_busy_port(port: int) -> None:
+    """A second ``up`` on a port another stack's router holds would join that stack: its sim
+    would answer the other's resets and both runs would be garbage. Refuse it instead."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as a router's listener
+        try:
+            probe.bind(("127.0.0.1", port))
+        except OSError as exc:
+            raise ConfigError(
+                "port", f"127.0.0.1:{port} is in use ({exc.strerror}; another stack?): pass --port"
+            ) from exc
+
+
 def _interrupt(signum: int, _frame: object) -> None:
     raise KeyboardInterrupt(signal.Signals(signum).name)
 
@@ -99,6 +113,7 @@ def _up_run(args: argparse.Namespace) -> int:
     # some CI runners) would otherwise never see Ctrl-C, and SIGTERM should stop it the same way.
     signal.signal(signal.SIGINT, _interrupt)
     signal.signal(signal.SIGTERM, _interrupt)
+    _refuse_busy_port(args.port)
     tls_dir = Path(tempfile.mkdtemp(prefix="manigraph-certs-")) if args.secure else None
     endpoint = f"{'tls' if tls_dir else 'tcp'}/127.0.0.1:{args.port}"
     bus_env = {
