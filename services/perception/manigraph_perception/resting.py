@@ -7,7 +7,9 @@ along the ray, and nowhere else. A block at rest, though, rests on something: th
 and the ray from the camera through the measured centre meets the plane where the block's
 centre must be. Of the supports whose point is near the measured one (along the ray), that
 exist there (a block under it, a box round it) and leave the block clear of its neighbours, the
-nearest is taken; a block with none (held in the air) keeps its measured pose.
+nearest is taken; a block with none (held in the air) keeps its measured pose. A block seen
+on the ray through where it is believed to be has not moved (``same_place``): a centimetre of
+noise along the ray does not take it off the block under it.
 """
 
 from __future__ import annotations
@@ -41,6 +43,9 @@ class RestConfig:
     max_shift: float = 0.045
     #: A block overlapping another this much (metres, centre to centre) is not there.
     clearance: float = 0.03
+    #: A block whose viewing ray passes this close (metres) to where it is believed to be is
+    #: still there: the ray is what the image measures well.
+    same_place: float = 0.008
 
 
 def rest_on_support(

@@ -202,6 +202,10 @@ class WorldModel:
             or objects[pose.object_id].category.value != "block"
         ):
             return measured
+        believed = self.beliefs[pose.object_id].position
+        if _ray_distance(self.camera, measured, believed) < self.config.rest.same_place:
+            # Seen where it was believed (the image says nothing else): it has not moved.
+            return believed.copy()
         rotation = pose.base_T_object[:3, :3]
         size = np.array(objects[pose.object_id].size.as_tuple())
         supports = [Support(0.0)]
@@ -296,6 +300,13 @@ def _quaternion(xyzw: np.ndarray) -> Quaternion:
     if q[3] < 0:
         q = -q
     return Quaternion(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+
+
+def _ray_distance(camera: np.ndarray, through: np.ndarray, point: np.ndarray) -> float:
+    """How far ``point`` is from the ray from ``camera`` through ``through``."""
+    ray = (through - camera) / np.linalg.norm(through - camera)
+    offset = point - camera
+    return float(np.linalg.norm(offset - (offset @ ray) * ray))
 
 
 def _half_height(rotation: np.ndarray, size: np.ndarray) -> float:
