@@ -49,9 +49,13 @@ class BlurGauge:
         if marker_id not in self.patterns:
             cells = self.dictionary.markerSize + 2
             inner = cv2.aruco.generateImageMarker(self.dictionary, marker_id, cells * self.cell_px)
-            self.patterns[marker_id] = cv2.copyMakeBorder(
-                inner, *[self.cell_px] * 4, cv2.BORDER_CONSTANT, value=255
-            ).astype(np.float32)
+            margin = self.cell_px
+            self.patterns[marker_id] = np.asarray(
+                cv2.copyMakeBorder(
+                    inner, margin, margin, margin, margin, cv2.BORDER_CONSTANT, value=255
+                ),
+                dtype=np.float32,
+            )
         return self.patterns[marker_id]
 
     def measure(self, grey: np.ndarray, markers: list[tuple[int, np.ndarray]]) -> Blur | None:

@@ -61,7 +61,7 @@ def detector_for(markers: MarkerMap | str) -> Detectors:
             parameters.adaptiveThreshWinSizeMin = window
             parameters.adaptiveThreshWinSizeMax = window
         detectors.append(cv2.aruco.ArucoDetector(dictionary, parameters))
-    return Detectors(*detectors, gauge=BlurGauge(dictionary))
+    return Detectors(detectors[0], detectors[1], BlurGauge(dictionary))
 
 
 #: Subpixel corner refinement finds a black square's corners this far inside the true ones
