@@ -124,6 +124,12 @@ class PandaMotionDriver(RobotDriver):
         self.placement_tolerance = options.placement_tolerance
         self._ids = itertools.count()
         self._stopped = False
+        #: Emergency stops so far, and how many there had been when the decision whose
+        #: motions are being planned began: a decision stopped (and resumed) while it was
+        #: planning never moves the arm afterwards.
+        self._stops = 0
+        self._decision: str | None = None
+        self._decision_stops = 0
 
     def pick(self, motion: Motion) -> None:
         decision_id, object_id, grasp = motion.decision_id, motion.object_id, motion.grasp
@@ -178,6 +184,7 @@ class PandaMotionDriver(RobotDriver):
 
     def stop(self) -> None:
         self._stopped = True
+        self._stops += 1
         self.transport.stop()
 
     def resume(self) -> None:
@@ -222,6 +229,7 @@ class PandaMotionDriver(RobotDriver):
             contact = None
             failure: SkillError | None = None
             for planner, turn, carry in options:
+                self._raise_if_stopped()  # a re-plan takes 50-500 ms: stop between them
                 try:
                     trajectory = make(planner, q, turn, carry)
                 except SkillError as exc:  # e.g. no IK solution this high or turned
@@ -269,11 +277,13 @@ class PandaMotionDriver(RobotDriver):
         self, decision_id: str, plan: Callable[[np.ndarray], JointTrajectory]
     ) -> JointTrajectoryResult:
         """Plan from the arm's joints and execute; plan once more if the arm was elsewhere."""
-        if self._stopped:
-            raise SkillError("stopped", "emergency stop engaged")
+        if decision_id != self._decision:
+            self._decision, self._decision_stops = decision_id, self._stops
+        self._raise_if_stopped()
         q = self.transport.joint_positions()
         for _attempt in range(2):
             trajectory = plan(q)  # raises SkillError('no_ik_solution') before any motion
+            self._raise_if_stopped()  # the stop (and maybe resume) came while planning
             result = self.transport.execute(self._command(decision_id, trajectory))
             if result.ok:
                 return result
@@ -281,6 +291,12 @@ class PandaMotionDriver(RobotDriver):
                 raise SkillError(result.reason or "driver_error", result.detail)
             q = np.array(result.positions)
         raise SkillError("start_mismatch", "the arm keeps moving away from the planned start")
+
+    def _raise_if_stopped(self) -> None:
+        if self._stopped:
+            raise SkillError("stopped", "emergency stop engaged")
+        if self._stops != self._decision_stops:
+            raise SkillError("stopped", "an emergency stop came during this decision")
 
     def _command(self, decision_id: str, trajectory: JointTrajectory) -> JointTrajectoryCommand:
         return JointTrajectoryCommand(
