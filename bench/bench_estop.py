@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from manigraph_shared.bus import Bus
+from manigraph_shared.errors import ManigraphError
 from manigraph_shared.messages import (
     Action,
     EmergencyStop,
@@ -45,6 +47,22 @@ def legal_first_move(scene: Scene) -> tuple[str, str]:
     return block.id, goal.id
 
 
+def warm_up(bus: Bus, attempts: int = 5) -> None:
+    """One reset until it succeeds: the physics sim's first one builds its scene, which can
+    take longer than the sim's own 30 s answer deadline on a loaded machine."""
+    for attempt in range(attempts):
+        try:
+            bus.request(
+                EpisodeRequest(episode_id="estop-warm-up", task="stack", blocks=3, seed=0),
+                EpisodeEvent,
+                timeout=60.0,
+            )
+            return
+        except ManigraphError as exc:
+            print(f"warm-up reset {attempt + 1}: {exc}", flush=True)
+    raise SystemExit(f"the sim answered none of {attempts} resets")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--samples", type=int, default=10)
@@ -54,6 +72,7 @@ def main() -> None:
     rng = random.Random(args.seed)
     latencies: list[float] = []
     phases: list[str] = []
+    at_skills: list[float] = []  # stop sent -> skills stamps its stopped status (one clock)
     halted = 0
     with tempfile.TemporaryDirectory() as logs, stack(args.log_dir or Path(logs)) as running:
         running.start("router")
@@ -71,12 +90,13 @@ def main() -> None:
             bus.subscribe(SkillStatus, lambda s: statuses.put((time.perf_counter(), s)))
             bus.subscribe(JointState, joints.append)
             time.sleep(0.5)
+            warm_up(bus)
             for sample in range(args.samples):
                 episode = f"estop-{sample}"
                 bus.request(
                     EpisodeRequest(episode_id=episode, task="stack", blocks=3, seed=sample),
                     EpisodeEvent,
-                    timeout=30.0,
+                    timeout=60.0,
                 )
                 scene = scenes.get(timeout=10.0)
                 while scene.episode_id != episode:
@@ -100,8 +120,8 @@ def main() -> None:
                 time.sleep(rng.uniform(0.1, 0.6))
                 # where the stop lands: a trajectory under way, or skills planning between them
                 phase = "moving" if in_flight else "planning"
-                sent = time.perf_counter()
-                bus.publish(EmergencyStop(engaged=True, reason="bench", stamp=time.time()))
+                sent, stop_stamp = time.perf_counter(), time.time()
+                bus.publish(EmergencyStop(engaged=True, reason="bench", stamp=stop_stamp))
                 arrived, status = statuses.get(timeout=10.0)
                 while status.decision_id != decision or not status.state.terminal:
                     arrived, status = statuses.get(timeout=10.0)
@@ -110,7 +130,12 @@ def main() -> None:
                 else:
                     latencies.append((arrived - sent) * 1000)
                     phases.append(phase)
-                    print(f"sample {sample}: {latencies[-1]:.1f} ms ({phase})", flush=True)
+                    at_skills.append((status.stamp - stop_stamp) * 1000)
+                    print(
+                        f"sample {sample}: {latencies[-1]:.1f} ms ({phase}; skills stamped "
+                        f"its status {at_skills[-1]:.1f} ms after the stop was sent)",
+                        flush=True,
+                    )
                     time.sleep(0.2)  # let the sim report the halted arm
                     before = np.array(joints[-1].positions)
                     time.sleep(0.3)
@@ -124,6 +149,7 @@ def main() -> None:
         f"emergency stop -> skill reports stopped: {distribution(latencies)} "
         f"(target 100 ms); arm still afterwards in {halted}/{len(latencies)}"
     )
+    print(f"  stop sent -> skills stamps 'stopped': {distribution(at_skills)}")
     for phase in sorted(set(phases)):
         landed = [t for t, p in zip(latencies, phases, strict=True) if p == phase]
         print(f"  stops landing while {phase}: {distribution(landed)}")

@@ -24,6 +24,7 @@ Nothing a sender does can block the threads that receive messages:
 from __future__ import annotations
 
 import queue
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -52,6 +53,9 @@ QUEUE_CAPACITY = 4
 SCENE_WAIT = 1.0
 #: An action decided on a scene this far ahead of the newest scene seen is refused unread.
 MAX_SCENE_AHEAD = 50
+#: Longest the worker (planning: Python-heavy IK) keeps the GIL while a Zenoh thread waits
+#: for it, seconds (Python's default is 5 ms): the stop's callback needs the GIL to run.
+GIL_SWITCH_INTERVAL = 0.001
 
 
 class SkillsService(Service):
@@ -80,6 +84,7 @@ class SkillsService(Service):
         self._worker = threading.Thread(target=self._work, name="skills-worker", daemon=True)
 
     def setup(self) -> None:
+        sys.setswitchinterval(GIL_SWITCH_INTERVAL)
         self.bus.subscribe(EpisodeEvent, self.gate.on_episode, on_error=self._rejected)
         self.bus.subscribe(Scene, self._on_scene, on_error=self._rejected)
         self.bus.subscribe(EmergencyStop, self._on_estop, on_error=self._rejected)
