@@ -52,6 +52,7 @@ from manigraph_tools.flood import concrete_key, flood_scenes, fuzz_stack
 from manigraph_tools.fuzzing import message_types
 
 RSS_TOLERANCE = 0.20
+Counter = collections.Counter[str]
 HUNG_REASONS = ("timeout", "no_progress")  # what the run client says of an episode that hung
 REPO = Path(__file__).resolve().parents[1]
 
@@ -71,52 +72,44 @@ class Soak:
         self.soak = soak
         self.settle = settle
         self.rows: list[Row] = []
-        self._recorded: collections.Counter[str] = collections.Counter()
-        self._recorded_invalid: collections.Counter[str] = collections.Counter()
+        self._files: dict[Path, tuple[int, Counter, Counter, bool]] = {}
 
-    def recorded_since_last(self, invalid_only: bool = False) -> collections.Counter[str]:
-        """Messages per key the recorder wrote since the previous call (flushed chunks).
+    def recorded(self, decode: bool = False) -> tuple[Counter, Counter]:
+        """Messages per key the recorder has written so far (flushed chunks), and of them the
+        payloads that fail validation as their key's type (with ``decode``; the fuzzer sends
+        only those, while episodes running meanwhile publish valid ones on the same keys).
 
-        Waits until the recorder's files stop growing first. With ``invalid_only``, only
-        payloads that fail validation as their key's type are counted on the fuzzed keys (the
-        fuzzer sends only those; episodes running meanwhile publish valid ones on the same keys).
+        Waits until the recorder has caught up first. A file is read again only if it grew
+        (rotated files are read once), so the cost does not grow with every check.
         """
         self._wait_recorder_idle()
-        types = {concrete_key(cls): cls for cls in message_types()}
-        total: collections.Counter[str] = collections.Counter()
-        invalid: collections.Counter[str] = collections.Counter()
+        total: Counter = collections.Counter()
+        invalid: Counter = collections.Counter()
         for path in sorted(self.soak.log.parent.glob("soak*.mcap")):
-            for item in read_log(path):
-                total[item.topic] += 1
-                cls = types.get(item.topic)
-                if invalid_only and cls is not None:
-                    try:
-                        cls.decode(item.data, item.topic)
-                    except MessageError:
-                        invalid[item.topic] += 1
-        delta = total - self._recorded
-        self._recorded = total
-        if invalid_only:
-            delta = invalid - self._recorded_invalid
-        self._recorded_invalid = invalid if invalid_only else self._recorded_invalid
-        return delta
+            size = path.stat().st_size
+            cached = self._files.get(path)
+            if cached is None or cached[0] != size or (decode and not cached[3]):
+                cached = (size, *count_recorded(path, decode), decode)
+                self._files[path] = cached
+            total.update(cached[1])
+            invalid.update(cached[2])
+        return total, invalid
 
-    def _wait_recorder_idle(self, quiet: float = 3.0, limit: float = 120.0) -> None:
-        """Until the recorder's files have not grown for ``quiet`` s (at most ``limit`` s)."""
+    def _wait_recorder_idle(self, window: float = 2.0, limit: float = 120.0) -> None:
+        """Until the recorder's files grow by less than 64 KiB in ``window`` s (heartbeats
+        keep them growing a little), at most ``limit`` s."""
         deadline = time.monotonic() + limit
-        size, since = -1, time.monotonic()
+        size = -1
         while time.monotonic() < deadline:
             now = sum(p.stat().st_size for p in self.soak.log.parent.glob("soak*.mcap"))
-            if now != size:
-                size, since = now, time.monotonic()
-            elif time.monotonic() - since >= quiet:
+            if 0 <= now - size < 65_536:
                 return
-            time.sleep(0.5)
+            size = now
+            time.sleep(window)
 
     def check(self, name: str, run) -> None:  # type: ignore[no-untyped-def]
         before = self.soak.rss()
         rejected = self.soak.rejected()
-        self.recorded_since_last(invalid_only=True)
         started = time.perf_counter()
         counts, lost, held, notes = run()
         seconds = time.perf_counter() - started
@@ -151,6 +144,7 @@ class Soak:
     # --- the checks ---------------------------------------------------------------------
     def fuzz(self, per_type: int, seed: int):  # type: ignore[no-untyped-def]
         def run():  # type: ignore[no-untyped-def]
+            _, invalid_before = self.recorded(decode=True)
             episodes = EpisodesMeanwhile(self.soak)
             episodes.start()
             try:
@@ -174,7 +168,7 @@ class Soak:
                     )
             finally:
                 episodes.stop()
-            recorded = self.recorded_since_last(invalid_only=True)
+            recorded = self.recorded(decode=True)[1] - invalid_before
             lost_reliable = lost_latest = 0
             for cls in message_types():
                 if cls.delivery is Delivery.QUERY:
@@ -199,11 +193,11 @@ class Soak:
 
     def flood(self, valid: bool, seconds: float, rate: float):  # type: ignore[no-untyped-def]
         def run():  # type: ignore[no-untyped-def]
+            before = self.recorded()[0][Scene.key]
             started = time.perf_counter()
             sent = flood_scenes(self.soak.bus, seconds, rate, valid)
             achieved = sent / (time.perf_counter() - started)
-            time.sleep(1.0)
-            kept = self.recorded_since_last()[Scene.key]
+            kept = self.recorded()[0][Scene.key] - before
             lost = f"recorder kept {min(kept, sent)} of {sent} (congestion DROP allowed)"
             return f"{sent} scenes at {achieved:.0f}/s", lost, True, ""
 
@@ -333,6 +327,23 @@ class EpisodesMeanwhile:
         return ", ".join(f"{reason} x{n}" for reason, n in self._reasons.items())
 
 
+def count_recorded(path: Path, decode: bool) -> tuple[Counter, Counter]:
+    """Messages per key in one recorder file, and (with ``decode``) the invalid ones among
+    those on a fuzzed key."""
+    types = {concrete_key(cls): cls for cls in message_types()}
+    total: Counter = collections.Counter()
+    invalid: Counter = collections.Counter()
+    for item in read_log(path):
+        total[item.topic] += 1
+        cls = types.get(item.topic) if decode else None
+        if cls is not None:
+            try:
+                cls.decode(item.data, item.topic)
+            except MessageError:
+                invalid[item.topic] += 1
+    return total, invalid
+
+
 def big_scene(objects: int, goals: int) -> Scene:
     return Scene(
         episode_id="bomb",
@@ -389,7 +400,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawTextHelpFormatter
     )
-    parser.add_argument("--per-type", type=int, default=100_000, help="fuzzed payloads per type")
+    parser.add_argument(
+        "--per-type", type=int, default=100_000, help="fuzzed payloads per type (0: no fuzz)"
+    )
     parser.add_argument("--flood-seconds", type=float, default=30.0)
     parser.add_argument("--flood-rate", type=float, default=10_000.0, help="scenes per second")
     parser.add_argument("--settle", type=float, default=60.0, help="seconds before RSS readings")
@@ -407,7 +420,8 @@ def main() -> None:
         if warm.returncode != 0:
             raise SystemExit(f"the stack cannot run an episode before the soak:\n{warm.stderr}")
         soak = Soak(stack, args.settle)
-        soak.check(f"fuzz, {args.per_type} per type", soak.fuzz(args.per_type, args.seed))
+        if args.per_type > 0:
+            soak.check(f"fuzz, {args.per_type} per type", soak.fuzz(args.per_type, args.seed))
         soak.check("valid scene flood", soak.flood(True, args.flood_seconds, args.flood_rate))
         soak.check("invalid scene flood", soak.flood(False, args.flood_seconds, args.flood_rate))
         soak.check("explain bomb (256+256 nodes, x3)", soak.explain_bomb())
