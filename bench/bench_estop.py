@@ -116,7 +116,12 @@ def main() -> None:
                 )
                 _, status = statuses.get(timeout=10.0)
                 while not (status.decision_id == decision and status.state is SkillState.RUNNING):
+                    if status.decision_id == decision and status.state.terminal:
+                        break
                     _, status = statuses.get(timeout=10.0)
+                if status.state is not SkillState.RUNNING:  # refused: no stop to time
+                    print(f"sample {sample}: the action was refused ({status.reason})")
+                    continue
                 time.sleep(rng.uniform(0.1, 0.6))
                 # where the stop lands: a trajectory under way, or skills planning between them
                 phase = "moving" if in_flight else "planning"
