@@ -13,8 +13,15 @@ from __future__ import annotations
 
 import json
 import os
+import queue
 import random
 import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+import urllib.request
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -325,5 +332,77 @@ def test_a_ten_dish_demonstration_takes_at_most_30_clicks_and_trains_the_dishwas
     from manigraph_planner.policies import load_policy
 
     policy = load_policy(str(checkpoint))
-    decision = policy.decide(pairs[0][0])
+    assert type(policy).__name__ == "DishwasherGNNPolicy"
+    scene = pairs[1][0]  # the top rack pulled out: a bowl can go in, so there is a decision
+    decision = policy.decide(scene)
     assert decision is not None
+    assert decision.object_id in {o.id for o in scene.objects} | {r.id for r in scene.racks}
+
+
+@pytest.mark.timeout(600)
+def test_up_with_policy_human_serves_the_page_and_starts_no_planner(tmp_path: Path) -> None:
+    page_port = free_port()
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "manigraph_shared.cli",
+            "up",
+            "--policy",
+            "human",
+            "--task",
+            "dishwasher",
+            "--objects",
+            "4",
+            "--port",
+            str(free_port()),
+            "--demo-port",
+            str(page_port),
+            "--demo-output",
+            str(tmp_path / "demos.mcap"),
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    lines: queue.SimpleQueue[str] = queue.SimpleQueue()
+    threading.Thread(target=lambda: [lines.put(line) for line in process.stderr or []]).start()
+    try:
+        deadline = time.monotonic() + 400
+        up = ""
+        while not up.startswith("stack is up"):
+            assert process.poll() is None, "manigraph up exited"
+            try:
+                up = lines.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                raise AssertionError("the stack did not come up") from None
+        assert up.startswith("stack is up: router, sim, demo-ui, skills")
+        assert "planner" not in up
+        with urllib.request.urlopen(f"http://127.0.0.1:{page_port}/api/state", timeout=30) as reply:
+            state = json.load(reply)
+        assert state["defaults"]["task"] == "dishwasher" and state["defaults"]["objects"] == 4
+        assert state["busy"] == "no episode yet: start one" and not state["planner_running"]
+    finally:
+        process.send_signal(signal.SIGINT)
+        process.wait(timeout=60)
+
+
+def test_up_with_policy_human_refuses_episodes_a_person_must_start() -> None:
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "manigraph_shared.cli",
+            "up",
+            "--policy",
+            "human",
+            "--episodes",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert result.returncode == 2
+    assert "episodes: --policy human: a person starts each episode on the page" in result.stderr
