@@ -87,8 +87,8 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--demo-port",
         type=int,
-        default=8765,
-        help=f"with --policy {HUMAN}: port of the demonstration page on 127.0.0.1 (default 8765)",
+        default=8770,
+        help=f"with --policy {HUMAN}: port of the demonstration page on 127.0.0.1 (default 8770)",
     )
     parser.add_argument(
         "--demo-output",

@@ -41,7 +41,7 @@ class DemoUiOptions(Options):
 
     http_host: str = option("127.0.0.1", help="address the page is served on (loopback)")
     http_port: int = option(
-        8765, help="port of the page (0: any free one)", within=Interval(0, 65535)
+        8770, help="port of the page (0: any free one; view has 8765)", within=Interval(0, 65535)
     )
     output: Path | None = option(
         None, help="MCAP file the demonstrations go to (default demos/demo-ui-<time>.mcap)"
