@@ -60,6 +60,8 @@ QUARTER = np.pi / 2
 #: far, low grasp from the home pose swings ~0.3 m aside) but not over a short one (from
 #: above a tower to a block beside it only 0.3 cleared the tower).
 ELBOW_SWING = (0.05, 0.3)
+#: A place refused with these reasons never moved: the held object is put back.
+PLANNING_FAILURES = frozenset({"collision", "no_ik_solution"})
 #: After letting go of a rack's handle the hand rises and backs off this far towards the
 #: robot, metres, clear of the handle and the rack.
 HANDLE_BACK_OFF = 0.1
@@ -143,6 +145,8 @@ class PandaMotionDriver(RobotDriver):
         self.placement_tolerance = options.placement_tolerance
         self._ids = itertools.count()
         self._stopped = False
+        #: The object last picked: its id, the hand's position and yaw, the grasp.
+        self._picked: tuple[str, np.ndarray, float, Grasp] | None = None
 
     def pick(self, motion: Motion) -> None:
         decision_id, object_id, grasp = motion.decision_id, motion.object_id, motion.grasp
@@ -153,6 +157,7 @@ class PandaMotionDriver(RobotDriver):
             + grasp.turn
             + grasp_yaw((orientation.x, orientation.y, orientation.z, orientation.w))
         )
+        self._picked = None
         result = self._run(
             decision_id,
             self._avoiding(
@@ -161,6 +166,7 @@ class PandaMotionDriver(RobotDriver):
                 target,
             ),
         )
+        self._picked = (object_id, target, yaw, grasp)
         if result.gripper_width < self.min_grasp_width:
             self._open(decision_id, grasp.obstacles)
             raise SkillError(
@@ -175,14 +181,19 @@ class PandaMotionDriver(RobotDriver):
         # The object turned with the hand at the grasp; turn back so it lands square (a
         # block or a square cover looks the same after a quarter turn).
         yaw = self.planner.config.hand_yaw + grasp.turn
-        carry = self._run(
-            decision_id,
-            self._avoiding(
-                lambda planner, q, turn, carry_z: planner.place(q, hand, yaw + turn, carry_z),
-                grasp,
-                hand,
-            ),
-        )
+        try:
+            carry = self._run(
+                decision_id,
+                self._avoiding(
+                    lambda planner, q, turn, carry_z: planner.place(q, hand, yaw + turn, carry_z),
+                    grasp,
+                    hand,
+                ),
+            )
+        except SkillError as exc:
+            if exc.reason in PLANNING_FAILURES:
+                self._put_back(decision_id, object_id)
+            raise
         if carry.gripper_width < self.min_grasp_width:
             self._open(decision_id, grasp.obstacles)
             raise SkillError("grasp_slipped", f"{object_id} was lost during the transfer")
@@ -194,6 +205,23 @@ class PandaMotionDriver(RobotDriver):
                 raise SkillError(
                     "placement_missed", f"{object_id} rests {miss * 1000:.0f} mm from its goal"
                 )
+
+    def _put_back(self, decision_id: str, object_id: str) -> None:
+        """After a place that could not be planned: set the held object down where it was
+        picked, as it was held, so a refused placement leaves it where it was (best effort:
+        if that cannot be planned either, it stays held)."""
+        if self._picked is None or self._picked[0] != object_id:
+            return
+        _, hand, yaw, grasp = self._picked
+        self._picked = None
+        try:
+            self._run(
+                decision_id,
+                self._checked(lambda q: self.planner.place(q, hand, yaw), grasp.obstacles),
+            )
+            self._run(decision_id, self._checked(self.planner.release, grasp.obstacles))
+        except SkillError as exc:
+            log.info("could not put %s back: %s", object_id, exc)
 
     def check_orientation(self, object_id: str, current: Quaternion, target: Quaternion) -> None:
         """Top-down grasps turn an object about the vertical only: the axis that points up
