@@ -82,6 +82,7 @@ from manigraph_planner.training.structure import (
     add_distractors,
     add_finished_tower,
     add_open_box,
+    drop_finished_pairs,
     drop_idle_covers,
     extend_towers,
     hide_box_contents,
@@ -100,6 +101,7 @@ STRUCTURAL_PROBABILITIES = (
     "open_box_probability",
     "open_box_contents_probability",
     "finished_tower_probability",
+    "drop_finished_probability",
 )
 
 
@@ -122,6 +124,7 @@ class Augmentation:
     closing_storage_probability: float = 0.5
     finished_tower_probability: float = 0.5
     max_finished_levels: int = 40
+    drop_finished_probability: float = 0.0
     geometry: SceneGeometry = field(default_factory=SceneGeometry)
 
     def __post_init__(self) -> None:
@@ -156,6 +159,8 @@ class Augmentation:
             source, below = (self._levels(generator, self.max_levels) for _ in range(2))
             above = self._levels(generator, self.max_free_levels)
             graph = extend_towers(graph, source, below, above, self.geometry)
+        if self._chance(self.drop_finished_probability, generator):
+            graph = drop_finished_pairs(graph, 1 + self._levels(generator, 3), self.geometry)
         if self._chance(self.drop_covers_probability, generator):
             graph = drop_idle_covers(graph, self.geometry)
         if self._chance(self.hide_probability, generator):
