@@ -8,9 +8,10 @@ these steps; each keeps what the expert decides (step 3 is the one exception, ar
    with filled goals below and free goals above, up to ``max_levels`` each
    (:func:`~manigraph_planner.training.structure.extend_towers`). The demonstrations never
    show more than four blocks; the tests go to forty.
-1b. **Finished work dropped** (probability ``drop_finished_probability``, off but for
-   ``gcn``): 1-3 filled goals with their blocks leave the bottom of every goal stack, the
-   stacks moving down together, and every filled goal on a box floor goes with its block
+1b. **Finished work dropped** (probability ``drop_finished_probability``, off in every
+   recipe; measured for ``gcn``, see below): 1-3 filled goals with their blocks leave the
+   bottom of every goal stack, the stacks moving down together, and every filled goal on a
+   box floor goes with its block
    (:func:`~manigraph_planner.training.structure.drop_finished_pairs`): graphs as small as a
    2-stack's four nodes, which no demonstration (K = 3, 4) shows.
 2. **Idle covers dropped** (probability ``drop_covers_probability``) where the expert moves a
@@ -60,16 +61,18 @@ validation episodes
   nothing (K = 9 stacking, 6-pyramid, 3-stack: 0.00 for training seeds 0, 1, 2); capped, it
   finished K = 9, the pyramid, the 3-stack and box rearrangement on every validation
   episode for all three seeds (50 each), but not K = 40.
-* ``gcn`` (degree-normalised sum): steps 1b, 2, 5 and 6 only. Its sum grows with the graph, and
+* ``gcn`` (degree-normalised sum): steps 2, 5 and 6 only. Its sum grows with the graph, and
   measured on this project it then loses even K = 9 stacking (1.00 with steps 5-6 only,
   0.00 with the uncapped structural steps; capped at 6 levels, 0.00 and 0.52 for training
   seeds 0 and 1). Step 2 only ever removes nodes: it shows scenes without a box, as stacking
   has, and lifted gcn's K = 9 validation success over training seeds 0, 1, 2 from 0.70,
-  0.00, 1.00 to 1.00, 0.30, 1.00. Step 1b (2026-12-01, issue #18) shows graphs of 2-4
-  nodes: the old recipe picked a covered block 50, 97 and 9 times over 50 validation
-  2-, 3- and 4-stacks (shipped seed 1); with 1b, 36, 4, 0 (training seed 0) and 19, 64, 9
-  (seed 2): better at K = 2, still not right. Also lowering source towers (the inverse of step 1 for blocks) made it
-  worse (50 of 50 at K = 2, 290 covered picks over 50 9-stacks), so it is not used.
+  0.00, 1.00 to 1.00, 0.30, 1.00. Step 1b (2026-12-01, issue #18, not in the recipe) shows
+  graphs of 2-4 nodes: the old recipe picked a covered block 50, 97 and 9 times over 50
+  validation 2-, 3- and 4-stacks (shipped seed 1); with 1b, 36, 4, 0 (training seed 0) and
+  19, 64, 9 (seed 2): better at K = 2, still not right, and seed 2 picked covered blocks at
+  K = 5-8 where the old seed 1 did not (docs/training.md). Lowering source towers too (the
+  inverse of step 1 for blocks) made it worse (50 of 50 at K = 2, 290 covered picks over 50
+  9-stacks).
 
 Node order is not augmented: every architecture is permutation-equivariant (tested).
 Why each step keeps the label is argued in :mod:`~manigraph_planner.training.structure` and

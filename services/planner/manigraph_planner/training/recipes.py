@@ -22,16 +22,12 @@ from manigraph_shared.registry import Registry
 
 __all__ = [
     "GATED_MAX_LEVELS",
-    "GCN_DROP_FINISHED_PROBABILITY",
     "RECIPES",
     "RecipeOptions",
     "TranslationRecipeOptions",
     "augmentation_for",
     "resample_every_for",
 ]
-
-#: How often a ``gcn`` copy loses finished goals and their blocks (see its recipe).
-GCN_DROP_FINISHED_PROBABILITY = 0.5
 
 #: Level cap of the structural steps for ``gated``: see the augment module docstring.
 GATED_MAX_LEVELS = 6
@@ -60,19 +56,12 @@ class TranslationRecipeOptions(RecipeOptions):
 RECIPES: Registry[Callable[[RecipeOptions], Augmentation]] = Registry("recipe")
 
 
-@RECIPES.register(
-    "gcn", options=TranslationRecipeOptions, help="translation, noise, no covers, finished work"
-)
+@RECIPES.register("gcn", options=TranslationRecipeOptions, help="translation, noise, no covers")
 def _gcn(options: RecipeOptions) -> Augmentation:
-    """``gcn`` sums over its neighbours: it gets only the edits that remove nodes (idle
-    covers, and finished goals with their blocks, so that it sees 2-4-node scenes such as a
-    2-stack's; without them it took the bottom block of every 2-stack), translation and
-    noise."""
     translation_and_noise = Augmentation(copies=options.copies, noise_xy=0.004)
     return replace(
         translation_and_noise.without_structure(),
         drop_covers_probability=translation_and_noise.drop_covers_probability,
-        drop_finished_probability=GCN_DROP_FINISHED_PROBABILITY,
     )
 
 
