@@ -19,6 +19,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_sim.backend import SimBackend
 from manigraph_sim.physics.backend import PhysicsBackend
+from manigraph_skills.drivers.panda_motion import position_in
 
 
 class InProcessGripperTransport:
@@ -53,10 +54,13 @@ class InProcessJointTransport:
         scene = self.backend.scene(time.time())
         if scene is None:
             return None
-        return np.array(scene.object(object_id).position.as_tuple())
+        return position_in(scene, object_id)
 
     def stop(self) -> None:
         self.backend.emergency_stop(True)
 
     def resume(self) -> None:
         self.backend.emergency_stop(False)
+
+    def abort(self, reason: str) -> None:
+        """In process the world cannot go away between calls: there is nothing to abort."""
