@@ -70,9 +70,9 @@ validation episodes
   graphs of 2-4 nodes: the old recipe picked a covered block 50, 97 and 9 times over 50
   validation 2-, 3- and 4-stacks (shipped seed 1); with 1b, 36, 4, 0 (training seed 0) and
   19, 64, 9 (seed 2): better at K = 2, still not right, and seed 2 picked covered blocks at
-  K = 5-8 where the old seed 1 did not (docs/training.md). Lowering source towers too (the
-  inverse of step 1 for blocks) made it worse (50 of 50 at K = 2, 290 covered picks over 50
-  9-stacks).
+  K = 5-9 (0.93 at K = 9) where the old seed 1 did not (docs/training.md). Lowering source
+  towers too (the inverse of step 1 for blocks) made it worse (50 of 50 at K = 2, 290
+  covered picks over 50 9-stacks).
 
 Node order is not augmented: every architecture is permutation-equivariant (tested).
 Why each step keeps the label is argued in :mod:`~manigraph_planner.training.structure` and
