@@ -17,17 +17,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
 
-from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_lab.evaluate import EvalSpec, evaluate
-from manigraph_planner.gnn import save_checkpoint
-from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
-from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
-from manigraph_planner.training.dishwasher import (
-    DishTrainConfig,
-    load_dish_demonstrations,
-    train_dish,
-)
 from manigraph_shared.cli import Command
+
+# Demos, training and torch are imported when the experiment runs: ``manigraph`` loads every
+# subcommand's module to build its parser, so a module-level torch import here would cost
+# every ``manigraph`` process (the router's included) a torch import: 10-90 s on a busy CPU.
 
 PREFERENCES = ("top-bottom", "left-right")
 #: The paper's protocol: 5 demonstrations of 10 dishes, tested on 6, 8, 10 and 12.
@@ -49,6 +43,17 @@ class ExperimentConfig:
 
 
 def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[str, object]:
+    from manigraph_lab.demos import DemoProtocol, record_demos
+    from manigraph_lab.evaluate import EvalSpec, evaluate
+    from manigraph_planner.gnn import save_checkpoint
+    from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
+    from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
+    from manigraph_planner.training.dishwasher import (
+        DishTrainConfig,
+        load_dish_demonstrations,
+        train_dish,
+    )
+
     config.out.mkdir(parents=True, exist_ok=True)
     table: dict[str, dict[int, list[float]]] = {}
     started = time.perf_counter()
