@@ -23,3 +23,25 @@ def test_loading_every_subcommand_imports_no_heavy_library() -> None:
         [sys.executable, "-c", LOAD_EVERY_COMMAND], capture_output=True, text=True, check=True
     )
     assert done.stdout.strip() == "", f"imported at start-up: {done.stdout.strip()}"
+
+
+SERVE_THE_EXPERT = """
+import sys
+from manigraph_planner.decisions import DecisionHistory
+from manigraph_planner.explain import ExplainHandler
+from manigraph_planner.policies import load_policy
+from manigraph_planner.service import PlannerService
+
+handler = ExplainHandler(load_policy("expert"), DecisionHistory())
+print(handler.available, "torch" in sys.modules)
+print(handler.problem)
+"""
+
+
+def test_the_planner_serving_the_expert_imports_no_torch() -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", SERVE_THE_EXPERT], capture_output=True, text=True, check=True
+    )
+    flags, problem = done.stdout.strip().splitlines()
+    assert flags == "False False"  # not explainable, and torch never imported
+    assert "'expert' is not a GNN policy" in problem
