@@ -28,9 +28,20 @@ SERVICES = ("certs", "router", "recorder", "sim", "planner", "skills")
 READY = {"router": "zenoh router listening"}
 
 
+def compose_command() -> list[str]:
+    """`docker compose` (v2) where installed, else `docker-compose` (v1, Debian 12's)."""
+    v2 = subprocess.run(["docker", "compose", "version"], capture_output=True, text=True)
+    if v2.returncode == 0 and "compose" in v2.stdout.lower():
+        return ["docker", "compose"]
+    return ["docker-compose"]
+
+
+COMPOSE = compose_command()
+
+
 def compose(project: str, env: dict[str, str], *args: str, timeout: float = 600):  # type: ignore[no-untyped-def]
     return subprocess.run(
-        ["docker", "compose", "-p", project, *args],
+        [*COMPOSE, "-p", project, *args],
         cwd=REPO,
         env=env,
         capture_output=True,

@@ -45,10 +45,11 @@ def test_a_realtime_episode_takes_its_simulated_time_and_streams_like_a_robot(
     assert summary["realtime_factor"] <= 1.05
 
     (streams,) = stream_rates(log)
-    # 30 Hz (the default --scene-hz) within 20 %, also while the arm moves: flat out the
-    # service thread is inside each motion and no scene comes out until it ends.
+    # 30 Hz (the default --scene-hz) within 20 %, also while the arm moves: without streaming
+    # the service thread is inside each motion (the longest lasts 1-3 s) and no scene comes
+    # out until it ends. Gaps up to 0.28 s were seen at load 58 on 2 cores.
     assert 24.0 <= streams.scene_hz <= 36.0, streams
-    assert streams.scene_gap_max < 0.25, streams
+    assert streams.scene_gap_max < 0.5, streams
     # 100 Hz joint states (--joint-state-hz) during motions: 80-93 Hz measured at load 38 on
     # 2 cores (a step late by more than a period skips a sample); flat out: none at all.
     assert streams.moving_seconds > 0.8 * simulated - 1.0, streams
