@@ -19,10 +19,6 @@ from typing import TextIO
 
 from manigraph_shared.cli import Command
 
-# Demos, training and torch are imported when the experiment runs: ``manigraph`` loads every
-# subcommand's module to build its parser, so a module-level torch import here would cost
-# every ``manigraph`` process (the router's included) a torch import: 10-90 s on a busy CPU.
-
 PREFERENCES = ("top-bottom", "left-right")
 #: The paper's protocol: 5 demonstrations of 10 dishes, tested on 6, 8, 10 and 12.
 TRAIN_OBJECTS = 10
@@ -43,6 +39,8 @@ class ExperimentConfig:
 
 
 def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[str, object]:
+    # Imported here: every ``manigraph`` command loads this module to build its parser, and
+    # torch with PyG takes seconds (minutes on a loaded machine) to import.
     from manigraph_lab.demos import DemoProtocol, record_demos
     from manigraph_lab.evaluate import EvalSpec, evaluate
     from manigraph_planner.gnn import save_checkpoint
