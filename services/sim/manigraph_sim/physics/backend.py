@@ -18,6 +18,7 @@ budget is spent.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -75,6 +76,7 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         goal_tolerance: float = 0.02,
         realtime: bool = False,
         config: PhysicsConfig | None = None,
+        stream_hz: tuple[float, float] = (30.0, 100.0),
         video: VideoConfig | None = None,
         camera: CameraConfig | None = None,
         markers: MarkerMap | None = None,
@@ -82,6 +84,11 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         super().__init__()
         self.goal_tolerance = goal_tolerance
         self.realtime = realtime
+        #: With ``realtime``: the Scene and JointState rates a robot streams while it moves.
+        self.stream_hz = stream_hz
+        #: Called after every physics step of a motion in real time (the sim service
+        #: publishes what is due from it); None: nothing streams during a motion.
+        self.while_moving: Callable[[], None] | None = None
         self.video_config = video
         self.video: EpisodeVideo | None = None
         #: The tripod camera (``--camera``) and the markers printed on the bodies it sees.
@@ -118,7 +125,18 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
                 noise_sigma=options.camera_noise,
                 blur_pixels=options.camera_blur,
             )
-        return cls(options.goal_tolerance, options.realtime, video=video, camera=camera)
+        return cls(
+            options.goal_tolerance,
+            options.realtime,
+            stream_hz=(options.scene_hz, options.joint_state_hz),
+            video=video,
+            camera=camera,
+        )
+
+    @property
+    def stream_rates(self) -> tuple[float, float] | None:
+        """Scene and JointState rates (Hz) in real time; None when running flat out."""
+        return self.stream_hz if self.realtime else None
 
     # --- episodes ---------------------------------------------------------------------------
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
@@ -280,7 +298,12 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
             positions = np.array([p.positions for p in command.points])
             closed = [p.gripper is GripperTarget.CLOSED for p in command.points]
             self.physics_steps += self.world.follow(
-                times, positions, closed, self.realtime, halt=self.halted.is_set
+                times,
+                positions,
+                closed,
+                self.realtime,
+                halt=self.halted.is_set,
+                while_moving=self.while_moving,
             )
             if self.halted.is_set():
                 raise SkillError("stopped", "emergency stop during the trajectory")
@@ -326,6 +349,13 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
             loaded = {d.id for d in view.dishes.values() if view.loaded_as_preferred(d)}
             return loaded | {r.id for r in view.racks.values() if not r.open}
         return set(self._geometric_view().occupancy())
+
+    def sim_seconds(self) -> float | None:
+        """Physics time simulated in this episode (motions and settling, without the
+        settling of the layout before the first decision)."""
+        if self.world is None:
+            return None
+        return max(0.0, self.world.sim_time - self.config.settle_time)
 
     def episode_ended(self) -> None:
         if self.video is not None and self.request is not None:
