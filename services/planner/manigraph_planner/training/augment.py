@@ -82,6 +82,7 @@ checked against the expert in ``tests/planner/training/test_structure.py``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import torch
 
@@ -155,7 +156,8 @@ class Augmentation:
     def without_structure(self) -> Augmentation:
         """This augmentation with every structural step (1-4) off: rigid translation and
         position noise only."""
-        return replace(self, **{name: 0.0 for name in STRUCTURAL_PROBABILITIES})
+        off: dict[str, Any] = {name: 0.0 for name in STRUCTURAL_PROBABILITIES}
+        return replace(self, **off)
 
     def apply(self, samples: list[Sample], generator: torch.Generator) -> list[Sample]:
         """The originals followed by ``copies`` randomized copies of each."""

@@ -38,6 +38,8 @@ from manigraph_shared.messages import (
     JointTrajectoryResult,
     Quaternion,
     Scene,
+    SceneObject,
+    SceneRack,
     Vector3,
 )
 from manigraph_shared.orientations import ORIENTATION_NAMES, up_axis_orientation
@@ -119,7 +121,8 @@ def object_seen_after(
 def position_in(scene: Scene, object_id: str) -> np.ndarray | None:
     """Where object ``object_id`` is in ``scene``, or rack ``object_id``'s handle; None if
     neither is in it."""
-    for thing in [*scene.objects, *scene.racks]:
+    things: list[SceneObject | SceneRack] = [*scene.objects, *scene.racks]
+    for thing in things:
         if thing.id == object_id:
             return np.array(thing.position.as_tuple())
     return None
