@@ -17,16 +17,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
 
-from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_lab.evaluate import EvalSpec, evaluate
-from manigraph_planner.gnn import save_checkpoint
-from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
-from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
-from manigraph_planner.training.dishwasher import (
-    DishTrainConfig,
-    load_dish_demonstrations,
-    train_dish,
-)
 from manigraph_shared.cli import Command
 
 PREFERENCES = ("top-bottom", "left-right")
@@ -49,6 +39,19 @@ class ExperimentConfig:
 
 
 def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[str, object]:
+    # Imported here: every ``manigraph`` command loads this module to build its parser, and
+    # torch with PyG takes seconds (minutes on a loaded machine) to import.
+    from manigraph_lab.demos import DemoProtocol, record_demos
+    from manigraph_lab.evaluate import EvalSpec, evaluate
+    from manigraph_planner.gnn import save_checkpoint
+    from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
+    from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
+    from manigraph_planner.training.dishwasher import (
+        DishTrainConfig,
+        load_dish_demonstrations,
+        train_dish,
+    )
+
     config.out.mkdir(parents=True, exist_ok=True)
     table: dict[str, dict[int, list[float]]] = {}
     started = time.perf_counter()

@@ -28,9 +28,9 @@ from torch import Tensor
 from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC, TRAY_ACTIONS, dish_scene_to_graph
 from manigraph_planner.gnn.models import ModelConfig
 from manigraph_planner.gnn.models.dish_net import DishPolicyNet
+from manigraph_planner.training.dataset import read_decisions
 from manigraph_shared.errors import ConfigError, LogError
-from manigraph_shared.mcap_log import read_log
-from manigraph_shared.messages import Action, Scene, TrayAction
+from manigraph_shared.messages import TrayAction
 
 _NONE = TRAY_ACTIONS.index(TrayAction.NONE)
 
@@ -56,22 +56,13 @@ class DishDemos:
 
 
 def load_dish_demonstrations(paths: Iterable[Path]) -> DishDemos:
-    scenes: dict[tuple[str, int], Scene] = {}
-    actions: list[Action] = []
-    for path in sorted(paths):
-        if not path.is_file():
-            raise LogError(f"demonstrations: no such file: {path}")
-        for item in read_log(path, [Scene.key, Action.key]):
-            message = item.decode()
-            if isinstance(message, Scene):
-                scenes[(message.episode_id, message.sequence)] = message
-            elif isinstance(message, Action):
-                actions.append(message)
+    """The dishwasher decisions of the logs (those on a scene with racks; others skipped)."""
+    scenes, actions = read_decisions(paths)
     digest = hashlib.sha256()
     samples, episodes = [], set()
     for action in actions:
         scene = scenes.get((action.episode_id, action.scene_sequence))
-        if scene is None:
+        if scene is None or not scene.racks:
             continue
         graph = dish_scene_to_graph(scene)
         tray = TRAY_ACTIONS.index(action.tray_action)
