@@ -9,9 +9,10 @@
   and stacks and pyramid rows, which have room along x, are grasped as before.
 * **Dishes**: a plate standing on an edge is taken across its thickness (``plate_turn``); a
   bowl as a block.
-* **How high to carry**: a block hangs between the fingers, and the planner's carry heights
-  clear stacks with it; a cover sticks out far beyond the hand, so it is carried with its
-  underside above every object's top and every goal (a box's rim is under its lid goal).
+* **How high to carry**: a cover sticks out far beyond the hand, so it is carried with its
+  underside above every object's top and every goal (a box's rim is under its lid goal); a
+  held block is carried the same way (its underside 2 cm over every top), and the empty hand
+  to a block at the planner's own heights (the arm-link check sees the hand, not what it holds).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from manigraph_shared.grasp_points import grasp_height
-from manigraph_shared.messages import Scene, SceneObject, Vector3
+from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, Vector3
 from manigraph_shared.orientations import up_axis_orientation
 from manigraph_shared.panda import (
     FINGER_ABOVE_TCP,
@@ -75,6 +76,12 @@ def carry_height(scene: Scene, item: SceneObject, height: float) -> float:
     everything; 0 (the planner's own carry heights) for an object no wider than the hand."""
     if max(item.size.x, item.size.y) <= 2 * FINGER_OPEN:
         return 0.0
+    return clearing_height(scene, item, height)
+
+
+def clearing_height(scene: Scene, item: SceneObject, height: float) -> float:
+    """Lowest TCP height at which ``item`` (held ``height`` above its centre) passes over
+    every other object's top and every goal with ``CARRY_CLEARANCE`` to spare."""
     tops = [o.position.z + o.size.z / 2 for o in scene.objects if o.id != item.id]
     tops += [g.position.z for g in scene.goals]
     hang = height + item.size.z / 2
@@ -113,6 +120,11 @@ def choose_grasps(scene: Scene, item: SceneObject, goal: Vector3) -> tuple[Grasp
         carry,
         scene_obstacles(scene, item, here),
     )
+    if item.category is ObjectCategory.BLOCK:
+        # The planner carries at most ``PlanConfig.max_carry_z`` (0.30 m) high: a block lifted
+        # off an eight-block tower (top 0.28 m once it is gone) would come down onto the tower
+        # and drag across it. The arm check does not see the held block; this height does.
+        carry = max(carry, clearing_height(scene, item, height))
     place = Grasp(
         height,
         closing_turn(scene, _point(goal, height), item.id),
