@@ -42,10 +42,15 @@ class Demonstrations:
     skipped: int
 
 
-def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
+def recorded_decisions(paths: Iterable[Path]) -> list[tuple[Scene | None, Action]]:
+    """Every Action in the logs at ``paths`` (in file-name order, then log order) with the
+    Scene it was decided on, or None if no log holds that scene.
+
+    Raises:
+        LogError: a path is not a file.
+    """
     scenes: dict[tuple[str, int], Scene] = {}
     actions: list[Action] = []
-    digest = hashlib.sha256()
     for path in sorted(paths):
         if not path.is_file():
             raise LogError(f"demonstrations: no such file: {path}")
@@ -55,11 +60,15 @@ def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
                 scenes[(message.episode_id, message.sequence)] = message
             elif isinstance(message, Action):
                 actions.append(message)
+    return [(scenes.get((a.episode_id, a.scene_sequence)), a) for a in actions]
+
+
+def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
+    digest = hashlib.sha256()
     samples: list[Sample] = []
     skipped = 0
     episodes = set()
-    for action in actions:
-        scene = scenes.get((action.episode_id, action.scene_sequence))
+    for scene, action in recorded_decisions(paths):
         sample = _sample(scene, action) if scene is not None else None
         if sample is None:
             skipped += 1
