@@ -36,14 +36,30 @@ def setup_logging(level: str | None = None) -> None:
     )
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _chosen_command(argv: list[str], names: set[str]) -> str | None:
+    """The subcommand ``argv`` names, if it names one: only its entry point then needs
+    loading (``manigraph router`` should not import torch because the planner is installed)."""
+    tokens = iter(argv)
+    for token in tokens:
+        if token == "--log-level":
+            next(tokens, None)
+        elif not token.startswith("-"):
+            return token if token in names else None
+    return None
+
+
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The parser of every installed subcommand; given ``argv`` that names one, of it alone."""
+    entries = {entry.name: entry for entry in entry_points(group=GROUP)}
+    chosen = _chosen_command(argv, set(entries)) if argv is not None else None
     parser = argparse.ArgumentParser(
         prog="manigraph",
         description="Learn long-horizon manipulation policies with GNNs; run them over Zenoh.",
     )
     parser.add_argument("--log-level", help="DEBUG, INFO, WARNING (env MANIGRAPH_LOG_LEVEL)")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for entry in sorted(entry_points(group=GROUP), key=lambda e: e.name):
+    for name in [chosen] if chosen else sorted(entries):
+        entry = entries[name]
         command: Command = entry.load()
         sub = subparsers.add_parser(entry.name, help=command.help, description=command.help)
         command.configure(sub)
@@ -52,7 +68,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else argv
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     setup_logging(args.log_level)
     try:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -94,6 +95,23 @@ def test_physics_only_flags_are_refused_for_the_geometric_world(flag: list[str])
     assert result.returncode != 0
     option = flag[0].lstrip("-")
     assert f"backend.{option}: not an option of backend 'geometric'" in result.stderr
+
+
+def test_a_port_another_stack_holds_is_refused_before_anything_starts() -> None:
+    """Two stacks on one router would answer each other's resets; the second is refused."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as other_stack:
+        other_stack.bind(("127.0.0.1", 0))
+        other_stack.listen()
+        port = other_stack.getsockname()[1]
+        result = subprocess.run(
+            [sys.executable, "-m", "manigraph_shared.cli", "up", "--port", str(port)],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+    assert result.returncode == 2
+    assert f"port: 127.0.0.1:{port} is in use" in result.stderr
+    assert "stack is up" not in result.stderr
 
 
 @pytest.mark.parametrize("json_only", [False, True])

@@ -1,0 +1,43 @@
+"""`manigraph run`: seeded episodes on an already running stack."""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from manigraph_shared.bus import Bus
+from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
+from manigraph_shared.cli import Command
+from manigraph_shared.options import add_option_arguments, options_from_args
+from manigraph_tools.commands.common import emit_json, wait_services
+from manigraph_tools.episodes import EpisodeOptions, EpisodePlan, run_episodes
+
+
+def episode_arguments(parser: argparse.ArgumentParser) -> None:
+    add_option_arguments(parser.add_argument_group("episodes"), EpisodeOptions)
+
+
+def plan_from_args(args: argparse.Namespace, episodes: int) -> EpisodePlan:
+    options = options_from_args(EpisodeOptions, args)
+    return options.plan(episodes, run_id=f"{options.label()}-{int(time.time())}")
+
+
+def _run_configure(parser: argparse.ArgumentParser) -> None:
+    episode_arguments(parser)
+    add_bus_arguments(parser)
+
+
+def _run_run(args: argparse.Namespace) -> int:
+    plan = plan_from_args(args, args.episodes or 1)  # a bad option stops here, before any waiting
+    with Bus.open(bus_config_from_args(args, wait_seconds=30.0)) as bus:
+        wait_services(bus, ["sim", "planner", "skills"])
+        summary = run_episodes(bus, plan)
+    emit_json(summary, readable=not args.json)
+    return 0
+
+
+run_command = Command(
+    help="run seeded episodes on an already running stack; last line: one JSON object",
+    configure=_run_configure,
+    run=_run_run,
+)

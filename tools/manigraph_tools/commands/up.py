@@ -1,0 +1,202 @@
+"""`manigraph up`: the router and every service as supervised processes; with `--episodes`,
+run them and exit."""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import signal
+import socket
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from manigraph_shared.bus import Bus
+from manigraph_shared.bus_config import BusConfig
+from manigraph_shared.cli import Command
+from manigraph_shared.errors import ConfigError, ManigraphError
+from manigraph_shared.manifest import driver_for_world, load_manifests
+from manigraph_shared.registry import Registry
+from manigraph_tools.certs import make_certificates
+from manigraph_tools.commands.common import emit_json
+from manigraph_tools.commands.run import episode_arguments, plan_from_args
+from manigraph_tools.episodes import run_episodes
+from manigraph_tools.supervisor import ProcessSpec, Supervisor
+
+
+def _skills_driver(sim_backend: str) -> str:
+    """The skills driver that needs only what the sim backend offers, from their manifests."""
+    manifests = load_manifests()
+    return driver_for_world(manifests["sim"], sim_backend, manifests["skills"])
+
+
+def _sim_backends() -> Registry[Any] | None:
+    """The sim's backend registry, whose options ``up`` forwards to ``manigraph sim``; None
+    where the sim is not installed (an image with one service, which cannot run ``up``)."""
+    try:
+        from manigraph_sim.backends import BACKENDS
+    except ImportError:
+        return None
+    return BACKENDS
+
+
+#: Perception of the physics sim's rendered camera: its markers and exact calibration.
+SIM_CAMERA_PERCEPTION = [
+    "perception",
+    "--camera",
+    "bus",
+    "--markers",
+    "sim",
+    "--calibration",
+    str(Path(__file__).resolve().parents[3] / "examples" / "calibration" / "sim-front.yaml"),
+]
+
+
+def _up_configure(parser: argparse.ArgumentParser) -> None:
+    episode_arguments(parser)
+    parser.add_argument("--record", type=Path, help="also record everything to this MCAP file")
+    parser.add_argument("--policy", default="expert", help="planner policy or checkpoint")
+    parser.add_argument(
+        "--sim",
+        default="geometric",
+        choices=["geometric", "physics"],
+        help="sim backend (default: geometric)",
+    )
+    parser.add_argument(
+        "--scene-source",
+        choices=["sim", "camera"],
+        default="sim",
+        help="who publishes Scene: the sim's ground truth (default) or perception reading "
+        "the physics sim's rendered camera (needs Vulkan; docs/perception.md)",
+    )
+    parser.add_argument(
+        "--explain-decisions",
+        action="store_true",
+        help="GNN policies: publish an Explanation beside every decision (lands in --record)",
+    )
+    parser.add_argument("--port", type=int, default=7447, help="router port on 127.0.0.1")
+    parser.add_argument(
+        "--secure",
+        action="store_true",
+        help="mutual TLS and the router's access control, with certificates made for this run "
+        "in a temporary directory (default: plain TCP on loopback, for development)",
+    )
+    parser.add_argument("--log-dir", type=Path, help="also write <service>.log files here")
+    backends = _sim_backends()
+    if backends is not None:
+        backends.add_arguments(
+            parser.add_argument_group("sim backend options (passed to manigraph sim)")
+        )
+
+
+def _refuse_busy_port(port: int) -> None:
+    """A second ``up`` on a port another stack's router holds would join that stack: its sim
+    would answer the other's resets and both runs would be garbage. Refuse it instead."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as a router's listener
+        try:
+            probe.bind(("127.0.0.1", port))
+        except OSError as exc:
+            raise ConfigError(
+                "port", f"127.0.0.1:{port} is in use ({exc.strerror}; another stack?): pass --port"
+            ) from exc
+
+
+def _interrupt(signum: int, _frame: object) -> None:
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
+def _up_run(args: argparse.Namespace) -> int:
+    # Explicit handlers: a process started with SIGINT ignored (a background job of a script,
+    # some CI runners) would otherwise never see Ctrl-C, and SIGTERM should stop it the same way.
+    signal.signal(signal.SIGINT, _interrupt)
+    signal.signal(signal.SIGTERM, _interrupt)
+    _refuse_busy_port(args.port)
+    tls_dir = Path(tempfile.mkdtemp(prefix="manigraph-certs-")) if args.secure else None
+    endpoint = f"{'tls' if tls_dir else 'tcp'}/127.0.0.1:{args.port}"
+    bus_env = {
+        "MANIGRAPH_ZENOH_MODE": "client",
+        "MANIGRAPH_ZENOH_CONNECT": endpoint,
+        "MANIGRAPH_ZENOH_NO_MULTICAST_SCOUTING": "1",
+        "MANIGRAPH_TLS_DIR": str(tls_dir or ""),  # plain TCP is chosen, not inherited
+        "MANIGRAPH_TLS_IDENTITY": "",
+    }
+    if tls_dir is not None:
+        make_certificates(tls_dir, force=True)
+
+    def spec(name: str, argv: list[str]) -> ProcessSpec:
+        identity = {"MANIGRAPH_TLS_IDENTITY": name} if tls_dir else {}
+        return ProcessSpec(name, argv, {**bus_env, **identity})
+
+    backends = _sim_backends()
+    sim_options = (
+        backends.argv(args.sim, backends.given_options(args)) if backends is not None else []
+    )
+    if args.scene_source == "camera":
+        if args.sim != "physics":
+            raise ConfigError("scene-source", "camera needs --sim physics (it renders)")
+        sim_options += ["--camera", "--no-scenes"]
+    plan = plan_from_args(args, args.episodes) if args.episodes is not None else None
+    specs = [spec("router", ["router", "--listen", endpoint])]
+    if args.record:
+        specs.append(spec("recorder", ["record", "--output", str(args.record)]))
+    specs += [
+        spec("sim", ["sim", "--backend", args.sim, *sim_options]),
+        spec(
+            "planner",
+            ["planner", "--policy", args.policy]
+            + (["--explain-decisions"] if args.explain_decisions else []),
+        ),
+        spec("skills", ["skills", "--driver", _skills_driver(args.sim)]),
+    ]
+    if args.scene_source == "camera":
+        specs.append(spec("perception", SIM_CAMERA_PERCEPTION))
+    supervisor = Supervisor(args.log_dir)
+    summary: dict[str, object] | None = None
+    client = BusConfig(
+        connect=(endpoint,),
+        wait_seconds=30.0,
+        tls_dir=tls_dir,
+        tls_identity="client" if tls_dir else None,
+    )
+    try:
+        for process in specs:
+            supervisor.start(process)
+        supervisor.watch()  # a dead service is restarted; a dead router stops the stack
+        with Bus.open(client) as bus:
+            supervisor.wait_alive(bus, [process.name for process in specs])
+            security = "mutual TLS + access control" if tls_dir else "plain TCP"
+            print(
+                "stack is up: " + ", ".join(s.name for s in specs) + f" ({security})",
+                file=sys.stderr,
+                flush=True,
+            )
+            if plan is None:
+                print("Ctrl-C stops every service", file=sys.stderr, flush=True)
+                while True:
+                    supervisor.raise_if_failed()
+                    time.sleep(0.5)
+            summary = run_episodes(bus, plan)
+    except KeyboardInterrupt:
+        if supervisor.failure is None:
+            print("stopping the stack", file=sys.stderr)
+    finally:
+        supervisor.stop()
+        if tls_dir is not None:
+            shutil.rmtree(tls_dir, ignore_errors=True)
+    if supervisor.failure is not None:
+        raise ManigraphError(f"the stack stopped: {supervisor.failure}")
+    if summary is not None:
+        if any(supervisor.restarts.values()):
+            summary["restarts"] = {k: v for k, v in supervisor.restarts.items() if v}
+        emit_json(summary, readable=not args.json)
+    return 0
+
+
+up_command = Command(
+    help="start the router and every service locally; with --episodes run them and exit",
+    configure=_up_configure,
+    run=_up_run,
+)
