@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import statistics
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -22,49 +21,16 @@ from mcap.reader import make_reader
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action
-from manigraph_tools.testing import stack
+from manigraph_tools.testing import record_then_kill, stack
 
 
 def lost_window_ms(tmp: Path, run: int) -> float:
     """Kill a recording recorder; ms of messages published before the kill that are lost."""
     with stack(tmp) as running:
-        log = tmp / f"kill-{run}.mcap"
-        running.start("router")
-        recorder = running.start("recorder", "record", "--output", str(log))
-        published: dict[int, float] = {}
-        with running.client() as bus:
-            running.wait_alive(bus, "recorder")
-            stop = threading.Event()
-
-            def publish() -> None:
-                step = 0
-                while not stop.is_set():
-                    published[step] = time.monotonic()
-                    bus.publish(
-                        Action(
-                            decision_id=f"e:{step}",
-                            episode_id="e",
-                            scene_sequence=step,
-                            object_id="b",
-                            goal_id="g",
-                            policy="bench",
-                            stamp=time.time(),
-                        )
-                    )
-                    step += 1
-                    time.sleep(0.002)
-
-            publisher = threading.Thread(target=publish)
-            publisher.start()
-            time.sleep(1.5)
-            killed_at = time.monotonic()
-            recorder.kill()
-            recorder.wait()
-            stop.set()
-            publisher.join()
-        recovered = running.run("record", "--recover", str(log))
+        killed = record_then_kill(running, tmp / f"kill-{run}.mcap")
+        recovered = running.run("record", "--recover", str(killed.log))
         assert recovered.returncode == 0, recovered.stderr
-        with log.open("rb") as stream:  # the standard reader, summary and all
+        with killed.log.open("rb") as stream:  # the standard reader, summary and all
             reader = make_reader(stream)
             assert reader.get_summary() is not None
             kept = {
@@ -72,8 +38,7 @@ def lost_window_ms(tmp: Path, run: int) -> float:
                 for _, channel, m in reader.iter_messages()
                 if channel.topic == Action.key
             }
-    lost = [at for step, at in published.items() if at < killed_at and step not in kept]
-    return 1000 * (killed_at - min(lost)) if lost else 0.0
+    return killed.lost_window_ms(kept)
 
 
 def main() -> None:

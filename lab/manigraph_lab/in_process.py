@@ -60,3 +60,6 @@ class InProcessJointTransport:
 
     def resume(self) -> None:
         self.backend.emergency_stop(False)
+
+    def abort(self, reason: str) -> None:
+        """In process the world cannot go away between calls: there is nothing to abort."""

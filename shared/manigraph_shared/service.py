@@ -100,7 +100,7 @@ class Service:
         self._inbox = Inbox(INBOX_CAPACITY)
         self.messages_in = 0
         self.rejections = Rejections()
-        self.last_error = ""
+        self.last_error: str = ""
         self.stop_event = threading.Event()
         self._errors_to_report: deque[ManigraphError] = deque()
         self._rejections_unreported = 0

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import threading
 import time
 from pathlib import Path
 
@@ -12,7 +11,7 @@ from mcap.reader import make_reader
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, Scene, ServiceStatus
-from manigraph_tools.testing import Stack, free_port, run_up
+from manigraph_tools.testing import Stack, free_port, record_then_kill, run_up
 
 pytestmark = pytest.mark.integration
 
@@ -103,44 +102,10 @@ def test_bad_payloads_are_reported_and_the_services_keep_running(running_stack: 
 def test_recorder_killed_hard_keeps_everything_older_than_its_last_flush(
     running_stack: Stack, tmp_path: Path
 ) -> None:
-    log = tmp_path / "killed.mcap"
-    running_stack.start("router")
-    recorder = running_stack.start("recorder", "record", "--output", str(log))
-    published: dict[int, float] = {}
-    with running_stack.client() as bus:
-        running_stack.wait_alive(bus, "recorder")
-        stop = threading.Event()
-
-        def publish() -> None:
-            step = 0
-            while not stop.is_set():
-                published[step] = time.monotonic()
-                bus.publish(
-                    Action(
-                        decision_id=f"e:{step}",
-                        episode_id="e",
-                        scene_sequence=step,
-                        object_id="b",
-                        goal_id="g",
-                        policy="load",
-                        stamp=time.time(),
-                    )
-                )
-                step += 1
-                time.sleep(0.002)
-
-        publisher = threading.Thread(target=publish)
-        publisher.start()
-        time.sleep(1.5)
-        killed_at = time.monotonic()
-        recorder.kill()  # SIGKILL: no chance to finish the file
-        recorder.wait()
-        stop.set()
-        publisher.join()
-
-    recovered = {Action.decode(m.data).scene_sequence for m in read_log(log, [Action.key])}
+    killed = record_then_kill(running_stack, tmp_path / "killed.mcap")
+    recovered = {Action.decode(m.data).scene_sequence for m in read_log(killed.log, [Action.key])}
     # Flushed every 100 ms; allow the same again for delivery and scheduling on a busy CI box.
-    must_have = {step for step, at in published.items() if at < killed_at - 0.2}
+    must_have = killed.flushed_before(0.2)
     assert len(must_have) > 100
     assert must_have <= recovered, f"lost {len(must_have - recovered)} flushed messages"
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import threading
 import time
 from pathlib import Path
 
@@ -13,7 +12,7 @@ from mcap.reader import make_reader
 from manigraph_shared.errors import LogError
 from manigraph_shared.mcap_log import McapLogWriter, is_finalised, recover_log
 from manigraph_shared.messages import Action
-from manigraph_tools.testing import Stack
+from manigraph_tools.testing import Stack, record_then_kill
 
 pytestmark = pytest.mark.integration
 
@@ -106,34 +105,11 @@ def test_files_rotate_by_age(running_stack: Stack, tmp_path: Path) -> None:
 def test_a_killed_recorder_file_opens_with_the_standard_reader_after_recover(
     running_stack: Stack, tmp_path: Path
 ) -> None:
-    log = tmp_path / "killed.mcap"
-    running_stack.start("router")
-    recorder = running_stack.start("recorder", "record", "--output", str(log))
-    published: dict[int, float] = {}
-    with running_stack.client() as bus:
-        running_stack.wait_alive(bus, "recorder")
-        stop = threading.Event()
-
-        def publish() -> None:
-            step = 0
-            while not stop.is_set():
-                published[step] = time.monotonic()
-                bus.publish(action(step))
-                step += 1
-                time.sleep(0.002)
-
-        publisher = threading.Thread(target=publish)
-        publisher.start()
-        time.sleep(1.5)
-        killed_at = time.monotonic()
-        recorder.kill()
-        recorder.wait()
-        stop.set()
-        publisher.join()
-    result = running_stack.run("record", "--recover", str(log))
+    killed = record_then_kill(running_stack, tmp_path / "killed.mcap")
+    result = running_stack.run("record", "--recover", str(killed.log))
     assert result.returncode == 0 and "finalised with" in result.stderr
-    recovered = set(standard_read(log))
-    must_have = {step for step, at in published.items() if at < killed_at - 0.2}
+    recovered = set(standard_read(killed.log))
+    must_have = killed.flushed_before(0.2)
     assert len(must_have) > 100 and must_have <= recovered
 
 

@@ -242,3 +242,44 @@ def test_configuration_comes_from_the_environment_with_the_variable_named() -> N
             {"MANIGRAPH_FRANKA_ADDRESS": "r", "MANIGRAPH_FRANKA_GRASP_FORCE": "x"}
         )
     assert caught.value.field == "franka.grasp_force (MANIGRAPH_FRANKA_GRASP_FORCE)"
+
+
+class SlowRobot(FakeRobot):
+    """A motion that takes until ``stop`` halts it, as franky's blocking ``move`` does."""
+
+    def __init__(self, address: str, **options: object) -> None:
+        super().__init__(address, **options)
+        self.halted = threading.Event()
+        self.moving = threading.Event()
+
+    def move(self, motion: object) -> None:
+        self.moving.set()
+        if not self.halted.wait(timeout=10.0):
+            raise AssertionError("the motion was never halted")
+        self.calls.append("halted")
+        raise RuntimeError("franky: motion aborted by stop")  # as libfranka reports it
+
+    def stop(self) -> None:
+        super().stop()
+        self.halted.set()
+
+
+def test_an_abort_halts_the_motion_under_way_which_fails_with_its_reason() -> None:
+    config = FrankaConfig(address="172.16.0.2", realtime=False)
+    franka = FrankaDriver(config=config, robot_class=SlowRobot, gripper_class=FakeGripper)
+    outcome: dict[str, object] = {}
+
+    def pick() -> None:
+        try:
+            franka.pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
+        except SkillError as exc:
+            outcome["reason"] = exc.reason
+
+    worker = threading.Thread(target=pick)
+    worker.start()
+    robot = SlowRobot.last
+    assert isinstance(robot, SlowRobot) and robot.moving.wait(timeout=10.0)
+    franka.abort("sim_lost")
+    worker.join(timeout=10.0)
+    assert outcome == {"reason": "sim_lost"}  # not a robot_error: the cause is named
+    assert "stop" in robot.calls

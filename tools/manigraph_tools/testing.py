@@ -12,15 +12,18 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
 import zenoh
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
+from manigraph_shared.messages import Action
 
 
 def free_port() -> int:
@@ -145,6 +148,66 @@ def stack(log_dir: Path, tls_dir: Path | None = None) -> Iterator[Stack]:
         yield running
     finally:
         running.stop_all()
+
+
+@dataclass(frozen=True)
+class KilledRecording:
+    """What ``record_then_kill`` left: the unfinished log, when each step was published
+    (monotonic seconds, by the Action's ``scene_sequence``) and when the recorder was killed."""
+
+    log: Path
+    published: dict[int, float]
+    killed_at: float
+
+    def lost_window_ms(self, kept: set[int]) -> float:
+        """How far back before the kill published steps are missing from ``kept``, in ms."""
+        lost = [
+            at for step, at in self.published.items() if at < self.killed_at and step not in kept
+        ]
+        return 1000 * (self.killed_at - min(lost)) if lost else 0.0
+
+    def flushed_before(self, margin: float) -> set[int]:
+        """Steps published more than ``margin`` seconds before the kill."""
+        return {step for step, at in self.published.items() if at < self.killed_at - margin}
+
+
+def record_then_kill(running: Stack, log: Path, seconds: float = 1.5) -> KilledRecording:
+    """Start a router and a recorder writing ``log``, publish Actions at ~500/s for
+    ``seconds``, then SIGKILL the recorder mid-stream: no chance to finish its file."""
+    running.start("router")
+    recorder = running.start("recorder", "record", "--output", str(log))
+    published: dict[int, float] = {}
+    with running.client() as bus:
+        running.wait_alive(bus, "recorder")
+        stop = threading.Event()
+
+        def publish() -> None:
+            step = 0
+            while not stop.is_set():
+                published[step] = time.monotonic()
+                bus.publish(
+                    Action(
+                        decision_id=f"e:{step}",
+                        episode_id="e",
+                        scene_sequence=step,
+                        object_id="b",
+                        goal_id="g",
+                        policy="load",
+                        stamp=time.time(),
+                    )
+                )
+                step += 1
+                time.sleep(0.002)
+
+        publisher = threading.Thread(target=publish)
+        publisher.start()
+        time.sleep(seconds)
+        killed_at = time.monotonic()
+        recorder.kill()
+        recorder.wait()
+        stop.set()
+        publisher.join()
+    return KilledRecording(log, published, killed_at)
 
 
 def open_raw_session(endpoint: str, **tls: str) -> zenoh.Session:

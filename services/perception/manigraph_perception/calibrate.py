@@ -57,7 +57,8 @@ def calibrate_intrinsics(images: list[np.ndarray], spec: CharucoSpec) -> tuple[C
         corners, ids, _, _ = detector.detectBoard(grey)
         if ids is None or len(ids) < 6:
             continue
-        objects, pixels = board.matchImagePoints(corners, ids)
+        # OpenCV's stubs want one array per marker; a ChArUco board's corners are one array.
+        objects, pixels = board.matchImagePoints(corners, ids)  # type: ignore[call-overload]
         object_points.append(objects)
         image_points.append(pixels)
     if len(object_points) < 4:
@@ -201,7 +202,7 @@ def fit_camera_pose(
     in_camera = object_points @ camera_T_base[:3, :3].T + camera_T_base[:3, 3]
     rays = cv2.undistortPoints(image_points.reshape(-1, 1, 2), k, d).reshape(-1, 2)
     rays = np.hstack([rays, np.ones((len(rays), 1))])
-    rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+    rays = rays / np.linalg.norm(rays, axis=1, keepdims=True)
     along = np.sum(in_camera * rays, axis=1, keepdims=True)
     residuals = np.linalg.norm(in_camera - along * rays, axis=1) * 1000
     return np.linalg.inv(camera_T_base), residuals

@@ -94,6 +94,7 @@ def load_calibration(path: str | Path, need_extrinsics: bool = True) -> Calibrat
 
     try:
         k = matrix("camera_matrix", True)
+        assert k is not None  # required: matrix() raised otherwise
         distortion = matrix("distortion_coefficients", False)
         base_T_camera = matrix("base_T_camera", need_extrinsics)
         width = int(storage.getNode("image_width").real() or 640)

@@ -51,8 +51,8 @@ def scene_obstacles(scene: Scene, moving: SceneObject, at: np.ndarray) -> tuple[
         found.append(
             Obstacle(
                 other.id,
-                tuple(centre.tolist()),  # type: ignore[arg-type]
-                tuple(size.tolist()),  # type: ignore[arg-type]
+                tuple(centre.tolist()),
+                tuple(size.tolist()),
                 (o.x, o.y, o.z, o.w),
                 support,
             )

@@ -157,7 +157,9 @@ def _up_run(args: argparse.Namespace) -> int:
     summary: dict[str, object] | None = None
     client = BusConfig(
         connect=(endpoint,),
-        wait_seconds=30.0,
+        # The router is a process started just now: on a loaded 2-core machine its start took
+        # 30-90 s (load 14-40). A router that dies stops the stack sooner anyway.
+        wait_seconds=120.0,
         tls_dir=tls_dir,
         tls_identity="client" if tls_dir else None,
     )
@@ -166,7 +168,8 @@ def _up_run(args: argparse.Namespace) -> int:
             supervisor.start(process)
         supervisor.watch()  # a dead service is restarted; a dead router stops the stack
         with Bus.open(client) as bus:
-            supervisor.wait_alive(bus, [process.name for process in specs])
+            # Services import torch and SAPIEN: 40-90 s each at load 15+ on two cores.
+            supervisor.wait_alive(bus, [process.name for process in specs], timeout=180.0)
             security = "mutual TLS + access control" if tls_dir else "plain TCP"
             print(
                 "stack is up: " + ", ".join(s.name for s in specs) + f" ({security})",

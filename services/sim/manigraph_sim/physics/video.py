@@ -96,7 +96,7 @@ class EpisodeVideo:
         path = Path(self.config.path.format(episode=episode, seed=seed))
         path.parent.mkdir(parents=True, exist_ok=True)
         if path.suffix.lower() == ".gif":
-            imageio.mimsave(path, self.frames, duration=1000 / self.config.fps, loop=0)
+            imageio.mimsave(path, [*self.frames], duration=1000 / self.config.fps, loop=0)
         else:
-            imageio.mimsave(path, self.frames, fps=self.config.fps, macro_block_size=8)
+            imageio.mimsave(path, [*self.frames], fps=self.config.fps, macro_block_size=8)
         return path

@@ -126,6 +126,9 @@ class FrankaJointTransport:
         self._scene: Scene | None = None
         self._lock = threading.Condition()
         self._stopped = False
+        #: Set by ``abort`` (the skills service lost what it depends on): the motion under way
+        #: ends with this reason instead of its own result.
+        self._aborted: str | None = None
         if bus is not None and not config.dry_run:
             bus.subscribe(Scene, self._on_scene)  # perception's scenes: placement checks
 
@@ -133,14 +136,22 @@ class FrankaJointTransport:
     def stop(self) -> None:
         """Emergency stop: halt the arm now (best effort through franky) and refuse motions."""
         self._stopped = True
-        if self.robot is not None and not self.config.dry_run:
-            try:
-                self.robot.stop()
-            except Exception as exc:  # the library's; the flag still refuses what follows
-                log.warning("stopping the robot: %s", exc)
+        self._halt()
 
     def resume(self) -> None:
         self._stopped = False
+
+    def abort(self, reason: str) -> None:
+        """Halt the motion under way, which then fails with ``reason``; later ones run."""
+        self._aborted = reason
+        self._halt()
+
+    def _halt(self) -> None:
+        if self.robot is not None and not self.config.dry_run:
+            try:
+                self.robot.stop()
+            except Exception as exc:  # the library's; the flags still refuse what follows
+                log.warning("stopping the robot: %s", exc)
 
     def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
         if self._stopped:
@@ -180,14 +191,19 @@ class FrankaJointTransport:
                 "start_mismatch",
                 f"arm is {float(offset.max()):.3f} rad from the trajectory's start",
             )
+        self._aborted = None
         try:
             self._run(command)
         except Exception as exc:  # franky's ControlException, GripperException, ...
             if isinstance(exc, SkillError):
                 raise
+            if self._aborted is not None:
+                raise SkillError(self._aborted, "motion aborted") from exc
             return self._result(
                 command, self._read_joints(), self._width(), "robot_error", str(exc)[:1000]
             )
+        if self._aborted is not None:
+            raise SkillError(self._aborted, "motion aborted")
         return self._result(command, self._read_joints(), self._width())
 
     def joint_positions(self) -> np.ndarray:

@@ -185,9 +185,7 @@ class PandaMotionDriver(RobotDriver):
         self.transport.resume()
 
     def abort(self, reason: str) -> None:
-        abort = getattr(self.transport, "abort", None)
-        if abort is not None:
-            abort(reason)
+        self.transport.abort(reason)
 
     # --- pieces -----------------------------------------------------------------------------
     def _open(self, decision_id: str, obstacles: tuple[Obstacle, ...]) -> None:
