@@ -5,7 +5,7 @@ UV := $(PYTHON) -m uv
 RUN := $(UV) run --frozen --all-packages
 UV_VERSION := 0.13.9
 
-.PHONY: install vulkan up test test-fast lint format bench soak clean
+.PHONY: install vulkan chromium up test test-fast lint format bench soak clean
 
 install:  ## install uv and every package of the workspace (uv.lock)
 	@$(PYTHON) -m uv --version >/dev/null 2>&1 || $(PYTHON) -m pip install --quiet "uv==$(UV_VERSION)"
@@ -13,6 +13,9 @@ install:  ## install uv and every package of the workspace (uv.lock)
 
 vulkan:  ## Debian 12 only, as root: Mesa 25 lavapipe for physics videos and ManiSkill rendering
 	bash scripts/install-vulkan.sh
+
+chromium:  ## Debian, as root: Chromium for the demonstration page's browser test
+	bash scripts/install-chromium.sh
 
 up: install  ## run a 4-block stacking episode through router, sim, planner and skills
 	$(RUN) manigraph up --task stack --blocks 4 --episodes 1 --seed 0 --record logs/make-up.mcap

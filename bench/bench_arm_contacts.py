@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from collections import Counter
 
@@ -102,6 +103,13 @@ def main() -> None:
             touched_episodes += 1
             print(f"seed {seed}: {sorted(seen)}", flush=True)
         events.update((link, other.split("_")[0]) for _moving, link, other in seen)
+        # Progress on stderr: a long run stopped early still says how far it got.
+        print(
+            f"seed {seed}: {'success' if record.success else 'failure'}, "
+            f"{len(seen)} arm contacts, {seconds[-1]:.1f} s",
+            file=sys.stderr,
+            flush=True,
+        )
     print(
         json.dumps(
             {

@@ -4,8 +4,10 @@ One stack (router, sim, planner with a GNN policy, skills, recorder; real proces
 loopback) takes, in turn:
 
 * **fuzz**: ``--per-type`` malformed payloads on the key of every message type of the
-  contract (``Message.registry``; query types get a fifth of that as query payloads), drawn
-  by a mutational fuzzer from Hypothesis-generated valid messages;
+  contract (``Message.registry``; on the query keys as query payloads), drawn by a mutational
+  fuzzer from Hypothesis-generated valid messages, while real 4-block episodes run one after
+  another on the same stack (an episode that fails for ``timeout`` or ``no_progress``, or
+  whose run does not finish, is a *hung* episode);
 * **valid / invalid scene floods**: ``--flood-seconds`` of scenes at ``--flood-rate``/s;
 * **explain bomb**: three explain requests at once, each a 256-object + 256-goal scene;
 * **oversized task file**: a reset request past the 1 MiB payload limit, and one with a
@@ -25,6 +27,7 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import subprocess
 import tempfile
 import threading
 import time
@@ -33,6 +36,7 @@ from pathlib import Path
 
 from soak_stack import SERVICES, SoakStack, soak_stack  # bench/soak_stack.py
 
+from manigraph_shared.errors import MessageError
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import (
     Delivery,
@@ -48,6 +52,8 @@ from manigraph_tools.flood import concrete_key, flood_scenes, fuzz_stack
 from manigraph_tools.fuzzing import message_types
 
 RSS_TOLERANCE = 0.20
+Counter = collections.Counter[str]
+HUNG_REASONS = ("timeout", "no_progress")  # what the run client says of an episode that hung
 REPO = Path(__file__).resolve().parents[1]
 
 
@@ -66,21 +72,44 @@ class Soak:
         self.soak = soak
         self.settle = settle
         self.rows: list[Row] = []
-        self._recorded: collections.Counter[str] = collections.Counter()
+        self._files: dict[Path, tuple[int, Counter, Counter, bool]] = {}
 
-    def recorded_since_last(self) -> collections.Counter[str]:
-        """Messages per key the recorder wrote since the previous call (flushed chunks)."""
-        total: collections.Counter[str] = collections.Counter()
+    def recorded(self, decode: bool = False) -> tuple[Counter, Counter]:
+        """Messages per key the recorder has written so far (flushed chunks), and of them the
+        payloads that fail validation as their key's type (with ``decode``; the fuzzer sends
+        only those, while episodes running meanwhile publish valid ones on the same keys).
+
+        Waits until the recorder has caught up first. A file is read again only if it grew
+        (rotated files are read once), so the cost does not grow with every check.
+        """
+        self._wait_recorder_idle()
+        total: Counter = collections.Counter()
+        invalid: Counter = collections.Counter()
         for path in sorted(self.soak.log.parent.glob("soak*.mcap")):
-            total.update(item.topic for item in read_log(path))
-        delta = total - self._recorded
-        self._recorded = total
-        return delta
+            size = path.stat().st_size
+            cached = self._files.get(path)
+            if cached is None or cached[0] != size or (decode and not cached[3]):
+                cached = (size, *count_recorded(path, decode), decode)
+                self._files[path] = cached
+            total.update(cached[1])
+            invalid.update(cached[2])
+        return total, invalid
+
+    def _wait_recorder_idle(self, window: float = 2.0, limit: float = 120.0) -> None:
+        """Until the recorder's files grow by less than 64 KiB in ``window`` s (heartbeats
+        keep them growing a little), at most ``limit`` s."""
+        deadline = time.monotonic() + limit
+        size = -1
+        while time.monotonic() < deadline:
+            now = sum(p.stat().st_size for p in self.soak.log.parent.glob("soak*.mcap"))
+            if 0 <= now - size < 65_536:
+                return
+            size = now
+            time.sleep(window)
 
     def check(self, name: str, run) -> None:  # type: ignore[no-untyped-def]
         before = self.soak.rss()
         rejected = self.soak.rejected()
-        self.recorded_since_last()
         started = time.perf_counter()
         counts, lost, held, notes = run()
         seconds = time.perf_counter() - started
@@ -110,13 +139,36 @@ class Soak:
             )
         )
         print(f"[soak] {name}: {'held' if self.rows[-1].held else 'BROKE'}", flush=True)
+        print(table(self.rows[-1:]).splitlines()[-1], flush=True)  # kept if the soak is cut
 
     # --- the checks ---------------------------------------------------------------------
     def fuzz(self, per_type: int, seed: int):  # type: ignore[no-untyped-def]
         def run():  # type: ignore[no-untyped-def]
-            counts = fuzz_stack(self.soak.bus, per_type, seed=seed, valid_share=0.0)
-            time.sleep(1.0)  # the last flushes
-            recorded = self.recorded_since_last()
+            _, invalid_before = self.recorded(decode=True)
+            episodes = EpisodesMeanwhile(self.soak)
+            episodes.start()
+            try:
+                counts = {}
+                for index, cls in enumerate(message_types()):  # one type at a time, reported
+                    counts.update(
+                        fuzz_stack(
+                            self.soak.bus,
+                            per_type,
+                            seed=seed + index,
+                            valid_share=0.0,
+                            types=[cls],
+                            query_share=1.0,
+                        )
+                    )
+                    count = counts[cls.__name__]
+                    print(
+                        f"[soak]   fuzzed {cls.__name__}: {count.sent} payloads in "
+                        f"{count.seconds:.0f} s; {episodes.summary()}",
+                        flush=True,
+                    )
+            finally:
+                episodes.stop()
+            recorded = self.recorded(decode=True)[1] - invalid_before
             lost_reliable = lost_latest = 0
             for cls in message_types():
                 if cls.delivery is Delivery.QUERY:
@@ -127,21 +179,25 @@ class Soak:
                 else:
                     lost_reliable += missing
             sent = sum(c.sent for c in counts.values())
-            per = min(
-                c.sent for n, c in counts.items() if n not in ("EpisodeRequest", "ExplainRequest")
-            )
+            per = min(c.sent for c in counts.values())
             lost = f"recorder: {lost_reliable} reliable, {lost_latest} drop-allowed (scene, joints)"
-            return f"{sent} payloads, >= {per} per published type", lost, True, ""
+            held = per >= per_type and episodes.hung == 0 and episodes.failed == 0
+            return (
+                f"{sent} payloads, >= {per} on each of {len(counts)} types; {episodes.summary()}",
+                lost,
+                held,
+                episodes.failures(),
+            )
 
         return run
 
     def flood(self, valid: bool, seconds: float, rate: float):  # type: ignore[no-untyped-def]
         def run():  # type: ignore[no-untyped-def]
+            before = self.recorded()[0][Scene.key]
             started = time.perf_counter()
             sent = flood_scenes(self.soak.bus, seconds, rate, valid)
             achieved = sent / (time.perf_counter() - started)
-            time.sleep(1.0)
-            kept = self.recorded_since_last()[Scene.key]
+            kept = self.recorded()[0][Scene.key] - before
             lost = f"recorder kept {min(kept, sent)} of {sent} (congestion DROP allowed)"
             return f"{sent} scenes at {achieved:.0f}/s", lost, True, ""
 
@@ -215,6 +271,79 @@ class Soak:
         return run
 
 
+class EpisodesMeanwhile:
+    """Real ``manigraph run --blocks 4 --episodes 1`` runs, one after another, in a thread."""
+
+    def __init__(self, soak: SoakStack, run_timeout: float = 1800.0) -> None:
+        self.soak = soak
+        self.run_timeout = run_timeout
+        self.results: list[dict[str, object]] = []
+        self.hung = 0
+        self.failed = 0
+        self._reasons: collections.Counter[str] = collections.Counter()
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._loop, daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Let the episode under way finish, then stop."""
+        self._done.set()
+        self._thread.join()
+
+    def _loop(self) -> None:
+        seed = 1000
+        while not self._done.is_set():
+            args = ("run", "--blocks", "4", "--episodes", "1", "--seed", str(seed), "--json")
+            try:
+                result = self.soak.running.run(*args, timeout=self.run_timeout)
+            except subprocess.TimeoutExpired:
+                self.hung += 1
+                self._reasons["run did not finish"] += 1
+                continue
+            seed += 1
+            lines = result.stdout.strip().splitlines()
+            if not lines or not lines[-1].startswith("{"):
+                self.failed += 1
+                self._reasons[f"no summary (exit {result.returncode})"] += 1
+                continue
+            for episode in json.loads(lines[-1])["results"]:
+                self.results.append(episode)
+                if episode["success"]:
+                    continue
+                reason = str(episode["reason"])
+                self._reasons[reason.split(":")[0]] += 1
+                if reason.startswith(HUNG_REASONS):
+                    self.hung += 1
+                else:
+                    self.failed += 1
+
+    def summary(self) -> str:
+        done = sum(bool(r["success"]) for r in self.results)
+        return f"episodes meanwhile: {done}/{len(self.results)} succeeded, {self.hung} hung"
+
+    def failures(self) -> str:
+        return ", ".join(f"{reason} x{n}" for reason, n in self._reasons.items())
+
+
+def count_recorded(path: Path, decode: bool) -> tuple[Counter, Counter]:
+    """Messages per key in one recorder file, and (with ``decode``) the invalid ones among
+    those on a fuzzed key."""
+    types = {concrete_key(cls): cls for cls in message_types()}
+    total: Counter = collections.Counter()
+    invalid: Counter = collections.Counter()
+    for item in read_log(path):
+        total[item.topic] += 1
+        cls = types.get(item.topic) if decode else None
+        if cls is not None:
+            try:
+                cls.decode(item.data, item.topic)
+            except MessageError:
+                invalid[item.topic] += 1
+    return total, invalid
+
+
 def big_scene(objects: int, goals: int) -> Scene:
     return Scene(
         episode_id="bomb",
@@ -271,7 +400,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawTextHelpFormatter
     )
-    parser.add_argument("--per-type", type=int, default=100_000, help="fuzzed payloads per type")
+    parser.add_argument(
+        "--per-type", type=int, default=100_000, help="fuzzed payloads per type (0: no fuzz)"
+    )
     parser.add_argument("--flood-seconds", type=float, default=30.0)
     parser.add_argument("--flood-rate", type=float, default=10_000.0, help="scenes per second")
     parser.add_argument("--settle", type=float, default=60.0, help="seconds before RSS readings")
@@ -283,16 +414,19 @@ def main() -> None:
     args = parser.parse_args()
     started = time.time()
     with tempfile.TemporaryDirectory() as tmp, soak_stack(Path(tmp), args.policy) as stack:
-        warm = stack.running.run("run", "--blocks", "4", "--episodes", "1", "--json")
+        print(f"[soak] stack up after {time.time() - started:.0f} s", flush=True)
+        warm = stack.running.run("run", "--blocks", "4", "--episodes", "1", "--json", timeout=1800)
+        print(f"[soak] warm-up episode: {warm.stdout.strip()[-200:]}", flush=True)
         if warm.returncode != 0:
             raise SystemExit(f"the stack cannot run an episode before the soak:\n{warm.stderr}")
         soak = Soak(stack, args.settle)
-        soak.check(f"fuzz, {args.per_type} per type", soak.fuzz(args.per_type, args.seed))
+        if args.per_type > 0:
+            soak.check(f"fuzz, {args.per_type} per type", soak.fuzz(args.per_type, args.seed))
         soak.check("valid scene flood", soak.flood(True, args.flood_seconds, args.flood_rate))
         soak.check("invalid scene flood", soak.flood(False, args.flood_seconds, args.flood_rate))
         soak.check("explain bomb (256+256 nodes, x3)", soak.explain_bomb())
         soak.check("oversized task file", soak.oversized_task_file())
-        final = stack.running.run("run", "--blocks", "4", "--episodes", "3", "--json", timeout=600)
+        final = stack.running.run("run", "--blocks", "4", "--episodes", "3", "--json", timeout=1800)
         summary = json.loads(final.stdout.strip().splitlines()[-1]) if final.returncode == 0 else {}
         episodes_ok = summary.get("success_rate") == 1.0
         soak.rows.append(

@@ -29,7 +29,7 @@ def main() -> None:
     args = parser.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as tmp, soak_stack(Path(tmp), args.policy) as soak:
-        warm = soak.running.run("run", "--blocks", "4", "--episodes", "1", "--json")
+        warm = soak.running.run("run", "--blocks", "4", "--episodes", "1", "--json", timeout=1800)
         assert warm.returncode == 0, warm.stderr[-2000:]
         for valid in (True, False):
             before = soak.rss()
@@ -42,24 +42,28 @@ def main() -> None:
             for name in SERVICES:
                 rows.append((valid, name, sent, rate, before[name], peak[name], after[name]))
         dead = soak.dead()
-        final = soak.running.run("run", "--blocks", "4", "--episodes", "1", "--json")
+        final = soak.running.run("run", "--blocks", "4", "--episodes", "1", "--json", timeout=1800)
     print(f"scene floods: {args.seconds:g} s at {args.rate:g}/s, RSS read {args.settle:g} s after")
     print(
         "| flood | service | sent | rate/s | RSS before MiB | at end MiB | after MiB "
         "| change | held |"
     )
     print("|---|---|---|---|---|---|---|---|---|")
+    broke = 0
     for valid, name, sent, rate, before, peak, after in rows:
         change = (after - before) / before if before else float("nan")
         held = "held" if abs(change) <= 0.20 else "BROKE"
+        broke += held != "held"
         print(
             f"| {'valid' if valid else 'invalid (NaN)'} | {name} | {sent} | {rate:.0f} | "
             f"{before:.0f} | {peak:.0f} | {after:.0f} | {change:+.0%} | {held} |"
         )
+    episode_ok = final.returncode == 0 and '"success_rate": 1.0' in final.stdout
     print(
         f"dead processes: {dead or 'none'}; episode after the floods: "
-        f"{'success' if final.returncode == 0 and '1.0' in final.stdout else 'FAILED'}"
+        f"{'success' if episode_ok else 'FAILED'}"
     )
+    raise SystemExit(0 if not broke and not dead and episode_ok else 1)
 
 
 if __name__ == "__main__":

@@ -1,9 +1,10 @@
 """``manigraph demos``: expert demonstrations recorded as MCAP through the message contract.
 
 A demonstration log holds, per step, the ``Scene`` the expert decided on and its ``Action``
-(with ``scene_sequence`` pointing at that scene), plus the episode's start and end events. A
-log recorded from a running stack (``manigraph up --record``) has the same channels, so a
-user's own runs are training data too.
+(with ``scene_sequence`` pointing at that scene), plus the episode's start and end events,
+written by :class:`~manigraph_shared.demonstrations.DemonstrationLog`, the writer the
+demonstration page (``manigraph demo-ui``) uses too. A log recorded from a running stack
+(``manigraph up --record``) has the same channels, so a user's own runs are training data too.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import TextIO
 
 from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.policies.base import Policy
-from manigraph_shared.mcap_log import McapLogWriter
+from manigraph_shared.demonstrations import DemonstrationLog
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.progress import Progress
 
@@ -51,9 +52,8 @@ def record_demos(
 ) -> dict[str, object]:
     """Record ``protocol``'s episodes to ``path``; ``progress``: stream for a bar (drawn on a
     terminal only) and for a note on each episode the expert failed."""
-    log = McapLogWriter(path)
+    log = DemonstrationLog(path)
     steps = successes = 0
-    time_ns = 0
     requests = protocol.requests()
     bar = Progress(len(requests), "demos", unit="episode", stream=progress)
     try:
@@ -64,18 +64,11 @@ def record_demos(
                 bar.note(f"  skipped {request.episode_id}: the expert failed")
                 continue
             successes += 1
-            for message in [record.start, *_interleave(record), record.end]:
-                time_ns += 1_000_000
-                log.write(message.key_for(), message.encode(), time_ns)
-            steps += len(record.steps)
+            steps += log.write(
+                record.start, [(s.scene, s.action) for s in record.steps], record.end
+            )
             bar.status(f"{steps} decisions")
     finally:
         bar.close()
         log.close()
     return {"file": str(path), "trajectories": successes, "decisions": steps}
-
-
-def _interleave(record):  # type: ignore[no-untyped-def]
-    for step in record.steps:
-        yield step.scene
-        yield step.action

@@ -18,16 +18,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
 
-from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_lab.evaluate import EvalSpec, evaluate
-from manigraph_planner.gnn import save_checkpoint
-from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
-from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
-from manigraph_planner.training.dishwasher import (
-    DishTrainConfig,
-    load_dish_demonstrations,
-    train_dish,
-)
 from manigraph_shared.cli import Command
 
 PREFERENCES = ("top-bottom", "left-right")
@@ -54,6 +44,11 @@ class ExperimentConfig:
 def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[str, object]:
     """Record, train and evaluate every (preference, seed); ``config.jobs`` runs of them at
     once, each in its own process (the results do not depend on it)."""
+    # Imported here: every ``manigraph`` command loads this module to build its parser, and
+    # torch with PyG takes seconds (minutes on a loaded machine) to import.
+    from manigraph_lab.demos import DemoProtocol, record_demos
+    from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
+
     config.out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     runs = []
@@ -101,6 +96,15 @@ def _train_and_evaluate(
     """One training seed of one preference: its success rate for each number of dishes (and
     the checkpoint, for the first seed)."""
     import torch
+
+    from manigraph_lab.evaluate import EvalSpec, evaluate
+    from manigraph_planner.gnn import save_checkpoint
+    from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
+    from manigraph_planner.training.dishwasher import (
+        DishTrainConfig,
+        load_dish_demonstrations,
+        train_dish,
+    )
 
     torch.set_num_threads(1)
     demos = load_dish_demonstrations([demo_path])

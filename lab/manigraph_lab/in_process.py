@@ -19,6 +19,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_sim.backend import SimBackend
 from manigraph_sim.physics.backend import PhysicsBackend
+from manigraph_skills.drivers.panda_motion import position_in
 
 
 class InProcessGripperTransport:
@@ -53,7 +54,7 @@ class InProcessJointTransport:
         scene = self.backend.scene(time.time())
         if scene is None:
             return None
-        return np.array(scene.object(object_id).position.as_tuple())
+        return position_in(scene, object_id)
 
     def stop(self) -> None:
         self.backend.emergency_stop(True)

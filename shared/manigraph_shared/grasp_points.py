@@ -29,3 +29,29 @@ def grasp_height(category: str, size: np.ndarray) -> float:
     if category == "cover":
         return handle_offset(size)
     raise ConfigError("category", f"'{category}' is not 'block', 'cover', 'plate' or 'bowl'")
+
+
+#: Dishwasher racks: where the gripper takes each rack's handle, relative to the position a
+#: ``Scene`` reports for the rack (x, y, z, metres). The physical handle is a tab, 1.5 cm
+#: across y, sticking out of the rack's front towards the robot; the fingers close across it
+#: (along y). The top rack's is in the middle, high above the counter. The bottom rack's is
+#: at its left side, beyond the counter's dishes and the slots (a hand over either never
+#: meets it), and sticks out further, so the hand takes it in front of the top rack standing
+#: above it. Shared so the sim builds the tab where the skills grasp it.
+RACK_GRIP_OFFSET: dict[str, tuple[float, float, float]] = {
+    "rack_top": (-0.03, 0.0, 0.015),
+    "rack_bottom": (-0.08, -0.44, 0.015),
+}
+#: How far a rack slides out towards the robot (-x) when pulled, metres.
+RACK_TRAVEL = 0.16
+#: The tab's thickness across y, metres (what the closed fingers hold).
+RACK_TAB_THICKNESS = 0.015
+
+
+def rack_grip(rack_id: str) -> np.ndarray:
+    """The offset of rack ``rack_id``'s grip from its reported position; ``ConfigError``
+    naming the rack if it has no handle."""
+    try:
+        return np.array(RACK_GRIP_OFFSET[rack_id])
+    except KeyError:
+        raise ConfigError("rack_id", f"'{rack_id}' has no handle to grasp") from None

@@ -60,3 +60,16 @@ def nearest_orientation(q: Quaternion) -> int:
     """The index of the discrete orientation closest to ``q`` (largest |dot product|)."""
     dots = [abs(q.x * o.x + q.y * o.y + q.z * o.z + q.w * o.w) for o in ORIENTATIONS]
     return max(range(NUM_ORIENTATIONS), key=lambda i: (dots[i], -i))
+
+
+def up_axis_orientation(q: Quaternion) -> int:
+    """The index of the discrete orientation whose up axis is the object axis nearest to
+    world +z in pose ``q``, whatever the object's turn about the vertical (a physical dish
+    set down by a top-down grasp keeps its index at any yaw; ``nearest_orientation`` would
+    not)."""
+    x, y, z, w = q.x, q.y, q.z, q.w
+    # World +z in the object's frame: the third row of the rotation matrix.
+    up = (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y))
+    axis = max(range(3), key=lambda i: abs(up[i]))
+    positive = up[axis] > 0
+    return {2: 0, 1: 2, 0: 4}[axis] + (0 if positive else 1)

@@ -92,7 +92,7 @@ class Service:
 
     name: ClassVar[str]
     #: How often ``tick`` runs; ``None``: never.
-    tick_period: ClassVar[float | None] = None
+    tick_period: float | None = None
 
     def __init__(self, bus: Bus) -> None:
         self.bus = bus

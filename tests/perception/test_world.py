@@ -97,3 +97,35 @@ def test_a_grasp_that_closes_on_nothing_moves_nothing() -> None:
     world.on_gripper(0.0)  # held, then lost on the way
     world.on_gripper(0.08)
     assert np.array_equal(world.beliefs["block_0"].position, start)
+
+
+CAMERA = np.array([0.92, 0.0, 0.45])
+
+
+def _seen_along_ray(point: list[float], metres: float) -> list[ObjectPose]:
+    """block_0 measured ``metres`` off ``point`` along the camera's viewing ray."""
+    ray = (np.array(point) - CAMERA) / np.linalg.norm(np.array(point) - CAMERA)
+    pose = np.eye(4)
+    pose[:3, 3] = np.array(point) + metres * ray
+    return [ObjectPose("block_0", pose, 1, 0.1)]
+
+
+def test_with_a_camera_a_block_off_along_the_ray_rests_on_the_table_on_its_goal() -> None:
+    world = WorldModel(camera=CAMERA)
+    world.set_layout(_layout())
+    world.update(_seen_along_ray([0.5, 0.0, 0.02], 0.03), 1.0)  # 3 cm: past fill_exit
+    assert np.linalg.norm(world.beliefs["block_0"].position - [0.5, 0.0, 0.02]) < 1e-6
+    assert world.filled_by == {"goal_0": "block_0"}
+
+
+def test_a_block_seen_on_the_ray_through_its_belief_has_not_moved() -> None:
+    world = WorldModel(camera=CAMERA)
+    world.set_layout(_layout())
+    world.update(_seen_along_ray([0.5, 0.0, 0.02], 0.0), 1.0)
+    # Next frame: 4 cm along the same ray (near the table plane of a spot in front of it).
+    world.update(_seen_along_ray([0.5, 0.0, 0.02], -0.04), 2.0)
+    assert np.linalg.norm(world.beliefs["block_0"].position - [0.5, 0.0, 0.02]) < 1e-6
+    # Seen elsewhere across the image: it moved.
+    world.update(_seen_along_ray([0.45, 0.1, 0.02], 0.0), 3.0)
+    assert np.linalg.norm(world.beliefs["block_0"].position - [0.45, 0.1, 0.02]) < 1e-6
+    assert world.filled_by == {}

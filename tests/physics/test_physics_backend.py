@@ -152,6 +152,8 @@ def test_a_trajectory_planned_from_a_stale_state_is_replanned(loop: Loop) -> Non
 @pytest.mark.parametrize("realtime", [False, True])
 def test_realtime_mode_keeps_pace_with_the_clock(realtime: bool) -> None:
     backend = PhysicsBackend(realtime=realtime)
+    calls: list[float] = []
+    backend.while_moving = lambda: calls.append(time.perf_counter())
     backend.reset(EpisodeRequest(episode_id="e", task="stack", blocks=1, seed=0), 1.0)
     q = backend.world.arm_q.tolist()
     command = JointTrajectoryCommand(
@@ -169,3 +171,27 @@ def test_realtime_mode_keeps_pace_with_the_clock(realtime: bool) -> None:
     wall = time.perf_counter() - started
     simulated = 0.4 + backend.config.settle_time
     assert wall >= 0.95 * simulated if realtime else wall < simulated / 2
+    steps = round(simulated / backend.config.timestep)
+    # In real time the sim service streams from every step of a motion; flat out, nothing.
+    assert len(calls) == (steps if realtime else 0)
+    assert backend.stream_rates == ((30.0, 100.0) if realtime else None)
+    assert backend.sim_seconds() == pytest.approx(simulated, abs=2 * backend.config.timestep)
+
+
+def test_the_end_event_reports_the_simulated_seconds(loop: Loop) -> None:
+    loop.reset(blocks=1, seed=2)
+    loop.move("block_0", "goal_0")
+    end = loop.backend.end_event(time.time())
+    assert end is not None and end.success
+    # A PickAndPlace is seconds of motion: pregrasp, grasp, lift, transfer, place, retreat.
+    assert 2.0 < end.sim_seconds < 30.0
+    assert end.sim_seconds == pytest.approx(loop.backend.sim_seconds(), abs=1e-3)
+
+
+def test_realtime_stream_rates_are_validated_by_name() -> None:
+    with pytest.raises(ConfigError, match="scene_hz"):
+        create_backend("physics", realtime=True, scene_hz=0)
+    with pytest.raises(ConfigError, match="joint_state_hz"):
+        create_backend("physics", realtime=True, joint_state_hz=500)
+    backend = create_backend("physics", realtime=True, scene_hz=15, joint_state_hz=50)
+    assert backend.stream_rates == (15, 50)  # type: ignore[attr-defined]

@@ -64,3 +64,31 @@ def test_a_physics_episode_with_perception_as_the_only_scene_source(tmp_path) ->
     scenes = list(read_log(log, [Scene.key]))
     # Perception makes at most one Scene per frame; the sim (10 Hz) would have made many more.
     assert 0 < len(scenes) <= len(images)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not vulkan_available(), reason="no Vulkan device (scripts/install-vulkan.sh)")
+def test_up_degrades_the_camera_it_renders_and_perception_still_sees(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import cv2
+    import numpy as np
+
+    from manigraph_perception.deblur import Blur, BlurGauge
+    from manigraph_perception.detection import detect, detector_for
+    from manigraph_shared.markers import sim_marker_map
+    from manigraph_shared.mcap_log import read_log
+
+    log = tmp_path / "blurred.mcap"
+    result = run_up(
+        *("--sim", "physics", "--scene-source", "camera", "--task", "stack", "--blocks", "2"),
+        *("--camera-noise", "5", "--camera-blur", "5", "--episodes", "1", "--seed", "1"),
+        *("--record", str(log)),
+        timeout=400.0,
+    )
+    summary = json.loads(result.stdout.strip().splitlines()[-1])
+    assert summary["success_rate"] == 1.0
+    image = next(iter(read_log(log, ["manigraph/camera/front/image"]))).decode()
+    grey = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_GRAYSCALE)
+    markers = sim_marker_map()
+    found = detect(detector_for(markers)._replace(gauge=None), grey)
+    gauge = BlurGauge(cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_250))
+    assert gauge.measure(grey, [(m.id, m.corners) for m in found]) == Blur(1, 5)

@@ -12,6 +12,8 @@ from mcap.reader import make_reader
 from manigraph_shared.errors import LogError
 from manigraph_shared.mcap_log import McapLogWriter, is_finalised, recover_log
 from manigraph_shared.messages import Action
+from manigraph_shared.service import TRIM_AFTER_MESSAGES
+from manigraph_tools.recorder import Recorder
 from manigraph_tools.testing import Stack, record_then_kill
 
 pytestmark = pytest.mark.integration
@@ -129,3 +131,24 @@ def test_a_recorder_finalises_what_a_killed_one_left_in_its_directory(
     with running_stack.client() as bus:
         running_stack.wait_alive(bus, "recorder")
     assert is_finalised(left) and standard_read(left) == [0]
+
+
+def test_the_heap_is_trimmed_again_once_a_burst_has_been_written(
+    running_stack: Stack, tmp_path: Path
+) -> None:
+    """A trim during a burst frees little while the queue is full; the recorder trims once
+    more when the queue has drained (the soak's valid-scene flood left it 30 % larger a minute
+    later: its last trim was mid-flood, and heartbeats alone take minutes to make a burst)."""
+    running_stack.start("router")
+    with running_stack.client() as bus:
+        recorder = Recorder(bus, tmp_path / "r.mcap")  # not started: its queue is ours
+        assert not recorder.trim_heap()  # nothing happened yet
+        recorder.samples_seen += TRIM_AFTER_MESSAGES  # a burst ...
+        recorder._samples.put(("manigraph/x", b"{}", 0))  # ... still queued for the disk
+        assert recorder.trim_heap()
+        assert not recorder.trim_heap()  # still queued, no new samples
+        recorder._samples.get()  # written
+        assert recorder.trim_heap()  # once more, now that the queue is empty
+        assert not recorder.trim_heap()
+        recorder.samples_seen += 5  # heartbeats
+        assert not recorder.trim_heap()

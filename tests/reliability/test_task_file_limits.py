@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import pytest
 
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.errors import ConfigError, TaskError
+from manigraph_sim.tasks.task_file import parse_task_file
 from manigraph_tools.episodes import read_task_file
 
 
@@ -28,3 +30,43 @@ def test_a_task_file_within_the_limit_is_read_as_is(tmp_path: Path) -> None:
     small = tmp_path / "ok.toml"
     small.write_text('name = "x"\n')
     assert read_task_file(small) == 'name = "x"\n'
+
+
+def _objects(count: int, positions: int) -> str:
+    """``count`` blocks, each with ``positions`` listed positions that collide with the
+    next block's, and one goal."""
+    lines = []
+    for i in range(count):
+        listed = ", ".join(
+            f"[{0.2 + 0.01 * (k % 60):.2f}, {-0.3 + 0.01 * i:.2f}, 0.02]" for k in range(positions)
+        )
+        lines += ["[[objects]]", f'id = "b{i}"', 'category = "block"', f"positions = [{listed}]"]
+    lines += ["[[goals]]", 'id = "g"', 'category = "block"', "position = [0.4, 0.2, 0.02]"]
+    return "\n".join(lines)
+
+
+def _overlapping(count: int) -> str:
+    lines = []
+    for i in range(count):
+        lines += ["[[objects]]", f'id = "b{i}"', 'category = "block"', "position = [0.5, 0, 0.02]"]
+    lines += ["[[goals]]", 'id = "g"', 'category = "block"', "position = [0.4, 0.2, 0.02]"]
+    return "\n".join(lines)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [_overlapping(256), _objects(40, 64)],
+    ids=["256 blocks in one place", "40 blocks x 64 listed positions"],
+)
+def test_the_worst_task_file_that_fits_is_refused_in_well_under_a_second_of_cpu(
+    text: str,
+) -> None:
+    """The sim validates a reset's task file on its service thread: before, the first took
+    seconds of CPU (towers looked up per pair of objects) and the second 13 s (placements
+    compared one pair at a time), so one reset stalled the sim past doctor and the next
+    reset on a loaded machine."""
+    assert len(text) <= 65_536  # what a reset request can carry
+    started = time.process_time()
+    with pytest.raises(TaskError, match="overlaps"):
+        parse_task_file(text)
+    assert time.process_time() - started < 2.0

@@ -53,11 +53,11 @@ def allowed(message: str, key: str) -> set[str]:
 @pytest.mark.parametrize(
     ("message_type", "kind", "who"),
     [
-        (Action, "put", {"planner"}),
+        (Action, "put", {"planner", "demo-ui"}),
         (RobotCommand, "put", {"skills"}),
         (JointTrajectoryCommand, "put", {"skills"}),
         (Scene, "put", {"sim", "perception"}),
-        (EpisodeRequest, "query", {"client"}),
+        (EpisodeRequest, "query", {"client", "demo-ui"}),
         (EpisodeRequest, "declare_queryable", {"sim"}),
     ],
 )

@@ -115,6 +115,7 @@ CASES: list[tuple[Callable[[str], Message], str, str, str]] = [
     (action, "recorder", "planner", "skills"),
     (action, "skills", "planner", "skills"),
     (action, "client", "planner", "skills"),
+    (action, "view", "demo-ui", "skills"),  # a person deciding on the demonstration page
     (robot_command, "recorder", "skills", "sim"),
     (robot_command, "planner", "skills", "sim"),
     (scene, "recorder", "sim", "planner"),

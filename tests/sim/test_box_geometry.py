@@ -48,3 +48,24 @@ def test_box_geometry_is_validated_by_field() -> None:
         BoxGeometry(site_x=(0.7, 0.3))
     with pytest.raises(TaskError, match=r"box_geometry\.max_blocks"):
         BoxGeometry(max_blocks=10)
+
+
+@pytest.mark.parametrize("seed", [1001, 1036])
+def test_the_physical_box_rearrangement_lays_out_seeds_that_once_found_no_sites(
+    seed: int,
+) -> None:
+    """Four cover footprints fit in the physics site area about one draw in 10^5; these
+    seeds found none in the sampler's first 64 batches and failed at reset."""
+    from manigraph_sim.tasks.from_request import episode_layout
+
+    request = EpisodeRequest(
+        episode_id=f"rearrange-{seed}", task="box-rearrangement", blocks=4, seed=seed
+    )
+    layout = episode_layout(request, boxes=PHYSICS_BOXES).layout
+    side = float(PHYSICS_BOXES.cover_size[0])
+    sites = [c.centre[:2] for c in layout.containers]
+    sites += [g.position[:2] for g in layout.goals if g.id.startswith("storage_")]
+    assert len(sites) == 4
+    for i, a in enumerate(sites):
+        for b in sites[i + 1 :]:
+            assert np.abs(a - b).max() >= side

@@ -244,6 +244,28 @@ def test_configuration_comes_from_the_environment_with_the_variable_named() -> N
     assert caught.value.field == "franka.grasp_force (MANIGRAPH_FRANKA_GRASP_FORCE)"
 
 
+def test_a_rack_toggle_runs_through_franky_grasp_slide_release() -> None:
+    from manigraph_skills.motion import PandaModel
+
+    franka = driver()
+    handle = Vector3(x=0.51, y=0.0, z=0.30)  # the top rack pulled out (docs/dishwasher.md)
+    franka.toggle_tray("e:0", "rack_top", handle, True)  # push it in
+    robot, gripper = FakeRobot.last, FakeGripper.last
+    assert robot is not None and gripper is not None
+    # Down to the handle, close, slide along the rail; open, back off: three arm motions.
+    assert robot.calls[1:] == ["move", "move", "move"]
+    assert gripper.calls == ["grasp 20.0", "move 0.08"]
+    model = PandaModel()
+
+    def tcp(motion: object) -> np.ndarray:
+        q = np.array(motion.waypoints[-1].target.position)  # type: ignore[attr-defined]
+        return model.tcp_pose(q).translation
+
+    grasped, slid = tcp(robot.motions[0]), tcp(robot.motions[1])
+    assert np.allclose(slid - grasped, [0.16, 0.0, 0.0], atol=0.005)  # the rail's length
+    assert abs(grasped[0] - (0.51 - 0.03)) < 0.005  # at the tab (grasp_points.rack_grip)
+
+
 class SlowRobot(FakeRobot):
     """A motion that takes until ``stop`` halts it, as franky's blocking ``move`` does."""
 

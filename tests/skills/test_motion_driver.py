@@ -160,3 +160,25 @@ def test_command_ids_of_a_64_character_decision_stay_valid() -> None:
     driver.place(Motion(decision, "block_0", GOAL, Quaternion()))
     ids = [command.command_id for command in arm.sent]
     assert len(set(ids)) == 3 and all(len(i) <= 64 for i in ids)
+
+
+def test_a_stop_and_resume_while_planning_never_moves_the_arm_for_that_decision() -> None:
+    arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=np.array(GOAL.as_tuple()))
+    driver = PandaMotionDriver(arm)
+    read = arm.joint_positions
+
+    def stop_and_resume_while_planning() -> np.ndarray:  # the stop lands as planning starts
+        driver.stop()
+        driver.resume()
+        arm.joint_positions = read  # type: ignore[method-assign]
+        return read()
+
+    arm.joint_positions = stop_and_resume_while_planning  # type: ignore[method-assign]
+    with pytest.raises(SkillError) as stopped:
+        driver.pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
+    assert stopped.value.reason == "stopped" and arm.sent == []
+    with pytest.raises(SkillError):  # the stopped decision stays stopped
+        driver.place(Motion("e:0", "block_0", GOAL, Quaternion()))
+    assert arm.sent == []
+    driver.pick(Motion("e:1", "block_0", BLOCK, Quaternion()))  # the next decision moves
+    assert len(arm.sent) == 1

@@ -80,5 +80,5 @@ class ArmWithoutTrays(RobotDriver):
 
 def test_a_driver_without_tray_support_refuses_as_unsupported() -> None:
     with pytest.raises(SkillError) as refused:
-        ArmWithoutTrays().toggle_tray("e:0", "rack_top", Vector3(x=0.5, y=0.0, z=0.3))
+        ArmWithoutTrays().toggle_tray("e:0", "rack_top", Vector3(x=0.5, y=0.0, z=0.3), False)
     assert refused.value.reason == "unsupported"

@@ -51,7 +51,7 @@ ANNOUNCE = ("liveliness_token",)
 READ = ("declare_subscriber", "liveliness_query", "declare_liveliness_subscriber")
 EVERY_MESSAGE = PUBLISH + SERVE + QUERY + ANNOUNCE + READ
 
-SERVICES = ("sim", "perception", "planner", "skills", "recorder")
+SERVICES = ("sim", "perception", "planner", "skills", "recorder", "demo-ui")
 
 
 @dataclass(frozen=True)
@@ -65,7 +65,12 @@ class Grant:
 
 
 GRANTS: tuple[Grant, ...] = (
-    Grant(("planner",), PUBLISH, (Action.key,), "only the planner decides"),
+    Grant(
+        ("planner", "demo-ui"),
+        PUBLISH,
+        (Action.key,),
+        "only a decider: the planner, or a person on the demonstration page",
+    ),
     Grant(("planner",), PUBLISH, (Explanation.key,), "why it decided"),
     Grant(("planner",), SERVE, (ExplainRequest.key,), "answers explain requests"),
     Grant(
@@ -91,7 +96,12 @@ GRANTS: tuple[Grant, ...] = (
     ),
     Grant(("perception",), PUBLISH, (MarkerDetections.key_pattern(),), "what it detected"),
     Grant(("sim",), SERVE, (EpisodeRequest.key,), "the sim answers resets"),
-    Grant(("client",), QUERY, (EpisodeRequest.key,), "only the episode client resets the world"),
+    Grant(
+        ("client", "demo-ui"),
+        QUERY,
+        (EpisodeRequest.key,),
+        "only the episode client (or the demonstration page) resets the world",
+    ),
     Grant(("client",), QUERY, (ExplainRequest.key,), "asks the planner why"),
     Grant(("client",), PUBLISH, (EmergencyStop.key,), "an operator stops or resumes the robot"),
     Grant(

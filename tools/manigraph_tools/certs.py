@@ -47,6 +47,7 @@ IDENTITIES = (
     "recorder",
     "view",
     "client",
+    "demo-ui",
 )
 DEFAULT_DAYS = 365
 

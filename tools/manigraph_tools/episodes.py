@@ -117,8 +117,11 @@ class EpisodeResult:
     goals_filled: int
     goals_total: int
     steps: int
+    #: Wall-clock seconds from the reset request to the end event.
     seconds: float
     reason: str
+    #: Simulated seconds, from a world with a clock (physics); None otherwise.
+    sim_seconds: float | None = None
 
 
 @dataclass(frozen=True)
@@ -297,7 +300,8 @@ def run_episodes(bus: Bus, plan: EpisodePlan, progress: TextIO = sys.stderr) -> 
                 f"episode {index + 1}/{plan.episodes} {plan.task_file_name or plan.task} "
                 f"K={plan.blocks} "
                 f"seed {result.seed}: {mark}, {result.goals_filled}/{result.goals_total} goals, "
-                f"{result.steps} steps, {result.seconds:.2f} s",
+                f"{result.steps} steps, {result.seconds:.2f} s"
+                + (f" ({result.sim_seconds:.2f} s simulated)" if result.sim_seconds else ""),
                 file=progress,
                 flush=True,
             )
@@ -362,6 +366,7 @@ def _run_one(
                 steps=end.steps,
                 seconds=round(time.monotonic() - started, 3),
                 reason=end.reason,
+                sim_seconds=end.sim_seconds,
             )
 
 
@@ -383,5 +388,20 @@ def summarize(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, obje
         ),
         "mean_steps": statistics.fmean(r.steps for r in results) if count else 0.0,
         "mean_seconds": statistics.fmean(r.seconds for r in results) if count else 0.0,
+        **_simulated(results),
         "results": [asdict(r) for r in results],
+    }
+
+
+def _simulated(results: list[EpisodeResult]) -> dict[str, float]:
+    """Mean simulated seconds per episode and the real-time factor (simulated over wall time:
+    1 in real time, ~30 flat out), over the episodes whose world has a clock."""
+    timed = [r for r in results if r.sim_seconds is not None]
+    if not timed:
+        return {}
+    simulated = sum(r.sim_seconds or 0.0 for r in timed)
+    wall = sum(r.seconds for r in timed)
+    return {
+        "mean_sim_seconds": round(simulated / len(timed), 3),
+        "realtime_factor": round(simulated / wall, 3) if wall > 0 else 0.0,
     }

@@ -1,7 +1,16 @@
 """What the stack tools consume and produce (see ``manigraph_shared.manifest``)."""
 
 from manigraph_shared.manifest import Manifest, port
-from manigraph_shared.messages import EmergencyStop, EpisodeEvent, EpisodeRequest, ExplainRequest
+from manigraph_shared.messages import (
+    Action,
+    EmergencyStop,
+    EpisodeEvent,
+    EpisodeRequest,
+    ExplainRequest,
+    Scene,
+    ServiceStatus,
+    SkillStatus,
+)
 
 RECORDER = Manifest(service="recorder", summary="manigraph record: MCAP", observes_all=True)
 
@@ -24,4 +33,12 @@ STOP = Manifest(
     service="stop",
     summary="manigraph stop / resume: emergency stop",
     produces=(port(EmergencyStop),),
+)
+
+DEMO_UI = Manifest(
+    service="demo-ui",
+    summary="manigraph demo-ui: a person clicks the decisions",
+    consumes=(port(Scene), port(SkillStatus), port(EpisodeEvent)),
+    produces=(port(Action), port(ServiceStatus)),
+    requests=(port(EpisodeRequest),),
 )

@@ -17,6 +17,7 @@ import cv2
 import numpy as np
 
 from manigraph_perception.calibration import Calibration
+from manigraph_perception.deblur import MIN_BLUR_PX, BlurGauge, wiener
 from manigraph_shared.markers import MarkerMap, marker_corners, marker_in_object
 
 
@@ -39,11 +40,13 @@ class ObjectPose:
 
 
 class Detectors(NamedTuple):
-    """OpenCV's detector for the image, and a cheaper one for the image enlarged twice (one
-    adaptive-threshold window instead of three: the same markers at 40% of the cost)."""
+    """OpenCV's detector for the image, a cheaper one for the image enlarged twice (one
+    adaptive-threshold window instead of three: the same markers at 40% of the cost), and the
+    gauge of motion blur (``deblur.py``)."""
 
     normal: cv2.aruco.ArucoDetector
     enlarged: cv2.aruco.ArucoDetector
+    gauge: BlurGauge | None = None
 
 
 def detector_for(markers: MarkerMap | str) -> Detectors:
@@ -58,7 +61,7 @@ def detector_for(markers: MarkerMap | str) -> Detectors:
             parameters.adaptiveThreshWinSizeMin = window
             parameters.adaptiveThreshWinSizeMax = window
         detectors.append(cv2.aruco.ArucoDetector(dictionary, parameters))
-    return Detectors(*detectors)
+    return Detectors(detectors[0], detectors[1], BlurGauge(dictionary))
 
 
 #: Subpixel corner refinement finds a black square's corners this far inside the true ones
@@ -77,17 +80,31 @@ def detect(
     upscale: bool = True,
 ) -> list[Marker]:
     """Markers found in ``grey``; with ``upscale``, also those found only in the image
-    enlarged twice (about twice the cost)."""
+    enlarged twice (about twice the cost); with the detector's blur gauge, when the markers
+    found show a motion blur, also those found once it is undone."""
     markers = _detect(detector.normal, grey, 1, corner_bias)
     if upscale:
-        found = {m.id for m in markers}
-        big = cv2.resize(grey, None, fx=2, fy=2, interpolation=cv2.INTER_LINEAR)
-        markers += [
-            m
-            for m in _detect(detector.enlarged, big, 2, UPSCALED_CORNER_BIAS_PX)
-            if m.id not in found
-        ]
+        markers += _missing(markers, _detect_enlarged(detector, grey))
+    if detector.gauge is not None and markers:
+        blur = detector.gauge.measure(grey, [(m.id, m.corners) for m in markers])
+        if blur is not None and blur.length >= MIN_BLUR_PX:
+            sharp = wiener(grey, blur)
+            again = _detect(detector.normal, sharp, 1, corner_bias)
+            if upscale:
+                again += _missing(again, _detect_enlarged(detector, sharp))
+            markers = again + _missing(again, markers)
     return markers
+
+
+def _missing(found: list[Marker], more: list[Marker]) -> list[Marker]:
+    """The markers of ``more`` whose id is not in ``found``."""
+    ids = {m.id for m in found}
+    return [m for m in more if m.id not in ids]
+
+
+def _detect_enlarged(detector: Detectors, grey: np.ndarray) -> list[Marker]:
+    big = cv2.resize(grey, None, fx=2, fy=2, interpolation=cv2.INTER_LINEAR)
+    return _detect(detector.enlarged, big, 2, UPSCALED_CORNER_BIAS_PX)
 
 
 def _detect(

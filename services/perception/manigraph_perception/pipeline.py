@@ -60,7 +60,7 @@ class Perception:
         self.calibration = calibration
         self.camera = camera
         self.detector = detector_for(markers)
-        self.world = WorldModel(world)
+        self.world = WorldModel(world, calibration.base_T_camera[:3, 3])
         self.poser: ObjectPoser | None = None
         self.known_ids = set(markers.by_id())
         self.counters = Counters()

@@ -21,11 +21,12 @@ hysteresis, and a stale flag.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from manigraph_perception.detection import ObjectPose
+from manigraph_perception.resting import RestConfig, Support, rest_on_support
 from manigraph_shared.messages import (
     Quaternion,
     Scene,
@@ -49,6 +50,9 @@ class WorldConfig:
     #: Gripper openings (metres) that mean "holding something": a block is 4 cm wide, a
     #: cover's handle 3 cm; the open Panda gripper is 8 cm, closed on nothing 0.
     held_width: tuple[float, float] = (0.005, 0.07)
+    #: A block's depth along the viewing ray from what it rests on (``resting.py``); None:
+    #: the marker pose as measured.
+    rest: RestConfig | None = field(default_factory=RestConfig)
 
     def __post_init__(self) -> None:
         if not 0 < self.fill_enter <= self.fill_exit <= 0.1:
@@ -68,8 +72,10 @@ class _Belief:
 class WorldModel:
     """Takes a layout, then one set of object poses per frame; gives the Scene."""
 
-    def __init__(self, config: WorldConfig | None = None) -> None:
+    def __init__(self, config: WorldConfig | None = None, camera: np.ndarray | None = None) -> None:
         self.config = config or WorldConfig()
+        #: The camera's centre in the robot base frame (needed to rest blocks on supports).
+        self.camera = None if camera is None else np.asarray(camera, dtype=float)
         self.layout: TaskLayout | None = None
         self.beliefs: dict[str, _Belief] = {}
         self.filled_by: dict[str, str] = {}  # goal id -> object id
@@ -128,11 +134,12 @@ class WorldModel:
         """One frame's observations (possibly none)."""
         self.last_frame = stamp
         self.last_useful = False
-        for pose in poses:
+        # Lowest first: a block's support is posed before the block on it.
+        for pose in sorted(poses, key=lambda p: p.base_T_object[2, 3]):
             belief = self.beliefs.get(pose.object_id)
             if belief is None:
                 continue
-            belief.position = pose.base_T_object[:3, 3].copy()
+            belief.position = self._resting(pose)
             belief.orientation = quaternion_of(pose.base_T_object[:3, :3])
             belief.seen = True
             belief.last_seen = stamp
@@ -183,6 +190,50 @@ class WorldModel:
         )
 
     # --- rules ------------------------------------------------------------------------------
+    def _resting(self, pose: ObjectPose) -> np.ndarray:
+        """A block's centre moved along the viewing ray onto what it rests on (unchanged for
+        a cover, without a camera position, or with no support near)."""
+        measured = pose.base_T_object[:3, 3].copy()
+        assert self.layout is not None
+        objects = {o.id: o for o in self.layout.objects}
+        if (
+            self.config.rest is None
+            or self.camera is None
+            or objects[pose.object_id].category.value != "block"
+        ):
+            return measured
+        believed = self.beliefs[pose.object_id].position
+        if _ray_distance(self.camera, measured, believed) < self.config.rest.same_place:
+            # Seen where it was believed (the image says nothing else): it has not moved.
+            return believed.copy()
+        rotation = pose.base_T_object[:3, :3]
+        size = np.array(objects[pose.object_id].size.as_tuple())
+        supports = [Support(0.0)]
+        boxes = [
+            Support(c.centre.z, (c.centre.x, c.centre.y), (c.inner.x / 2, c.inner.y / 2))
+            for c in self.layout.containers
+        ]
+        supports += boxes
+        neighbours = []
+        for object_id, belief in self.beliefs.items():
+            if object_id == pose.object_id:
+                continue
+            other = np.array(objects[object_id].size.as_tuple()) / 2
+            top = belief.position[2] + _half_height(_rotation(belief.orientation), other * 2)
+            supports.append(Support(top, (belief.position[0], belief.position[1]), (0.025, 0.025)))
+            if objects[object_id].category.value == "block":
+                neighbours.append(belief.position)
+        rested = rest_on_support(
+            measured,
+            self.camera,
+            _half_height(rotation, size),
+            supports,
+            neighbours,
+            self.config.rest,
+            excluded=boxes,
+        )
+        return measured if rested is None else rested
+
     def _update_filled(self) -> None:
         assert self.layout is not None
         categories = {o.id: o.category.value for o in self.layout.objects}
@@ -249,6 +300,30 @@ def _quaternion(xyzw: np.ndarray) -> Quaternion:
     if q[3] < 0:
         q = -q
     return Quaternion(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+
+
+def _ray_distance(camera: np.ndarray, through: np.ndarray, point: np.ndarray) -> float:
+    """How far ``point`` is from the ray from ``camera`` through ``through``."""
+    ray = (through - camera) / np.linalg.norm(through - camera)
+    offset = point - camera
+    return float(np.linalg.norm(offset - (offset @ ray) * ray))
+
+
+def _half_height(rotation: np.ndarray, size: np.ndarray) -> float:
+    """Half the height of a box resting on the face nearest to horizontal (its axis nearest
+    to vertical: a slightly tilted pose estimate does not make it taller)."""
+    return float(size[int(np.argmax(np.abs(rotation[2])))]) / 2
+
+
+def _rotation(xyzw: np.ndarray) -> np.ndarray:
+    x, y, z, w = np.asarray(xyzw, dtype=float) / np.linalg.norm(xyzw)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def quaternion_of(rotation: np.ndarray) -> np.ndarray:

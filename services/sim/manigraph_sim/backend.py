@@ -123,6 +123,10 @@ class EpisodeBackend(SimBackend):
     def episode_ended(self) -> None:
         """Called once as the end event is made (e.g. to write the episode's video)."""
 
+    def sim_seconds(self) -> float | None:
+        """Simulated time this episode has taken, for a world with a clock; else None."""
+        return None
+
     def _event(self, phase: EpisodePhase, stamp: float) -> EpisodeEvent:
         assert self.request is not None
         return episode_event(
@@ -133,6 +137,7 @@ class EpisodeBackend(SimBackend):
             total=len(self.required),
             steps=self.steps,
             max_steps=self.max_steps,
+            sim_seconds=self.sim_seconds() if phase is EpisodePhase.END else None,
         )
 
 
@@ -145,6 +150,7 @@ def episode_event(
     total: int,
     steps: int,
     max_steps: int,
+    sim_seconds: float | None = None,
 ) -> EpisodeEvent:
     """The start or end event of ``request``'s episode: an episode ends in success exactly when
     every required goal is filled, else because its step budget is spent."""
@@ -163,5 +169,6 @@ def episode_event(
         steps=steps,
         success=success,
         reason=reason,
+        sim_seconds=None if sim_seconds is None else round(sim_seconds, 3),
         stamp=stamp,
     )

@@ -31,6 +31,8 @@ __all__ = ["BACKENDS", "GeometricOptions", "PhysicsOptions", "create_backend"]
 
 #: Metres from a goal's centre within which an object fills it.
 GOAL_TOLERANCE = Interval(0, 0.1, low_open=True)
+#: Rates streamed in real time: at most one sample per physics step (5 ms).
+STREAM_RATE = Interval(0, 200, low_open=True)
 
 
 @dataclass(frozen=True)
@@ -55,7 +57,24 @@ class PhysicsOptions(Options):
     goal_tolerance: float = option(
         0.02, help="how close to a goal fills it", within=GOAL_TOLERANCE, unit="metres"
     )
-    realtime: bool = option(False, help="simulate in real time, not flat out")
+    realtime: bool = option(
+        False,
+        help="simulate at 1x wall-clock time, not flat out, streaming Scene and JointState "
+        "while the arm moves as a robot does (--scene-hz, --joint-state-hz)",
+    )
+    scene_hz: float = option(
+        30.0,
+        help="with --realtime: Scene rate, also while the arm moves (a camera's rate)",
+        within=STREAM_RATE,
+        unit="Hz",
+    )
+    joint_state_hz: float = option(
+        100.0,
+        help="with --realtime: JointState rate while the arm moves (at most the 200 Hz "
+        "physics rate)",
+        within=STREAM_RATE,
+        unit="Hz",
+    )
     video: Path | None = option(
         None,
         help="render each episode to this .gif/.mp4 ({episode}, {seed} allowed; needs Vulkan, "

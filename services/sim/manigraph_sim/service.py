@@ -13,6 +13,7 @@ from manigraph_shared.messages import (
     EpisodeRequest,
     JointTrajectoryCommand,
     RobotCommand,
+    ServiceState,
     SkillStatus,
 )
 from manigraph_shared.service import Service
@@ -26,9 +27,30 @@ REFUSED = frozenset(
 )
 
 
+class Cadence:
+    """Says when something published at ``hz`` is due, keeping the rate over time (a late
+    sample does not push every later one back; after a long stall it starts afresh)."""
+
+    def __init__(self, hz: float) -> None:
+        self.period = 1.0 / hz
+        self.next = 0.0
+
+    def due(self, now: float) -> bool:
+        if now < self.next:
+            return False
+        self.next += self.period
+        if self.next <= now:
+            self.next = now + self.period
+        return True
+
+
 class SimService(Service):
     """Publishes ``Scene`` at ``publish_hz`` and right after every change, resets episodes on
-    request, executes robot commands and reports episode start and end."""
+    request, executes robot commands and reports episode start and end.
+
+    A backend simulating in real time (``stream_rates``: Scene and JointState rates) streams
+    as a robot does: the Scene at its rate all the time, and while the arm moves the
+    JointState at its rate and the Scene at its rate, published from inside the motion."""
 
     name = "sim"
 
@@ -43,6 +65,14 @@ class SimService(Service):
         super().__init__(bus)
         self.backend = backend
         self.tick_period = 1.0 / publish_hz
+        rates: tuple[float, float] | None = getattr(backend, "stream_rates", None)
+        self._streaming: tuple[Cadence, Cadence, Cadence] | None = None
+        if rates is not None:
+            scene_hz, joint_state_hz = rates
+            self.tick_period = 0.25 / scene_hz  # ticks check the scenes' cadence
+            # Scenes, joint states, and heartbeats (so a long motion is not taken for a stall).
+            self._streaming = (Cadence(scene_hz), Cadence(joint_state_hz), Cadence(1.0))
+            backend.while_moving = self._stream_while_moving  # type: ignore[attr-defined]
         #: False: perception is the Scene source; the sim only referees (episode events).
         self.scenes = scenes
         #: Camera frames per second of wall time (besides one right after every change).
@@ -127,9 +157,28 @@ class SimService(Service):
             )
             self.bus.publish(end)
 
+    def _stream_while_moving(self) -> None:
+        """Inside a real-time motion, after each physics step: what a moving robot streams."""
+        assert self._streaming is not None and isinstance(self.backend, JointedArmBackend)
+        scenes, joint_states, heartbeats = self._streaming
+        now = time.monotonic()
+        if joint_states.due(now):
+            state = self.backend.joint_state(time.time())
+            if state is not None:
+                self.bus.publish(state)
+        if self.scenes and scenes.due(now):
+            scene = self.backend.scene(time.time())
+            if scene is not None:
+                self.bus.publish(scene)
+        if heartbeats.due(now):
+            self.publish_status(ServiceState.OK, self.last_error)
+
     def _execute_trajectory(self, command: JointTrajectoryCommand) -> None:
         assert isinstance(self.backend, JointedArmBackend)
         result = self.backend.execute_trajectory(command, time.time())
+        # Stamped when the motion ended (not when it began), so what was streamed during the
+        # motion is older than the answer, and a scene stamped after it shows the end state.
+        result = result.model_copy(update={"stamp": time.time()})
         if not result.ok:
             self.log.info("trajectory %s failed: %s", command.command_id, result.reason)
             if result.reason in REFUSED:
@@ -173,6 +222,8 @@ class SimService(Service):
 
     def tick(self) -> None:
         if self.scenes:
+            if self._streaming is not None and not self._streaming[0].due(time.monotonic()):
+                return
             self._publish_scene()
         elif self.camera_period is not None and time.monotonic() >= self._next_frame:
             self._publish_frame()

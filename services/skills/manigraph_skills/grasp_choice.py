@@ -7,6 +7,8 @@
   within their width across the closing axis. So a block in a box is taken between free
   sides (``manigraph_sim.physics.box_layout`` leaves room on one side of every cell it uses),
   and stacks and pyramid rows, which have room along x, are grasped as before.
+* **Dishes**: a plate standing on an edge is taken across its thickness (``plate_turn``); a
+  bowl as a block.
 * **How high to carry**: a block hangs between the fingers, and the planner's carry heights
   clear stacks with it; a cover sticks out far beyond the hand, so it is carried with its
   underside above every object's top and every goal (a box's rim is under its lid goal).
@@ -18,6 +20,7 @@ import numpy as np
 
 from manigraph_shared.grasp_points import grasp_height
 from manigraph_shared.messages import Scene, SceneObject, Vector3
+from manigraph_shared.orientations import up_axis_orientation
 from manigraph_shared.panda import (
     FINGER_ABOVE_TCP,
     FINGER_BELOW_TCP,
@@ -82,12 +85,28 @@ def _point(position: Vector3, height: float) -> np.ndarray:
     return np.array(position.as_tuple()) + np.array([0.0, 0.0, height])
 
 
+def plate_turn(item: SceneObject) -> float | None:
+    """A plate is taken across its thickness, and keeps its turn to the goal (a slot's ribs
+    hold it across y): ``TURN_TO_Y`` standing on a rim along x (the thin axis along y), 0
+    standing on a side; None for anything else (a flat plate is wider than the fingers open)."""
+    if item.category.value != "plate":
+        return None
+    index = up_axis_orientation(item.orientation)
+    return {2: TURN_TO_Y, 3: TURN_TO_Y, 4: 0.0, 5: 0.0}.get(index)
+
+
 def choose_grasps(scene: Scene, item: SceneObject, goal: Vector3) -> tuple[Grasp, Grasp]:
     """The grasp to pick ``item`` with, and the one to set it down at ``goal`` with, each
     with the obstacles the arm must avoid on the way (``obstacles``)."""
     height = grasp_height(item.category.value, np.array(item.size.as_tuple()))
     carry = carry_height(scene, item, height)
     here, there = np.array(item.position.as_tuple()), np.array(goal.as_tuple())
+    turn = plate_turn(item)
+    if turn is not None:
+        return (
+            Grasp(height, turn, carry, scene_obstacles(scene, item, here), np.pi),
+            Grasp(height, turn, carry, scene_obstacles(scene, item, there), np.pi),
+        )
     pick = Grasp(
         height,
         closing_turn(scene, _point(item.position, height), item.id),

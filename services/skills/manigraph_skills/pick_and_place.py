@@ -10,6 +10,7 @@ from collections.abc import Callable
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus, TrayAction
 from manigraph_shared.orientations import orientation
+from manigraph_skills.dish_rules import check_dish_move
 from manigraph_skills.drivers.base import Motion, RobotDriver
 from manigraph_skills.grasp_choice import choose_grasps
 from manigraph_skills.workspace import Workspace
@@ -61,13 +62,17 @@ class PickAndPlace:
             for name, point in (("object", item.position), ("goal", goal.position)):
                 if not self.workspace.contains(point):
                     raise SkillError("outside_workspace", f"{name} at {point.as_tuple()}")
+            turn = goal.orientation
+            if action.orientation_index is not None:
+                turn = orientation(action.orientation_index)
+            if scene.racks and self.driver.checks_dish_rules:
+                check_dish_move(scene, item, goal)
+            if action.orientation_index is not None:
+                self.driver.check_orientation(item.id, item.orientation, turn)
             status(SkillState.RUNNING)
             pick, place = choose_grasps(scene, item, goal.position)
             decision = action.decision_id
             self.driver.pick(Motion(decision, item.id, item.position, item.orientation, pick))
-            turn = goal.orientation
-            if action.orientation_index is not None:
-                turn = orientation(action.orientation_index)
             self.driver.place(Motion(decision, item.id, goal.position, turn, place))
         except SkillError as exc:
             return status(SkillState.FAILED, exc.reason, exc.detail)
@@ -86,4 +91,4 @@ class PickAndPlace:
         if not self.workspace.contains(rack.position):
             raise SkillError("outside_workspace", f"{rack_id} handle at {rack.position.as_tuple()}")
         status(SkillState.RUNNING)
-        self.driver.toggle_tray(action.decision_id, rack_id, rack.position)
+        self.driver.toggle_tray(action.decision_id, rack_id, rack.position, rack.open)

@@ -12,8 +12,10 @@ Nothing a sender does can block the threads that receive messages:
   naming the reason, so a real planner decides again instead of waiting;
 * the worker waits at most ``scene_wait`` seconds for the scene an action was decided on;
 * ``EmergencyStop`` is acted on in the Zenoh thread that delivers it: the driver is stopped,
-  the skill under way fails with reason ``stopped``, queued actions are refused, and so is
-  every action until the stop is released;
+  the skill under way is reported failed with reason ``stopped`` from that thread at once
+  (``ActionInFlight``: the worker may be planning or waiting for a scene; what it reports
+  for that decision afterwards is dropped), queued actions are refused, and so is every
+  action until the stop is released;
 * when the robot's process (``robot_service``, the sim) goes away, the skill under way fails
   at once with reason ``robot_lost`` instead of waiting out the driver's timeout, so the
   next episode finds skills free.
@@ -22,6 +24,7 @@ Nothing a sender does can block the threads that receive messages:
 from __future__ import annotations
 
 import queue
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -39,6 +42,7 @@ from manigraph_shared.messages import (
 from manigraph_shared.scene_gate import SceneGate
 from manigraph_shared.service import Service
 from manigraph_skills.drivers.base import RobotDriver
+from manigraph_skills.in_flight import ActionInFlight
 from manigraph_skills.pick_and_place import SKILL, PickAndPlace
 from manigraph_skills.scene_cache import SceneCache
 from manigraph_skills.workspace import Workspace
@@ -49,6 +53,9 @@ QUEUE_CAPACITY = 4
 SCENE_WAIT = 1.0
 #: An action decided on a scene this far ahead of the newest scene seen is refused unread.
 MAX_SCENE_AHEAD = 50
+#: Longest the worker (planning: Python-heavy IK) keeps the GIL while a Zenoh thread waits
+#: for it, seconds (Python's default is 5 ms): the stop's callback needs the GIL to run.
+GIL_SWITCH_INTERVAL = 0.001
 
 
 class SkillsService(Service):
@@ -73,9 +80,11 @@ class SkillsService(Service):
         self.stopped = threading.Event()
         self.stop_reason = ""
         self._actions: queue.Queue[Action] = queue.Queue(queue_capacity)
+        self.in_flight = ActionInFlight(bus.publish, SKILL)
         self._worker = threading.Thread(target=self._work, name="skills-worker", daemon=True)
 
     def setup(self) -> None:
+        sys.setswitchinterval(GIL_SWITCH_INTERVAL)
         self.bus.subscribe(EpisodeEvent, self.gate.on_episode, on_error=self._rejected)
         self.bus.subscribe(Scene, self._on_scene, on_error=self._rejected)
         self.bus.subscribe(EmergencyStop, self._on_estop, on_error=self._rejected)
@@ -112,6 +121,7 @@ class SkillsService(Service):
             self.stopped.set()
             self.stop_reason = message.reason
             self.driver.stop()
+            self.in_flight.stop(f"emergency stop engaged: {message.reason}")
             while True:  # what was queued is not done either
                 try:
                     self._refuse(self._actions.get_nowait(), "stopped", "emergency stop engaged")
@@ -158,17 +168,21 @@ class SkillsService(Service):
                 action = self._actions.get(timeout=0.2)
             except queue.Empty:
                 continue
+            self.in_flight.begin(action.decision_id)
             try:
                 self._execute(action)
             except Exception:  # a bug in one action must not end the worker
                 self.log.exception("action %s failed unexpectedly", action.decision_id)
+            finally:
+                self.in_flight.end()
 
     def _execute(self, action: Action) -> None:
-        if self.stopped.is_set():
-            self._refuse(action, "stopped", "emergency stop engaged")
+        if self.stopped.is_set():  # the stop came while it was queued or just taken
+            self.reject(action, "stopped", f"{action.decision_id}: emergency stop engaged")
+            self.in_flight.stop("emergency stop engaged")
             return
         scene = self.scenes.wait_for(action.episode_id, action.scene_sequence, self.scene_wait)
-        final = self.skill.execute(action, scene, self.bus.publish)
+        final = self.skill.execute(action, scene, self.in_flight.report)
         self.log.info(
             "%s %s -> %s: %s%s",
             action.decision_id,

@@ -38,7 +38,7 @@ class Action(Message):
 
     key: ClassVar[str] = "manigraph/planner/action"
     delivery: ClassVar[Delivery] = Delivery.RELIABLE
-    publisher: ClassVar[str] = "planner"
+    publisher: ClassVar[str] = "planner (or demo-ui while a person teaches)"
 
     decision_id: Identifier = Field(description="`<episode>:<step>`, unique per decision")
     episode_id: Identifier

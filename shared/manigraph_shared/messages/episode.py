@@ -55,6 +55,13 @@ class EpisodeEvent(Message):
     steps: int = Field(0, ge=0, description="skills executed so far")
     success: bool | None = Field(None, description="all goals filled; set at end")
     reason: str = Field("", max_length=256, description="why it ended")
+    sim_seconds: float | None = Field(
+        None,
+        ge=0,
+        le=1e6,
+        description="simulated seconds the episode took, set at end by a world with a clock "
+        "(physics); compare with wall time to see the real-time factor",
+    )
     stamp: Stamp
 
     @model_validator(mode="after")

@@ -111,6 +111,24 @@ def test_the_policy_decodes_a_tray_action_or_a_feasible_placement() -> None:
         assert decision.object_id == decision.goal_id == decision.tray_action.rack_id
 
 
+def test_ranked_alternatives_start_with_the_decision_and_offer_every_loadable_dish() -> None:
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
+    backend.dishwasher.toggle("rack_top")  # type: ignore[union-attr]  # the top rack out
+    s = backend.scene(1.0)
+    assert s is not None
+    policy = DishwasherGNNPolicy(dish_net(1))
+    ranked = policy.ranked(s)
+    assert ranked[0] == policy.decide(s)
+    placements = [d for d in ranked if d.tray_action.value == "none"]
+    # Every dish can go into the open top rack's slots of its kind: each is offered once.
+    assert sorted(d.object_id for d in placements) == sorted(o.id for o in s.objects)
+    for d in placements:
+        assert s.goal(d.goal_id).rack == "rack_top" and not s.goal(d.goal_id).filled
+    toggles = {d.object_id for d in ranked if d.tray_action.value != "none"}
+    assert toggles == {"rack_top", "rack_bottom"}
+
+
 @pytest.mark.skipif(
     not (CHECKPOINTS / "dishwasher-top-bottom-sage.pt").is_file(), reason="not shipped yet"
 )

@@ -23,6 +23,7 @@ def test_each_recipe_is_its_architectures() -> None:
     gcn = augmentation_for("gcn")
     assert (gcn.copies, gcn.noise_xy, gcn.tower_probability) == (8, 0.004, 0.0)
     assert gcn.drop_covers_probability > 0 and resample_every_for("gcn") == 0
+    assert gcn.drop_finished_probability == 0.0  # measured mixed: docs/training.md
     assert augmentation_for("gated").max_levels == GATED_MAX_LEVELS
     assert augmentation_for("gat").open_box_contents_probability == 0.0
     assert augmentation_for("sage").open_box_contents_probability > 0

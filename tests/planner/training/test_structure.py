@@ -18,6 +18,7 @@ from manigraph_planner.training.structure import (
     add_distractors,
     add_finished_tower,
     add_open_box,
+    drop_finished_pairs,
     drop_idle_covers,
     extend_towers,
     hide_box_contents,
@@ -237,6 +238,47 @@ def test_idle_covers_are_dropped_only_when_blocks_are_moved(samples: list[Sample
             assert not bool((graph.x[:, 0] == 3).any())
         assert_expert_agrees(graph)
     assert dropped > 0
+
+
+@pytest.mark.parametrize("levels", [1, 2, 4])
+def test_dropping_finished_pairs_keeps_the_label_and_shrinks_graphs(
+    samples: list[Sample], levels: int
+) -> None:
+    smallest = min(s.x.shape[0] for s in samples)
+    shrunk, sizes = 0, []
+    for sample in samples:
+        graph = drop_finished_pairs(as_graph(sample), levels, GEOMETRY)
+        removed = sample.x.shape[0] - graph.x.shape[0]
+        assert removed % 2 == 0  # a filled goal goes with the block in it
+        shrunk += removed > 0
+        assert_expert_agrees(graph)
+        bare = drop_idle_covers(graph, GEOMETRY)
+        assert_expert_agrees(bare)
+        sizes.append(bare.x.shape[0])
+    assert shrunk >= len(samples) // 4
+    # A 2-stack has four nodes; the demonstrations (K = 3, 4) show none that small.
+    assert smallest > 4 and min(sizes) <= 4
+
+
+def test_a_finished_goal_stack_moves_down_as_its_bottom_is_dropped() -> None:
+    # Two blocks done at the bottom of a goal stack, two free goals above, one block to move.
+    x = torch.tensor(
+        [
+            [1.0, 0.5, 0.2, 0.02, 0.0],  # the block to move
+            [1.0, 0.4, -0.2, 0.02, 1.0],
+            [1.0, 0.4, -0.2, 0.06, 1.0],
+            [2.0, 0.4, -0.2, 0.02, 1.0],
+            [2.0, 0.4, -0.2, 0.06, 1.0],
+            [2.0, 0.4, -0.2, 0.10, 0.0],  # the expert's goal
+            [2.0, 0.4, -0.2, 0.14, 0.0],
+        ]
+    )
+    graph = drop_finished_pairs(Graph(x, 0, 5), 1, GEOMETRY)
+    assert graph.x.shape[0] == 5
+    assert graph.x[graph.goal_index].tolist() == pytest.approx([2.0, 0.4, -0.2, 0.06, 0.0])
+    assert sorted(graph.x[graph.x[:, 0] == 2.0, 3].tolist()) == pytest.approx([0.02, 0.06, 0.1])
+    assert_expert_agrees(graph)
+    assert drop_finished_pairs(Graph(x, 1, 5), 2, GEOMETRY).x.shape[0] == 7  # not its object
 
 
 def test_randomized_copies_keep_the_label_and_are_seeded(samples: list[Sample]) -> None:

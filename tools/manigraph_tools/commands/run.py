@@ -30,7 +30,9 @@ def _run_configure(parser: argparse.ArgumentParser) -> None:
 def _run_run(args: argparse.Namespace) -> int:
     plan = plan_from_args(args, args.episodes or 1)  # a bad option stops here, before any waiting
     with Bus.open(bus_config_from_args(args, wait_seconds=30.0)) as bus:
-        wait_services(bus, ["sim", "planner", "skills"])
+        # Right after `docker compose up -d` the planner may still be importing torch: at
+        # load 33 on 2 cores it was not alive 90 s after `up -d` (as `up`, wait 180 s).
+        wait_services(bus, ["sim", "planner", "skills"], timeout=180.0)
         summary = run_episodes(bus, plan)
     emit_json(summary, readable=not args.json)
     return 0

@@ -18,6 +18,7 @@ from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError, ManigraphError
 from manigraph_shared.manifest import driver_for_world, load_manifests
+from manigraph_shared.options import option_argv
 from manigraph_shared.registry import Registry
 from manigraph_tools.certs import make_certificates
 from manigraph_tools.commands.common import emit_json
@@ -42,6 +43,26 @@ def _sim_backends() -> Registry[Any] | None:
     return BACKENDS
 
 
+#: ``up --policy human``: no planner; the demonstration page (``manigraph demo-ui``) decides.
+HUMAN = "human"
+
+
+def _demo_ui_argv(args: argparse.Namespace) -> list[str]:
+    """``manigraph demo-ui`` flags from ``up``'s: the page's port and file, and the episode
+    flags as the page's first episode."""
+    from manigraph_tools.demo_ui.service import DemoUiOptions
+
+    values = {
+        "http_port": args.demo_port,
+        "output": args.demo_output,
+        **{
+            name: getattr(args, name)
+            for name in ("task", "task_file", "blocks", "stacks", "objects", "preference", "seed")
+        },
+    }
+    return ["demo-ui", *option_argv(DemoUiOptions, values)]
+
+
 #: Perception of the physics sim's rendered camera: its markers and exact calibration.
 SIM_CAMERA_PERCEPTION = [
     "perception",
@@ -57,7 +78,24 @@ SIM_CAMERA_PERCEPTION = [
 def _up_configure(parser: argparse.ArgumentParser) -> None:
     episode_arguments(parser)
     parser.add_argument("--record", type=Path, help="also record everything to this MCAP file")
-    parser.add_argument("--policy", default="expert", help="planner policy or checkpoint")
+    parser.add_argument(
+        "--policy",
+        default="expert",
+        help=f"planner policy or checkpoint; '{HUMAN}': no planner, a person decides on the "
+        "demonstration page instead (docs/demo-ui.md)",
+    )
+    parser.add_argument(
+        "--demo-port",
+        type=int,
+        default=8770,
+        help=f"with --policy {HUMAN}: port of the demonstration page on 127.0.0.1 (default 8770)",
+    )
+    parser.add_argument(
+        "--demo-output",
+        type=Path,
+        help=f"with --policy {HUMAN}: MCAP file of the demonstrations "
+        "(default demos/demo-ui-<time>.mcap)",
+    )
     parser.add_argument(
         "--sim",
         default="geometric",
@@ -139,12 +177,21 @@ def _up_run(args: argparse.Namespace) -> int:
             raise ConfigError("scene-source", "camera needs --sim physics (it renders)")
         sim_options += ["--camera", "--no-scenes"]
     plan = plan_from_args(args, args.episodes) if args.episodes is not None else None
+    human = args.policy == HUMAN
+    if human and plan is not None:
+        raise ConfigError(
+            "episodes", f"--policy {HUMAN}: a person starts each episode on the page; leave it out"
+        )
+    if human and args.explain_decisions:
+        raise ConfigError("explain-decisions", f"needs a GNN planner, not --policy {HUMAN}")
     specs = [spec("router", ["router", "--listen", endpoint])]
     if args.record:
         specs.append(spec("recorder", ["record", "--output", str(args.record)]))
     specs += [
         spec("sim", ["sim", "--backend", args.sim, *sim_options]),
-        spec(
+        spec("demo-ui", _demo_ui_argv(args))
+        if human
+        else spec(
             "planner",
             ["planner", "--policy", args.policy]
             + (["--explain-decisions"] if args.explain_decisions else []),
@@ -177,6 +224,12 @@ def _up_run(args: argparse.Namespace) -> int:
                 flush=True,
             )
             if plan is None:
+                if human:
+                    print(
+                        f"demonstration page: http://127.0.0.1:{args.demo_port}/",
+                        file=sys.stderr,
+                        flush=True,
+                    )
                 print("Ctrl-C stops every service", file=sys.stderr, flush=True)
                 while True:
                     supervisor.raise_if_failed()

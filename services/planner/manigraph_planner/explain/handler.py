@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import sys
+from typing import TYPE_CHECKING
+
 from manigraph_planner.decisions import DecisionHistory
 from manigraph_planner.explain.config import ExplainerConfig
-from manigraph_planner.explain.scene_explainer import SceneExplainer
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.errors import ManigraphError, PolicyError
 from manigraph_shared.messages import Action, ExplainRequest, Explanation
+
+if TYPE_CHECKING:
+    from manigraph_planner.explain.scene_explainer import SceneExplainer
 
 __all__ = ["ExplainHandler"]
 
@@ -30,6 +35,17 @@ class ExplainHandler:
         self.history = history
         self.explainer: SceneExplainer | None = None
         self.problem = ""
+        # A GNN policy's class is loaded (and torch with it) iff a GNN policy was loaded:
+        # any other policy is refused here without importing the explainer, or torch.
+        gnn = sys.modules.get("manigraph_planner.policies.gnn")
+        if gnn is None or not isinstance(policy, gnn.GNNPolicy):
+            self.problem = (
+                f"policy: '{policy.name}' is not a GNN policy; only GNN policies can be "
+                "explained (start the planner with --policy CHECKPOINT.pt)"
+            )
+            return
+        from manigraph_planner.explain.scene_explainer import SceneExplainer
+
         try:
             self.explainer = SceneExplainer(policy, config)
         except PolicyError as exc:

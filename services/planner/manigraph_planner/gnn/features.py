@@ -30,7 +30,7 @@ import torch
 from torch import Tensor
 
 from manigraph_shared.errors import PolicyError
-from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene
+from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneGoal, SceneObject
 
 __all__ = [
     "FEATURE_SPEC",
@@ -165,7 +165,8 @@ def scene_to_graph(scene: Scene) -> GraphState:
     rows: list[tuple[float, float, float, float, float]] = []
     object_ids: list[str] = []
     goal_ids: list[str] = []
-    for entity in [*scene.objects, *scene.goals]:
+    entities: list[SceneObject | SceneGoal] = [*scene.objects, *scene.goals]
+    for entity in entities:
         if entity.category not in _OBJECT_CODE and entity.category not in _GOAL_CODE:
             raise PolicyError(
                 f"scene: '{entity.id}' is a {entity.category}; this policy knows blocks and "

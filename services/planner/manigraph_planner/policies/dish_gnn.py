@@ -45,6 +45,30 @@ class DishwasherGNNPolicy(Policy):
             heads = self.net.heads_complete(graph.x)
         return decision_from_heads(graph, heads)
 
+    def ranked(self, scene: Scene) -> list[Decision]:
+        """The decision, then each other dish that can go somewhere now, most likely first,
+        into its most likely slot; then the tray actions by the tray head. The planner takes
+        one of these only after the decision made no progress (e.g. a robot that cannot turn
+        that dish as asked, ``orientation_unreachable``), so one dish a robot cannot load
+        does not hold up the others."""
+        graph = dish_scene_to_graph(scene)
+        if graph.num_objects == 0:
+            return []
+        with torch.inference_mode():
+            heads = self.net.heads_complete(graph.x)
+        first = decision_from_heads(graph, heads)
+        ranked = [] if first is None else [first]
+        for pair in _pairs_by_dish(graph, heads):
+            if all(pair.pair != d.pair for d in ranked):
+                ranked.append(pair)
+        for index in heads.tray.argsort(descending=True).tolist():
+            tray = TRAY_ACTIONS[int(index)]
+            if tray is not TrayAction.NONE and tray.rack_id is not None:
+                toggle = Decision(tray.rack_id, tray.rack_id, None, tray)
+                if all(toggle.pair != d.pair for d in ranked):
+                    ranked.append(toggle)
+        return ranked
+
 
 def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
     """The decision the four heads of one graph make (see :class:`DishwasherGNNPolicy`)."""
@@ -53,6 +77,35 @@ def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
         rack = tray.rack_id
         assert rack is not None
         return Decision(rack, rack, None, tray)
+    scores = _pair_scores(graph, heads)
+    if scores is None:
+        return None
+    m = graph.num_goals
+    flat = int(scores.flatten().argmax())
+    o, g = flat // m, flat % m
+    orientation = int(heads.orientation[o].argmax())
+    return Decision(graph.object_ids[o], graph.goal_ids[g], orientation)
+
+
+def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[Decision]:
+    """For each dish that fits a usable free slot, most likely dish first: its most likely
+    such slot, in the orientation head's argmax."""
+    scores = _pair_scores(graph, heads)
+    if scores is None:
+        return []
+    best, slots = scores.max(dim=1)
+    pairs = []
+    for o in best.argsort(descending=True).tolist():
+        if torch.isinf(best[o]):
+            break
+        orientation = int(heads.orientation[o].argmax())
+        pairs.append(Decision(graph.object_ids[o], graph.goal_ids[int(slots[o])], orientation))
+    return pairs
+
+
+def _pair_scores(graph: DishGraph, heads: DishHeads) -> torch.Tensor | None:
+    """Log-likelihood of each (dish, slot) pair, -inf where the slot cannot take the dish
+    now; None if no pair can be loaded."""
     k, m = graph.num_objects, graph.num_goals
     codes = graph.goal_codes()
     object_logp = heads.node[:k].log_softmax(0)
@@ -66,11 +119,7 @@ def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
     fits = (codes[k : k + m].unsqueeze(0) == wanted.unsqueeze(1)) & free.unsqueeze(0)
     if not bool(fits.any()):
         return None
-    scores = (object_logp.unsqueeze(1) + goal_logp.unsqueeze(0)).masked_fill(~fits, float("-inf"))
-    flat = int(scores.flatten().argmax())
-    o, g = flat // m, flat % m
-    orientation = int(heads.orientation[o].argmax())
-    return Decision(graph.object_ids[o], graph.goal_ids[g], orientation)
+    return (object_logp.unsqueeze(1) + goal_logp.unsqueeze(0)).masked_fill(~fits, float("-inf"))
 
 
 def _rack_usable(graph: DishGraph, rack: str | None) -> bool:

@@ -19,8 +19,10 @@ from manigraph_shared.orientations import nearest_orientation
 TOP, BOTTOM = TRAY_RACKS[TrayAction.TOGGLE_TOP], TRAY_RACKS[TrayAction.TOGGLE_BOTTOM]
 _TOGGLE = {rack: action for action, rack in TRAY_RACKS.items()}
 _DISHES = (ObjectCategory.PLATE, ObjectCategory.BOWL)
-#: Slots nearer than this (metres) to a dish hold it.
-_IN_SLOT = 1e-3
+#: Slots nearer than this (metres, on every axis) to a dish hold it: the geometric world puts
+#: a dish exactly at its slot, a physical dish settles a few millimetres off (the physics
+#: world's ``SLOT_FIT``); neighbouring slots are 5.5 cm apart.
+_IN_SLOT = 0.02
 
 
 def preferred(preference: str, dish: ObjectCategory, slot: SceneGoal) -> bool:

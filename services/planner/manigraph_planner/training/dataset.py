@@ -1,8 +1,11 @@
 """Training samples from MCAP logs: each recorded Action with the Scene it was decided on.
 
 Any log with ``manigraph/world/scene`` and ``manigraph/planner/action`` channels is training
-data: ``manigraph demos`` output, or a run recorded with ``manigraph up --record``. An action
-is paired with the scene whose ``episode_id`` and ``sequence`` it names (``scene_sequence``).
+data: ``manigraph demos`` output, the demonstration page's (``manigraph demo-ui``), or a run
+recorded with ``manigraph up --record``. An action is paired with the scene whose
+``episode_id`` and ``sequence`` it names (``scene_sequence``). Decisions on a dishwasher scene
+(one with racks) are the four-headed policy's (``training.dishwasher``) and are skipped here;
+:func:`count_heads` says which kind a log holds.
 """
 
 from __future__ import annotations
@@ -42,13 +45,8 @@ class Demonstrations:
     skipped: int
 
 
-def recorded_decisions(paths: Iterable[Path]) -> list[tuple[Scene | None, Action]]:
-    """Every Action in the logs at ``paths`` (in file-name order, then log order) with the
-    Scene it was decided on, or None if no log holds that scene.
-
-    Raises:
-        LogError: a path is not a file.
-    """
+def read_decisions(paths: Iterable[Path]) -> tuple[dict[tuple[str, int], Scene], list[Action]]:
+    """Every scene (by episode and sequence) and every action of the logs ``paths``."""
     scenes: dict[tuple[str, int], Scene] = {}
     actions: list[Action] = []
     for path in sorted(paths):
@@ -60,16 +58,35 @@ def recorded_decisions(paths: Iterable[Path]) -> list[tuple[Scene | None, Action
                 scenes[(message.episode_id, message.sequence)] = message
             elif isinstance(message, Action):
                 actions.append(message)
-    return [(scenes.get((a.episode_id, a.scene_sequence)), a) for a in actions]
+    return scenes, actions
+
+
+#: The policy heads a decision trains: on a scene with racks the dishwasher's four, else the
+#: paper's object and goal (``ModelConfig.heads``).
+DISHWASHER_HEADS = "dishwasher"
+OBJECT_GOAL_HEADS = "object-goal"
+
+
+def count_heads(paths: Iterable[Path]) -> dict[str, int]:
+    """How many decisions of the logs train each kind of policy (those paired with a scene)."""
+    scenes, actions = read_decisions(paths)
+    counts = {OBJECT_GOAL_HEADS: 0, DISHWASHER_HEADS: 0}
+    for action in actions:
+        scene = scenes.get((action.episode_id, action.scene_sequence))
+        if scene is not None:
+            counts[DISHWASHER_HEADS if scene.racks else OBJECT_GOAL_HEADS] += 1
+    return counts
 
 
 def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
+    scenes, actions = read_decisions(paths)
     digest = hashlib.sha256()
     samples: list[Sample] = []
     skipped = 0
     episodes = set()
-    for scene, action in recorded_decisions(paths):
-        sample = _sample(scene, action) if scene is not None else None
+    for action in actions:
+        scene = scenes.get((action.episode_id, action.scene_sequence))
+        sample = _sample(scene, action) if scene is not None and not scene.racks else None
         if sample is None:
             skipped += 1
             continue

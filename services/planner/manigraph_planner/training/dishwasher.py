@@ -28,7 +28,7 @@ from torch import Tensor
 from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC, TRAY_ACTIONS, dish_scene_to_graph
 from manigraph_planner.gnn.models import ModelConfig
 from manigraph_planner.gnn.models.dish_net import DishPolicyNet
-from manigraph_planner.training.dataset import recorded_decisions
+from manigraph_planner.training.dataset import read_decisions
 from manigraph_planner.training.dish_augment import (
     DishSample,
     add_dishes,
@@ -49,12 +49,13 @@ class DishDemos:
 
 
 def load_dish_demonstrations(paths: Iterable[Path]) -> DishDemos:
-    """The dishwasher samples of the logs at ``paths`` (paired by
-    :func:`~manigraph_planner.training.dataset.recorded_decisions`)."""
+    """The dishwasher decisions of the logs (those on a scene with racks; others skipped)."""
+    scenes, actions = read_decisions(paths)
     digest = hashlib.sha256()
     samples, episodes = [], set()
-    for scene, action in recorded_decisions(paths):
-        if scene is None:
+    for action in actions:
+        scene = scenes.get((action.episode_id, action.scene_sequence))
+        if scene is None or not scene.racks:
             continue
         graph = dish_scene_to_graph(scene)
         tray = TRAY_ACTIONS.index(action.tray_action)

@@ -411,3 +411,65 @@ def add_finished_tower(
     blocks = [[BLOCK, sx, sy, h, 1.0] for h in z[:levels]]
     goals = [[BLOCK_GOAL, sx, sy, h, float(i < levels)] for i, h in enumerate(z)]
     return _rebuild(graph, x.clone(), blocks, goals)
+
+
+def drop_finished_pairs(graph: Graph, levels: int, geometry: SceneGeometry) -> Graph:
+    """Remove finished work: up to ``levels`` filled block goals with the blocks in them from
+    the bottom of every free-standing goal stack (what stood above them moves down by whole
+    block sizes), and every filled block goal with its block on a box floor.
+
+    The inverse of :func:`extend_towers` for goal stacks, and the way to small graphs: a
+    K-stack with K = 2 has four nodes, fewer than any demonstration (K = 3, 4) shows. Rule 1
+    never moves a block in a goal nor fills a filled goal; every goal stack moves down by the
+    same number of levels, so the lowest free goal is still the same goal, and a box floor's
+    goals move not at all. Goal stacks are left alone where some block goal lies in a box
+    (stacks moving down could then pass below the box floor's free goals). Returns ``graph``
+    itself where nothing qualifies."""
+    x = graph.x
+    boxes = _box_sites(x, geometry)
+    pitch = geometry.block_size
+    goal_rows = torch.nonzero(x[:, 0] == BLOCK_GOAL).flatten()
+    stacks: list[Tensor] = []
+    drop = torch.zeros(x.shape[0], dtype=torch.bool)
+    any_in_box = False
+    for column in _columns(x, goal_rows):
+        if _away_from_boxes(x, column, boxes, geometry):
+            stacks.append(column)
+            continue
+        any_in_box = True
+        for g in column.tolist():
+            if float(x[g, 4]) == 1.0:
+                drop |= _block_in(x, g)
+                drop[g] = True
+    if not any_in_box and stacks:
+        levels = min([levels] + [_filled_at_bottom(x, column) for column in stacks])
+        x = x.clone()
+        for column in stacks:
+            order = column[torch.argsort(x[column, 3])]
+            for g in order[:levels].tolist():
+                drop |= _block_in(x, g)
+                drop[g] = True
+            if levels:
+                cut = float(x[order[levels - 1], 3]) + pitch / 2
+                xy = x[order[0], 1:3]
+                above = ((x[:, 1:3] - xy).abs().amax(dim=1) <= COLUMN_TOLERANCE) & (x[:, 3] > cut)
+                above &= (x[:, 0] == BLOCK) | (x[:, 0] == BLOCK_GOAL)
+                x[above, 3] -= levels * pitch
+    if not bool(drop.any()) or bool(drop[graph.object_index] | drop[graph.goal_index]):
+        return graph
+    return _remove(Graph(x, graph.object_index, graph.goal_index), drop)
+
+
+def _filled_at_bottom(x: Tensor, column: Tensor) -> int:
+    """How many of ``column``'s block goals, from the bottom up, are filled."""
+    filled = x[column[torch.argsort(x[column, 3])], 4].tolist()
+    count = 0
+    while count < len(filled) and filled[count] == 1.0:
+        count += 1
+    return count
+
+
+def _block_in(x: Tensor, goal: int) -> Tensor:
+    """The filled blocks standing in block goal ``goal`` (same place within tolerance)."""
+    near = (x[:, 1:4] - x[goal, 1:4]).abs().amax(dim=1) <= COLUMN_TOLERANCE
+    return near & (x[:, 0] == BLOCK) & (x[:, 4] == 1.0)

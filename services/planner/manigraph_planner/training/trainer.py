@@ -51,9 +51,11 @@ class TrainConfig:
             if getattr(self, name) < 1:
                 raise ConfigError(name, "must be >= 1")
         self.model_config()  # the architecture and sizes, checked where a network is built
-        if self.resample_every is None:
-            object.__setattr__(self, "resample_every", resample_every_for(self.architecture))
-        if self.resample_every < 0:
+        resample_every = self.resample_every
+        if resample_every is None:
+            resample_every = resample_every_for(self.architecture)
+            object.__setattr__(self, "resample_every", resample_every)
+        if resample_every < 0:
             raise ConfigError("resample_every", "must be >= 0 epochs")
         if self.learning_rate <= 0:
             raise ConfigError("learning_rate", "must be > 0")

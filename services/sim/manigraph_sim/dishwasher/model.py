@@ -13,7 +13,9 @@ from typing import Final
 
 import numpy as np
 
+from manigraph_shared.dishwasher_rules import BOTTOM_RACK, TOP_RACK
 from manigraph_shared.errors import TaskError
+from manigraph_shared.grasp_points import RACK_TRAVEL as RACK_PULL
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN
 from manigraph_sim.world_model import Layout
 
@@ -25,13 +27,15 @@ DISH_SIZE: Final = {PLATE: (0.08, 0.08, 0.015), BOWL: (0.06, 0.06, 0.035)}
 #: The orientation a dish must have in its slot (``manigraph_shared.orientations``).
 SLOT_ORIENTATION: Final = {PLATE: UPRIGHT, BOWL: UPSIDE_DOWN}
 
-TOP: Final = "rack_top"
-BOTTOM: Final = "rack_bottom"
+TOP: Final = TOP_RACK
+BOTTOM: Final = BOTTOM_RACK
 #: How far a rack slides out towards the robot (-x), metres.
-RACK_TRAVEL: Final = 0.16
+RACK_TRAVEL: Final = RACK_PULL
 #: Slots per row of a rack: a plate row and a bowl row, half of each left (y < 0).
 SLOTS_PER_ROW: Final = 12
 SLOT_PITCH: Final = 0.055
+#: A rack's handle (the position a Scene reports for it) relative to its centre along x.
+HANDLE_X: Final = -0.09
 #: Most dishes an episode may hold: every preference must have a slot for each.
 MAX_DISHES: Final = SLOTS_PER_ROW
 
@@ -62,10 +66,12 @@ class Dish:
     position: np.ndarray  # centre, metres
     orientation: int  # index into manigraph_shared.orientations
     slot: str | None = None  # the slot it stands in, if any
+    #: Its own extents (the physics world's dishes), else the kind's ``DISH_SIZE``.
+    extents: tuple[float, float, float] | None = None
 
     @property
     def size(self) -> np.ndarray:
-        return np.array(DISH_SIZE[self.kind])
+        return np.array(self.extents or DISH_SIZE[self.kind])
 
 
 @dataclass
@@ -82,7 +88,7 @@ class Rack:
 
     @property
     def handle(self) -> np.ndarray:
-        return self.centre + np.array([-0.09, 0.0, 0.0])
+        return self.centre + np.array([HANDLE_X, 0.0, 0.0])
 
 
 @dataclass

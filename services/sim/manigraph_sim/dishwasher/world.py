@@ -17,10 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from manigraph_shared.dishwasher_rules import check_rack_usable, check_slot
 from manigraph_shared.errors import SkillError
 from manigraph_sim.dishwasher.model import (
-    BOTTOM,
-    TOP,
     Dish,
     DishwasherLayout,
     Preference,
@@ -75,11 +74,7 @@ class DishwasherWorld:
 
     # --- actions ----------------------------------------------------------------------------
     def _check_rack_usable(self, rack: Rack) -> None:
-        if not rack.open:
-            raise SkillError("rack_closed", f"{rack.id} is pushed in")
-        top = self.racks.get(TOP)
-        if rack.id == BOTTOM and top is not None and top.open:
-            raise SkillError("top_rack_open", "the bottom rack is loaded only with the top one in")
+        check_rack_usable(rack.id, {r.id: r.open for r in self.racks.values()})
 
     def pick(self, dish_id: str) -> None:
         if self.held is not None:
@@ -105,11 +100,7 @@ class DishwasherWorld:
             dish.position = np.array([target[0], target[1], resting_height(dish)])
             return
         self._check_rack_usable(self.racks[slot.rack])
-        taken = self.occupant(slot.id)
-        if taken is not None and taken != dish_id:
-            raise SkillError("slot_taken", f"{slot.id} holds {taken}")
-        if slot.kind != dish.kind:
-            raise SkillError("wrong_slot", f"{slot.id} takes a {slot.kind}, not a {dish.kind}")
+        check_slot(slot.id, slot.kind, dish_id, dish.kind, self.occupant(slot.id))
         dish.slot = slot.id
         dish.orientation = orientation
         dish.position = self.slot_position(slot)

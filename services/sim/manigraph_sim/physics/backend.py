@@ -18,6 +18,7 @@ budget is spent.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -40,10 +41,13 @@ from manigraph_shared.messages import (
     SkillStatus,
 )
 from manigraph_sim.backend import EpisodeBackend, JointedArmBackend
+from manigraph_sim.dishwasher.model import DishwasherLayout
+from manigraph_sim.dishwasher.scene import dishwasher_scene
 from manigraph_sim.geometric.world import GeometricWorld
 from manigraph_sim.manifest import CAMERA, JOINTS
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
+from manigraph_sim.physics.dishwasher import PhysicsDishwasher
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig
 from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
 from manigraph_sim.tasks.from_request import episode_layout
@@ -72,6 +76,7 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         goal_tolerance: float = 0.02,
         realtime: bool = False,
         config: PhysicsConfig | None = None,
+        stream_hz: tuple[float, float] = (30.0, 100.0),
         video: VideoConfig | None = None,
         camera: CameraConfig | None = None,
         markers: MarkerMap | None = None,
@@ -79,6 +84,11 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         super().__init__()
         self.goal_tolerance = goal_tolerance
         self.realtime = realtime
+        #: With ``realtime``: the Scene and JointState rates a robot streams while it moves.
+        self.stream_hz = stream_hz
+        #: Called after every physics step of a motion in real time (the sim service
+        #: publishes what is due from it); None: nothing streams during a motion.
+        self.while_moving: Callable[[], None] | None = None
         self.video_config = video
         self.video: EpisodeVideo | None = None
         #: The tripod camera (``--camera``) and the markers printed on the bodies it sees.
@@ -94,6 +104,8 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         self.config = config or PhysicsConfig()
         self.world: PhysicsWorld | None = None
         self.layout: Layout | None = None
+        #: The dishwasher task's cabinet and dishes (``physics.dishwasher``), else None.
+        self.dishwasher: PhysicsDishwasher | None = None
         #: Boxes seen open in this episode: their contents stay observed (partial observability).
         self.revealed: set[str] = set()
         self.physics_steps = 0
@@ -113,7 +125,18 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
                 noise_sigma=options.camera_noise,
                 blur_pixels=options.camera_blur,
             )
-        return cls(options.goal_tolerance, options.realtime, video=video, camera=camera)
+        return cls(
+            options.goal_tolerance,
+            options.realtime,
+            stream_hz=(options.scene_hz, options.joint_state_hz),
+            video=video,
+            camera=camera,
+        )
+
+    @property
+    def stream_rates(self) -> tuple[float, float] | None:
+        """Scene and JointState rates (Hz) in real time; None when running flat out."""
+        return self.stream_hz if self.realtime else None
 
     # --- episodes ---------------------------------------------------------------------------
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
@@ -121,13 +144,21 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         layout = episode.layout
         if self.markers is not None and self.camera_config is not None:
             self.markers.check_objects((body.id, body.category) for body in layout.bodies)
+        dishes = isinstance(layout, DishwasherLayout)
         self.world = PhysicsWorld(
-            layout.bodies,
+            [] if dishes else layout.bodies,
             self.config,
             render=self.video_config is not None or self.camera_config is not None,
             containers=layout.containers,
             markers=self.markers if self.camera_config is not None else None,
         )
+        self.dishwasher = None
+        required = layout.required_goals()
+        if isinstance(layout, DishwasherLayout):
+            self.dishwasher = PhysicsDishwasher(self.world, layout)
+            self.world.step(round(self.config.settle_time / self.config.timestep))
+            # Success as in the geometric world: every dish loaded as preferred, racks in.
+            required = {dish.id for dish in layout.dishes} | {rack.id for rack in layout.racks}
         self._warm_world = None
         self.revealed = set()
         if self.video_config is not None:
@@ -143,7 +174,7 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
             self.camera = TripodCamera(self.camera_config, self.world.scene)
             self.camera.sequence = sequence
         self.layout = layout
-        return self.begin(request, layout.required_goals(), episode.max_steps, stamp)
+        return self.begin(request, required, episode.max_steps, stamp)
 
     def _warm_up(self) -> None:
         """Render one frame of a one-block episode: the first frame of a process compiles the
@@ -192,6 +223,10 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
     def scene(self, stamp: float) -> Scene | None:
         if self.world is None or self.layout is None or self.request is None:
             return None
+        if self.dishwasher is not None:
+            self.sequence += 1
+            view = self.dishwasher.view(self.held())
+            return dishwasher_scene(view, self.request.episode_id, stamp, self.sequence, self.ended)
         orientations = {}
         for body in self.layout.bodies:
             x, y, z, w = self.world.pose(body.id)[1]
@@ -263,7 +298,12 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
             positions = np.array([p.positions for p in command.points])
             closed = [p.gripper is GripperTarget.CLOSED for p in command.points]
             self.physics_steps += self.world.follow(
-                times, positions, closed, self.realtime, halt=self.halted.is_set
+                times,
+                positions,
+                closed,
+                self.realtime,
+                halt=self.halted.is_set,
+                while_moving=self.while_moving,
             )
             if self.halted.is_set():
                 raise SkillError("stopped", "emergency stop during the trajectory")
@@ -304,7 +344,18 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         self.ended = done or self.steps >= self.max_steps
 
     def occupied_goals(self) -> set[str]:
+        if self.dishwasher is not None:
+            view = self.dishwasher.view(self.held())
+            loaded = {d.id for d in view.dishes.values() if view.loaded_as_preferred(d)}
+            return loaded | {r.id for r in view.racks.values() if not r.open}
         return set(self._geometric_view().occupancy())
+
+    def sim_seconds(self) -> float | None:
+        """Physics time simulated in this episode (motions and settling, without the
+        settling of the layout before the first decision)."""
+        if self.world is None:
+            return None
+        return max(0.0, self.world.sim_time - self.config.settle_time)
 
     def episode_ended(self) -> None:
         if self.video is not None and self.request is not None:

@@ -245,10 +245,13 @@ class PhysicsWorld:
         closed: list[bool],
         realtime: bool,
         halt: Callable[[], bool] | None = None,
+        while_moving: Callable[[], None] | None = None,
     ) -> int:
         """Track the trajectory step by step (linear between points), then settle.
         ``halt`` (checked every step) stops the arm where it is: the emergency stop.
-        Returns the number of physics steps taken."""
+        With ``realtime`` each step waits for its moment of wall-clock time, and
+        ``while_moving`` runs after each one (to publish the state a robot streams while it
+        moves). Returns the number of physics steps taken."""
         dt = self.config.timestep
         total = int(np.ceil(times[-1] / dt)) + round(self.config.settle_time / dt)
         start_wall = time.perf_counter()
@@ -266,4 +269,6 @@ class PhysicsWorld:
                 ahead = k * dt - (time.perf_counter() - start_wall)
                 if ahead > 0:
                     time.sleep(ahead)
+                if while_moving is not None:
+                    while_moving()
         return total

@@ -104,11 +104,16 @@ def sample_square_sites(
     side: float,
     area: tuple[tuple[float, float], tuple[float, float]],
     batch: int = 4096,
-    batches: int = 64,
+    batches: int = 1024,
 ) -> list[np.ndarray]:
     """``count`` positions inside ``area`` whose squares of ``side`` never overlap (every
     pair at least ``side`` apart along x or y). Such layouts can be rare when the squares
-    are large, so candidates are drawn and checked a batch at a time."""
+    are large, so candidates are drawn and checked a batch at a time.
+
+    The physics world's box rearrangement (four 28 cm squares in a 31 x 60 cm area) fits
+    about one draw in 10^5: 64 batches left 2 of seeds 1000-1059 without a layout (the
+    episode failed at reset). More batches change no layout that fitted before (the same
+    stream, read further)."""
     low = np.array([area[0][0], area[1][0]])
     high = np.array([area[0][1], area[1][1]])
     apart = ~np.eye(count, dtype=bool)

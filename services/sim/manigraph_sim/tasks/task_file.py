@@ -47,8 +47,8 @@ goals closer than a block's width, and more required block (cover) goals than bl
 
 from __future__ import annotations
 
-import itertools
 import tomllib
+from functools import cached_property
 from typing import Annotated, Literal
 
 import numpy as np
@@ -185,26 +185,37 @@ class TaskFile(_Strict):
 
     def _overlapping_objects(self) -> list[str]:
         """Objects that overlap in some draw (jitter at its worst; two objects choosing the
-        same listed position never both take it)."""
+        same listed position never both take it). Each pair's placements are compared as
+        arrays: 40 objects with 64 listed positions each are 3 million placement pairs."""
+        places = [np.array([p for p, _ in self.placements(i)]) for i in range(len(self.objects))]
+        bases = [  # each placement as the position its tower's bottom object takes
+            places[i] - np.array(o.anchor) + np.array(self.objects[self.root_of(i)].anchor)
+            for i, o in enumerate(self.objects)
+        ]
         problems = []
         for i, a in enumerate(self.objects):
             for j in range(i + 1, len(self.objects)):
                 b = self.objects[j]
-                depth = max(
-                    (
-                        self._depth(pa, pb, a.size, b.size, ja + jb)
-                        for (pa, ja), (pb, jb) in itertools.product(
-                            self.placements(i), self.placements(j)
-                        )
-                        if not self._exclusive(i, j, pa, pb)
-                    ),
-                    default=0.0,
-                )
+                depth = self._deepest(i, j, places, bases)
                 if depth > OVERLAP_TOLERANCE:
                     problems.append(
                         f"objects.{j}: {b.id} overlaps objects.{i} ({a.id}) by {depth * 100:.1f} cm"
                     )
         return problems
+
+    def _deepest(self, i: int, j: int, places: list[np.ndarray], bases: list[np.ndarray]) -> float:
+        """The deepest overlap of objects ``i`` and ``j`` over their placements (0: none)."""
+        slack = self.placements(i)[0][1] + self.placements(j)[0][1]
+        margins = np.array([slack, slack, 0.0])
+        half = (np.array(self.objects[i].size) + np.array(self.objects[j].size)) / 2
+        gap = np.abs(places[i][:, None, :] - places[j][None, :, :])
+        depth = (half - np.maximum(0.0, gap - margins)).min(axis=2)
+        ri, rj = self.root_of(i), self.root_of(j)
+        listed = self.objects[ri].positions is not None and self.objects[rj].positions is not None
+        if ri != rj and listed:  # both cannot take the same listed position
+            same = np.abs(bases[i][:, None, :] - bases[j][None, :, :]).max(axis=2) < 1e-3
+            depth = np.where(same, -np.inf, depth)
+        return max(0.0, float(depth.max()))
 
     def _crowded_block_goals(self) -> list[str]:
         blocks = [(i, g) for i, g in enumerate(self.goals) if g.category == "block"]
@@ -234,16 +245,26 @@ class TaskFile(_Strict):
     def support_of(self, index: int) -> int | None:
         """The object that object ``index`` rests on (same x, y within 1 mm, the highest one
         below it), or None when it stands on the table."""
-        x, y, z = self.objects[index].anchor
-        below = [
-            (other.anchor[2], j)
-            for j, other in enumerate(self.objects)
-            if j != index
-            and abs(other.anchor[0] - x) < 1e-3
-            and abs(other.anchor[1] - y) < 1e-3
-            and other.anchor[2] < z
-        ]
-        return max(below)[1] if below else None
+        return self._supports[index]
+
+    @cached_property
+    def _supports(self) -> list[int | None]:
+        """Every object's support, found once: the checks ask for towers per pair of objects,
+        and scanning all objects each time made a 256-object file cost O(n^3)-O(n^4) (a 64 KiB
+        task file of overlapping blocks kept the sim busy for minutes)."""
+        anchors = [o.anchor for o in self.objects]
+        supports: list[int | None] = []
+        for index, (x, y, z) in enumerate(anchors):
+            below = [
+                (other[2], j)
+                for j, other in enumerate(anchors)
+                if j != index
+                and abs(other[0] - x) < 1e-3
+                and abs(other[1] - y) < 1e-3
+                and other[2] < z
+            ]
+            supports.append(max(below)[1] if below else None)
+        return supports
 
     @property
     def blocks(self) -> int:
@@ -252,12 +273,28 @@ class TaskFile(_Strict):
 
     def root_of(self, index: int) -> int:
         """The object at the bottom of the tower that object ``index`` belongs to."""
-        base = self.support_of(index)
-        return index if base is None else self.root_of(base)
+        return self._roots[index]
+
+    @cached_property
+    def _roots(self) -> list[int]:
+        roots: list[int] = []
+        for index in range(len(self.objects)):
+            root = index
+            while (base := self._supports[root]) is not None:  # supports lie strictly lower
+                root = base
+            roots.append(root)
+        return roots
 
     def placements(self, index: int) -> list[tuple[Position, float]]:
         """Where object ``index`` may stand before the whole-layout shift: each listed position
         of its tower's bottom object, moved as the tower moves, with that object's jitter."""
+        return self._placements[index]
+
+    @cached_property
+    def _placements(self) -> list[list[tuple[Position, float]]]:
+        return [self._placements_of(index) for index in range(len(self.objects))]
+
+    def _placements_of(self, index: int) -> list[tuple[Position, float]]:
         root = self.objects[self.root_of(index)]
         offset = [a - b for a, b in zip(self.objects[index].anchor, root.anchor, strict=True)]
         bases = root.positions if root.positions is not None else [root.anchor]
@@ -268,27 +305,6 @@ class TaskFile(_Strict):
             )
             for base in bases
         ]
-
-    def _exclusive(self, i: int, j: int, pa: Position, pb: Position) -> bool:
-        """Objects ``i`` and ``j`` could stand there only by taking one listed position."""
-        ri, rj = self.root_of(i), self.root_of(j)
-        if ri == rj or self.objects[ri].positions is None or self.objects[rj].positions is None:
-            return False
-        ai, aj = self.objects[i].anchor, self.objects[j].anchor
-        base_i = [p - a + b for p, a, b in zip(pa, ai, self.objects[ri].anchor, strict=True)]
-        base_j = [p - a + b for p, a, b in zip(pb, aj, self.objects[rj].anchor, strict=True)]
-        return max(abs(x - y) for x, y in zip(base_i, base_j, strict=True)) < 1e-3
-
-    @staticmethod
-    def _depth(
-        pa: Position, pb: Position, sa: tuple[float, ...], sb: tuple[float, ...], slack: float
-    ) -> float:
-        """How deep two boxes can overlap when each may move by its jitter (``slack``, x, y)."""
-        margins = (slack, slack, 0.0)
-        return min(
-            (da + db) / 2 - max(0.0, abs(a - b) - m)
-            for a, b, da, db, m in zip(pa, pb, sa, sb, margins, strict=True)
-        )
 
 
 def parse_task_file(text: str) -> TaskFile:

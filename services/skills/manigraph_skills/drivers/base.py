@@ -7,6 +7,7 @@ with their options in ``manigraph_skills.drivers.registry``.
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any
@@ -26,6 +27,9 @@ class Grasp:
     carry_z: float = 0.0  # lowest TCP height for carrying the object across, metres
     #: What the arm must not touch on the way (a driver that plans arm motion checks it).
     obstacles: tuple[Obstacle, ...] = ()
+    #: The other hand yaw (added to ``turn``) the object may be held at, radians: a quarter
+    #: turn for a square block or cover, a half turn for a plate taken across its thickness.
+    other_turn: float = math.pi / 2
 
 
 #: A block's grasp at its centre, the driver's default yaw and carry heights.
@@ -54,6 +58,11 @@ class RobotDriver(ABC):
     """
 
     name: str
+    #: Whether the skill checks the dishwasher's loading rules on the scene before moving
+    #: this robot (``manigraph_shared.dishwasher_rules``): a physical dishwasher refuses
+    #: nothing by itself. The geometric world refuses by the same rules, so its driver
+    #: leaves them to it.
+    checks_dish_rules: bool = False
 
     @classmethod
     def from_options(cls, bus: Any, options: Any) -> RobotDriver:
@@ -68,11 +77,16 @@ class RobotDriver(ABC):
     def place(self, motion: Motion) -> None:
         """Carry the held object to the motion's position and release it."""
 
-    def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3) -> None:
-        """Grasp rack ``rack_id``'s handle (at ``handle``) and pull the rack out or push it in
-        (dishwasher). A driver that cannot refuses with reason ``unsupported``."""
+    def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3, is_open: bool) -> None:
+        """Grasp rack ``rack_id``'s handle (at ``handle``) and push the rack in if
+        ``is_open``, else pull it out (dishwasher). A driver that cannot refuses with reason
+        ``unsupported``."""
         name = getattr(self, "name", type(self).__name__)
         raise SkillError("unsupported", f"the {name} driver cannot toggle a tray yet")
+
+    def check_orientation(self, object_id: str, current: Quaternion, target: Quaternion) -> None:
+        """Refuse (``orientation_unreachable``) before any motion if this robot cannot turn
+        ``object_id`` from ``current`` to ``target`` as it places it; a magic gripper can."""
 
     @abstractmethod
     def stop(self) -> None:

@@ -10,7 +10,11 @@ Checks, each reported as a ``SkillError`` reason:
 * ``grasp_slipped``: after closing and lifting (or after the transfer) the fingers closed to
   less than ``min_grasp_width``, so nothing is between them;
 * ``placement_missed``: after release the object's centre is more than
-  ``placement_tolerance`` from the target (when the transport can observe objects).
+  ``placement_tolerance`` from the target (when the transport can observe objects);
+* ``orientation_unreachable``: a placement asks for another up axis than the object has
+  (top-down grasps turn an object about the vertical only), refused before any motion;
+* ``handle_missed``: the fingers closed on nothing at a rack's handle; ``rack_stuck``: after a
+  toggle the scene still shows the rack where it was.
 """
 
 from __future__ import annotations
@@ -25,14 +29,20 @@ from typing import Protocol
 import numpy as np
 
 from manigraph_shared.errors import SkillError
+from manigraph_shared.grasp_points import RACK_TRAVEL, rack_grip
 from manigraph_shared.ids import derived_id
 from manigraph_shared.messages import (
     GripperTarget,
     JointTrajectoryCommand,
     JointTrajectoryPoint,
     JointTrajectoryResult,
+    Quaternion,
     Scene,
+    SceneObject,
+    SceneRack,
+    Vector3,
 )
+from manigraph_shared.orientations import ORIENTATION_NAMES, up_axis_orientation
 from manigraph_skills.drivers.base import Grasp, Motion, RobotDriver
 from manigraph_skills.drivers.registry import MotionOptions
 from manigraph_skills.motion import GraspPlanner, JointTrajectory, PandaModel, PlanConfig
@@ -52,6 +62,11 @@ QUARTER = np.pi / 2
 #: far, low grasp from the home pose swings ~0.3 m aside) but not over a short one (from
 #: above a tower to a block beside it only 0.3 cleared the tower).
 ELBOW_SWING = (0.05, 0.3)
+#: A place refused with these reasons never moved: the held object is put back.
+PLANNING_FAILURES = frozenset({"collision", "no_ik_solution"})
+#: After letting go of a rack's handle the hand rises and backs off this far towards the
+#: robot, metres, clear of the handle and the rack.
+HANDLE_BACK_OFF = 0.1
 
 
 class JointTransport(Protocol):
@@ -89,9 +104,10 @@ def object_seen_after(
     after: float,
     timeout: float = 1.0,
 ) -> np.ndarray | None:
-    """Where ``object_id`` is in the newest scene stamped at or after ``after`` (waiting up to
-    ``timeout`` for one on ``lock``, which the scene's writer notifies); None if none came or
-    the object is not in it. Shared by the transports that cache streamed scenes."""
+    """Where ``object_id`` (an object, or a rack: its handle) is in the newest scene stamped at
+    or after ``after`` (waiting up to ``timeout`` for one on ``lock``, which the scene's writer
+    notifies); None if none came or it is not in it. Shared by the transports that cache
+    streamed scenes."""
     with lock:
         lock.wait_for(
             lambda: (scene := latest_scene()) is not None and scene.stamp >= after, timeout
@@ -99,14 +115,22 @@ def object_seen_after(
         scene = latest_scene()
     if scene is None or scene.stamp < after:
         return None
-    try:
-        return np.array(scene.object(object_id).position.as_tuple())
-    except KeyError:
-        return None
+    return position_in(scene, object_id)
+
+
+def position_in(scene: Scene, object_id: str) -> np.ndarray | None:
+    """Where object ``object_id`` is in ``scene``, or rack ``object_id``'s handle; None if
+    neither is in it."""
+    things: list[SceneObject | SceneRack] = [*scene.objects, *scene.racks]
+    for thing in things:
+        if thing.id == object_id:
+            return np.array(thing.position.as_tuple())
+    return None
 
 
 class PandaMotionDriver(RobotDriver):
     name = "panda-motion"
+    checks_dish_rules = True
 
     def __init__(
         self,
@@ -124,6 +148,14 @@ class PandaMotionDriver(RobotDriver):
         self.placement_tolerance = options.placement_tolerance
         self._ids = itertools.count()
         self._stopped = False
+        #: Emergency stops so far, and how many there had been when the decision whose
+        #: motions are being planned began: a decision stopped (and resumed) while it was
+        #: planning never moves the arm afterwards.
+        self._stops = 0
+        self._decision: str | None = None
+        self._decision_stops = 0
+        #: The object last picked: its id, the hand's position and yaw, the grasp.
+        self._picked: tuple[str, np.ndarray, float, Grasp] | None = None
 
     def pick(self, motion: Motion) -> None:
         decision_id, object_id, grasp = motion.decision_id, motion.object_id, motion.grasp
@@ -134,6 +166,7 @@ class PandaMotionDriver(RobotDriver):
             + grasp.turn
             + grasp_yaw((orientation.x, orientation.y, orientation.z, orientation.w))
         )
+        self._picked = None
         result = self._run(
             decision_id,
             self._avoiding(
@@ -142,6 +175,7 @@ class PandaMotionDriver(RobotDriver):
                 target,
             ),
         )
+        self._picked = (object_id, target, yaw, grasp)
         if result.gripper_width < self.min_grasp_width:
             self._open(decision_id, grasp.obstacles)
             raise SkillError(
@@ -156,14 +190,19 @@ class PandaMotionDriver(RobotDriver):
         # The object turned with the hand at the grasp; turn back so it lands square (a
         # block or a square cover looks the same after a quarter turn).
         yaw = self.planner.config.hand_yaw + grasp.turn
-        carry = self._run(
-            decision_id,
-            self._avoiding(
-                lambda planner, q, turn, carry_z: planner.place(q, hand, yaw + turn, carry_z),
-                grasp,
-                hand,
-            ),
-        )
+        try:
+            carry = self._run(
+                decision_id,
+                self._avoiding(
+                    lambda planner, q, turn, carry_z: planner.place(q, hand, yaw + turn, carry_z),
+                    grasp,
+                    hand,
+                ),
+            )
+        except SkillError as exc:
+            if exc.reason in PLANNING_FAILURES:
+                self._put_back(decision_id, object_id)
+            raise
         if carry.gripper_width < self.min_grasp_width:
             self._open(decision_id, grasp.obstacles)
             raise SkillError("grasp_slipped", f"{object_id} was lost during the transfer")
@@ -176,8 +215,59 @@ class PandaMotionDriver(RobotDriver):
                     "placement_missed", f"{object_id} rests {miss * 1000:.0f} mm from its goal"
                 )
 
+    def _put_back(self, decision_id: str, object_id: str) -> None:
+        """After a place that could not be planned: set the held object down where it was
+        picked, as it was held, so a refused placement leaves it where it was (best effort:
+        if that cannot be planned either, it stays held)."""
+        if self._picked is None or self._picked[0] != object_id:
+            return
+        _, hand, yaw, grasp = self._picked
+        self._picked = None
+        try:
+            self._run(
+                decision_id,
+                self._checked(lambda q: self.planner.place(q, hand, yaw), grasp.obstacles),
+            )
+            self._run(decision_id, self._checked(self.planner.release, grasp.obstacles))
+        except SkillError as exc:
+            log.info("could not put %s back: %s", object_id, exc)
+
+    def check_orientation(self, object_id: str, current: Quaternion, target: Quaternion) -> None:
+        """Top-down grasps turn an object about the vertical only: the axis that points up
+        stays up."""
+        now, wanted = up_axis_orientation(current), up_axis_orientation(target)
+        if now != wanted:
+            raise SkillError(
+                "orientation_unreachable",
+                f"{object_id} lies {ORIENTATION_NAMES[now]}; a top-down grasp cannot set it "
+                f"down {ORIENTATION_NAMES[wanted]}",
+            )
+
+    def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3, is_open: bool) -> None:
+        """Down onto the rack's handle tab (``grasp_points.rack_grip``), close across it,
+        pull the rack out along -x (or push it in), release and rise."""
+        start = np.array(handle.as_tuple())
+        grip = start + rack_grip(rack_id)
+        shift = np.array([RACK_TRAVEL if is_open else -RACK_TRAVEL, 0.0, 0.0])
+        # Yaw 0: the fingers close along y, across the tab.
+        held = self._run(
+            decision_id, self._checked(lambda q: self.planner.slide(q, grip, shift, 0.0), ())
+        )
+        if held.gripper_width < self.min_grasp_width:
+            self._open(decision_id, ())
+            raise SkillError(
+                "handle_missed", f"fingers closed to {held.gripper_width * 1000:.1f} mm"
+            )
+        released = self._run(
+            decision_id, self._checked(lambda q: self.planner.release(q, HANDLE_BACK_OFF), ())
+        )
+        seen = self.transport.object_position(rack_id, after=released.stamp)
+        if seen is not None and abs(seen[0] - start[0]) < RACK_TRAVEL / 2:
+            raise SkillError("rack_stuck", f"{rack_id} is still where it was")
+
     def stop(self) -> None:
         self._stopped = True
+        self._stops += 1
         self.transport.stop()
 
     def resume(self) -> None:
@@ -213,13 +303,14 @@ class PandaMotionDriver(RobotDriver):
             (planner, turn, carry)
             for carry in heights
             for planner in planners
-            for turn in (0.0, QUARTER)
+            for turn in (0.0, grasp.other_turn)
         ]
 
         def plan(q: np.ndarray) -> JointTrajectory:
             contact = None
             failure: SkillError | None = None
             for planner, turn, carry in options:
+                self._raise_if_stopped()  # a re-plan takes 50-500 ms: stop between them
                 try:
                     trajectory = make(planner, q, turn, carry)
                 except SkillError as exc:  # e.g. no IK solution this high or turned
@@ -267,11 +358,13 @@ class PandaMotionDriver(RobotDriver):
         self, decision_id: str, plan: Callable[[np.ndarray], JointTrajectory]
     ) -> JointTrajectoryResult:
         """Plan from the arm's joints and execute; plan once more if the arm was elsewhere."""
-        if self._stopped:
-            raise SkillError("stopped", "emergency stop engaged")
+        if decision_id != self._decision:
+            self._decision, self._decision_stops = decision_id, self._stops
+        self._raise_if_stopped()
         q = self.transport.joint_positions()
         for _attempt in range(2):
             trajectory = plan(q)  # raises SkillError('no_ik_solution') before any motion
+            self._raise_if_stopped()  # the stop (and maybe resume) came while planning
             result = self.transport.execute(self._command(decision_id, trajectory))
             if result.ok:
                 return result
@@ -279,6 +372,12 @@ class PandaMotionDriver(RobotDriver):
                 raise SkillError(result.reason or "driver_error", result.detail)
             q = np.array(result.positions)
         raise SkillError("start_mismatch", "the arm keeps moving away from the planned start")
+
+    def _raise_if_stopped(self) -> None:
+        if self._stopped:
+            raise SkillError("stopped", "emergency stop engaged")
+        if self._stops != self._decision_stops:
+            raise SkillError("stopped", "an emergency stop came during this decision")
 
     def _command(self, decision_id: str, trajectory: JointTrajectory) -> JointTrajectoryCommand:
         return JointTrajectoryCommand(

@@ -111,8 +111,25 @@ class GraspPlanner:
         self.line(trajectory, position, yaw, True, c.slow_speed, "place")
         return trajectory
 
-    def release(self, q: np.ndarray) -> JointTrajectory:
-        """Open the gripper where the hand is, then retreat straight up."""
+    def slide(
+        self, q: np.ndarray, grip: np.ndarray, shift: np.ndarray, yaw: float = 0.0
+    ) -> JointTrajectory:
+        """From ``q``: down onto ``grip`` (a handle) as to a grasp, close, then move the hand
+        straight by ``shift`` holding on (a rack along its rail)."""
+        c = self.config
+        grip = np.asarray(grip, dtype=float)
+        trajectory = JointTrajectory()
+        trajectory.add(0.0, q, closed=False)
+        self._transit(trajectory, grip + c.approach * UP, yaw, closed=False, what="pregrasp")
+        self.line(trajectory, grip, yaw, False, c.slow_speed, "grasp")
+        trajectory.hold(c.grip_time, closed=True)
+        self.line(trajectory, grip + np.asarray(shift), yaw, True, c.slow_speed, "slide")
+        return trajectory
+
+    def release(self, q: np.ndarray, back: float = 0.0) -> JointTrajectory:
+        """Open the gripper where the hand is, then retreat straight up (and ``back``
+        metres towards the robot, -x: away from a handle, so the next move does not come
+        down onto it)."""
         c = self.config
         trajectory = JointTrajectory()
         trajectory.add(0.0, q, closed=True)
@@ -121,7 +138,7 @@ class GraspPlanner:
         # Up by ``retreat``, but not above the carry ceiling (out of reach far out), and
         # never less than ``approach``.
         top = max(hand[2] + c.approach, min(hand[2] + c.retreat, c.max_carry_z))
-        above = np.array([hand[0], hand[1], top])
+        above = np.array([hand[0] - back, hand[1], top])
         self.line(trajectory, above, self.yaw_of(q), False, c.slow_speed, "retreat")
         return trajectory
 

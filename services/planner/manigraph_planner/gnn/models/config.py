@@ -52,6 +52,12 @@ class ModelConfig:
     feature_scale: tuple[float, ...] | None = None
     heads: str = "object-goal"
 
+    @property
+    def input_size(self) -> int:
+        """``in_channels``, resolved from the heads' feature spec when it was not given."""
+        assert self.in_channels is not None  # __post_init__ resolved it
+        return self.in_channels
+
     def __post_init__(self) -> None:
         ARCHITECTURES.check(self.architecture)  # ConfigError naming the registered ones
         spec = feature_spec_for(self.heads)

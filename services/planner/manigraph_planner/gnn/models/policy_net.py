@@ -35,7 +35,7 @@ class PolicyNet(nn.Module):
         super().__init__()
         self.config = config
         backbone = ARCHITECTURES[config.architecture]
-        self.backbone = backbone(config.in_channels, config.hidden_channels, config.num_layers)
+        self.backbone = backbone(config.input_size, config.hidden_channels, config.num_layers)
         self.head = nn.Linear(config.hidden_channels, 1)
         # Not persistent: ModelConfig is the source of truth and travels in the checkpoint.
         scale = torch.tensor(config.feature_scale, dtype=torch.float32)

@@ -1,0 +1,253 @@
+"""The dishwasher in SAPIEN: a cabinet articulation with two prismatic racks, dishes as rigid
+bodies, all built from boxes (nothing downloaded).
+
+* **Cabinet**: the articulation's fixed root, two side walls and a back wall around where
+  the racks stand pushed in (``tasks.dishwasher.RACK_CENTRES``, the geometric world's).
+* **Racks**: one link each on a prismatic joint along x (0: pushed in, ``-RACK_TRAVEL``:
+  pulled out towards the robot), with joint damping so a rack stays where it is left. A
+  rack is a floor whose top is 5 mm above its centre, a pair of 1.5 cm ribs around every plate
+  slot (plates stand between them), and a handle: a tab at one side of its front, sticking
+  out towards the robot, grasped where ``manigraph_shared.grasp_points.RACK_GRIP_OFFSET``
+  says (the top rack's in the middle, the bottom rack's beside its left side).
+* **Dishes**: a plate is a thin box (the geometric world's 8 x 8 x 1.5 cm); a bowl is an open
+  box (a base and four walls), 5 cm across so neighbouring bowl slots (5.5 cm apart) both
+  take one, 3.5 cm deep.
+
+The task's state is read back off the simulated poses as a
+:class:`~manigraph_sim.dishwasher.world.DishwasherWorld` (:meth:`PhysicsDishwasher.view`), so
+the geometric world's rules, success test and Scene are applied unchanged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Final
+
+import numpy as np
+import sapien
+from sapien import physx
+
+from manigraph_shared.grasp_points import RACK_GRIP_OFFSET, RACK_TAB_THICKNESS
+from manigraph_shared.messages import Quaternion
+from manigraph_shared.orientations import ORIENTATIONS, up_axis_orientation
+from manigraph_sim.dishwasher.model import (
+    BOWL,
+    HANDLE_X,
+    PLATE,
+    RACK_TRAVEL,
+    Dish,
+    DishwasherLayout,
+)
+from manigraph_sim.dishwasher.world import DishwasherWorld
+from manigraph_sim.physics.world import PhysicsWorld
+
+Part = tuple[sapien.Pose, np.ndarray]  # a box: pose relative to its body, half size
+
+#: The physical dishes' extents (x, y, z), metres.
+PHYSICAL_DISH_SIZE: Final = {PLATE: (0.08, 0.08, 0.015), BOWL: (0.05, 0.05, 0.035)}
+BOWL_WALL: Final = 0.004
+#: A rack's floor relative to its centre: x from the front (robot side) to the back, half
+#: width along y, top surface height, thickness.
+FLOOR_X: Final = (-0.08, 0.075)
+FLOOR_HALF_Y: Final = 0.34
+FLOOR_TOP: Final = 0.005
+FLOOR_THICKNESS: Final = 0.01
+#: Ribs around each plate slot: gap between them (a plate is 1.5 cm thick), height,
+#: thickness, and their extent along x relative to the rack centre.
+RIB_GAP: Final = 0.023
+RIB_HEIGHT: Final = 0.015
+RIB_THICKNESS: Final = 0.003
+RIB_X: Final = (-0.07, 0.0)
+#: The handle tab's height above the rack's centre (bottom, top).
+TAB_Z: Final = (0.0, 0.03)
+#: Joint damping of a rack's rail, N s / m; rack density, kg / m^3.
+RAIL_DAMPING: Final = 30.0
+RACK_DENSITY: Final = 500.0
+DISH_DENSITY: Final = 600.0
+#: A dish counts as standing in a slot when its centre is this close to the slot's position
+#: (with the rack where it physically is) and it is not held: half a plate's slot pitch.
+SLOT_FIT: Final = 0.02
+#: A rack counts as pulled out once it has travelled more than this fraction of its rail.
+OPEN_FRACTION: Final = 0.5
+
+CABINET_COLOUR = [0.8, 0.8, 0.82, 1.0]
+RACK_COLOUR = [0.35, 0.4, 0.5, 1.0]
+DISH_COLOUR = {PLATE: [0.95, 0.95, 0.92, 1.0], BOWL: [0.55, 0.75, 0.9, 1.0]}
+
+
+def _box(low: tuple[float, float, float], high: tuple[float, float, float]) -> Part:
+    lo, hi = np.array(low), np.array(high)
+    return sapien.Pose((lo + hi) / 2), (hi - lo) / 2
+
+
+def dish_parts(kind: str) -> list[Part]:
+    """A plate's box, or a bowl's base and four walls (opening towards its +z)."""
+    sx, sy, sz = PHYSICAL_DISH_SIZE[kind]
+    if kind == PLATE:
+        return [_box((-sx / 2, -sy / 2, -sz / 2), (sx / 2, sy / 2, sz / 2))]
+    w = BOWL_WALL
+    parts = [_box((-sx / 2, -sy / 2, -sz / 2), (sx / 2, sy / 2, -sz / 2 + w))]
+    parts += [
+        _box((-sx / 2, -sy / 2, -sz / 2), (-sx / 2 + w, sy / 2, sz / 2)),
+        _box((sx / 2 - w, -sy / 2, -sz / 2), (sx / 2, sy / 2, sz / 2)),
+        _box((-sx / 2, -sy / 2, -sz / 2), (sx / 2, -sy / 2 + w, sz / 2)),
+        _box((-sx / 2, sy / 2 - w, -sz / 2), (sx / 2, sy / 2, sz / 2)),
+    ]
+    return parts
+
+
+def rack_parts(rack_id: str, slot_ys: list[float]) -> list[Part]:
+    """A rack's floor, the ribs of its plate slots (at ``slot_ys``) and its handle tab,
+    relative to the rack's centre."""
+    parts = [
+        _box(
+            (FLOOR_X[0], -FLOOR_HALF_Y, FLOOR_TOP - FLOOR_THICKNESS),
+            (FLOOR_X[1], FLOOR_HALF_Y, FLOOR_TOP),
+        )
+    ]
+    for y in slot_ys:
+        for side in (-1.0, 1.0):
+            centre = y + side * (RIB_GAP + RIB_THICKNESS) / 2
+            parts.append(
+                _box(
+                    (RIB_X[0], centre - RIB_THICKNESS / 2, FLOOR_TOP),
+                    (RIB_X[1], centre + RIB_THICKNESS / 2, FLOOR_TOP + RIB_HEIGHT),
+                )
+            )
+    grip_x, grip_y, _ = RACK_GRIP_OFFSET[rack_id]
+    grip_x += HANDLE_X
+    half = RACK_TAB_THICKNESS / 2
+    front = FLOOR_X[0] - 0.005  # clear of the cabinet's walls when pushed in
+    parts.append(_box((grip_x - 0.03, grip_y - half, TAB_Z[0]), (front, grip_y + half, TAB_Z[1])))
+    if abs(grip_y) + half > FLOOR_HALF_Y:  # a bar joins a tab beside the floor to its corner
+        side = float(np.sign(grip_y))
+        inner, outer = side * FLOOR_HALF_Y, grip_y + side * half
+        low, high = min(inner, outer), max(inner, outer)
+        parts.append(_box((front - 0.01, low, TAB_Z[0]), (front, high, TAB_Z[1])))
+    return parts
+
+
+def cabinet_parts(closed_centres: list[np.ndarray]) -> list[Part]:
+    """Two side walls and a back wall around the pushed-in racks (world frame)."""
+    x0 = min(c[0] for c in closed_centres) + FLOOR_X[0]
+    x1 = max(c[0] for c in closed_centres) + FLOOR_X[1] + 0.02
+    top = max(c[2] for c in closed_centres) + 0.12
+    wall_y = FLOOR_HALF_Y + 0.02
+    return [
+        _box((x0, -wall_y - 0.01, 0.0), (x1, -wall_y, top)),
+        _box((x0, wall_y, 0.0), (x1, wall_y + 0.01, top)),
+        _box((x1, -wall_y - 0.01, 0.0), (x1 + 0.01, wall_y + 0.01, top)),
+    ]
+
+
+def _sapien_quaternion(q: Quaternion) -> list[float]:
+    return [q.w, q.x, q.y, q.z]
+
+
+class PhysicsDishwasher:
+    """The dishwasher and the dishes of ``layout`` added to ``world``'s scene (which must
+    not have been stepped with them yet: the caller settles the world afterwards)."""
+
+    def __init__(self, world: PhysicsWorld, layout: DishwasherLayout) -> None:
+        self.world = world
+        self.layout = layout
+        self.racks = {rack.id: rack for rack in layout.racks}
+        self.cabinet = self._build_cabinet()
+        self.rails = {joint.name: joint for joint in self.cabinet.active_joints}
+        material = physx.PhysxMaterial(
+            world.config.block_friction, world.config.block_friction, 0.0
+        )
+        for dish in layout.dishes:
+            world.entities[dish.id] = self._add_dish(dish, material)
+
+    def _build_cabinet(self) -> physx.PhysxArticulation:
+        world = self.world
+        builder = world.scene.create_articulation_builder()
+        root = builder.create_link_builder()
+        root.set_name("cabinet")
+        for pose, half in cabinet_parts([rack.closed_centre for rack in self.racks.values()]):
+            root.add_box_collision(pose, half, density=RACK_DENSITY)
+            if world.render:
+                root.add_box_visual(pose, half, material=CABINET_COLOUR)
+        for rack in self.racks.values():
+            link = builder.create_link_builder(root)
+            link.set_name(rack.id)
+            link.set_joint_name(rack.id)
+            link.set_joint_properties(
+                "prismatic",
+                limits=[[-RACK_TRAVEL, 0.0]],
+                pose_in_parent=sapien.Pose(rack.closed_centre),
+                pose_in_child=sapien.Pose(),
+                damping=RAIL_DAMPING,
+            )
+            slot_ys = [
+                float(s.offset[1])
+                for s in self.layout.slots
+                if s.rack == rack.id and s.kind == PLATE
+            ]
+            for pose, half in rack_parts(rack.id, slot_ys):
+                link.add_box_collision(pose, half, density=RACK_DENSITY)
+                if world.render:
+                    link.add_box_visual(pose, half, material=RACK_COLOUR)
+        cabinet = builder.build(fix_root_link=True)
+        cabinet.set_root_pose(sapien.Pose())
+        cabinet.set_qpos(np.array([-RACK_TRAVEL if r.open else 0.0 for r in self.racks.values()]))
+        return cabinet
+
+    def _add_dish(self, dish: Dish, material: physx.PhysxMaterial) -> sapien.Entity:
+        builder = self.world.scene.create_actor_builder()
+        for pose, half in dish_parts(dish.kind):
+            builder.add_box_collision(pose, half, material=material, density=DISH_DENSITY)
+            if self.world.render:
+                builder.add_box_visual(pose, half, material=DISH_COLOUR[dish.kind])
+        entity = builder.build(name=dish.id)
+        q = _sapien_quaternion(ORIENTATIONS[dish.orientation])
+        entity.set_pose(sapien.Pose(dish.position, q))
+        return entity
+
+    # --- state ------------------------------------------------------------------------------
+    def rack_travel(self, rack_id: str) -> float:
+        """How far rack ``rack_id`` is pulled out, metres (0: pushed in)."""
+        index = [j.name for j in self.cabinet.active_joints].index(rack_id)
+        return float(-self.cabinet.qpos[index])
+
+    def is_open(self, rack_id: str) -> bool:
+        return self.rack_travel(rack_id) > OPEN_FRACTION * RACK_TRAVEL
+
+    def view(self, held: str | None) -> DishwasherWorld:
+        """The simulated state as the geometric dishwasher world: each dish where it is, with
+        the orientation index of its up axis, in the slot it stands in (its rack where it
+        physically is, the dish not held); each rack open once it is more than half out."""
+        racks = [replace(rack, open=self.is_open(rack.id)) for rack in self.racks.values()]
+        physical = {
+            rack.id: rack.closed_centre - np.array([self.rack_travel(rack.id), 0.0, 0.0])
+            for rack in self.racks.values()
+        }
+        dishes = []
+        for dish in self.layout.dishes:
+            position, (x, y, z, w) = self.world.pose(dish.id)
+            index = up_axis_orientation(Quaternion(x=x, y=y, z=z, w=w))
+            slot = None
+            if dish.id != held:
+                slot = self._slot_near(position, physical)
+            dishes.append(
+                Dish(
+                    dish.id,
+                    dish.kind,
+                    position,
+                    index,
+                    slot,
+                    extents=PHYSICAL_DISH_SIZE[dish.kind],
+                )
+            )
+        world = DishwasherWorld(replace(self.layout, dishes=dishes, racks=racks))
+        world.held = held
+        return world
+
+    def _slot_near(self, position: np.ndarray, rack_centres: dict[str, np.ndarray]) -> str | None:
+        best, best_distance = None, SLOT_FIT
+        for slot in self.layout.slots:
+            distance = float(np.linalg.norm(rack_centres[slot.rack] + slot.offset - position))
+            if distance <= best_distance:
+                best, best_distance = slot.id, distance
+        return best

@@ -1,0 +1,1 @@
+"""The point-and-click demonstration page (``manigraph demo-ui``; docs/demo-ui.md)."""

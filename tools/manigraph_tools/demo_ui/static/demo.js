@@ -1,0 +1,391 @@
+// The demonstration page: draws the live Scene, turns clicks into requests. No build step.
+// The server decides everything (what a click means, whether it is allowed); the page only
+// remembers the selected object and orientation between two clicks.
+"use strict";
+
+const SVG = "http://www.w3.org/2000/svg";
+const TASK_FIELDS = {
+  dishwasher: ["objects", "preference"],
+  multistack: ["blocks", "stacks"],
+  file: [],
+};
+
+const page = {
+  state: null, // the server's last snapshot
+  selected: null, // id of the selected object
+  orientation: null, // index of the chosen orientation, null: the goal's own
+  bounds: null, // {episode, top: box, side: box} grown over the episode, metres
+  formFilled: false,
+  recorded: null, // demonstrations recorded, as last seen
+};
+
+const $ = (id) => document.getElementById(id);
+
+// --- talking to the server -------------------------------------------------------------------
+async function post(path, body) {
+  let reply;
+  try {
+    const response = await fetch(path, {
+      method: "POST",
+      headers: { "Content-Type": "application/json" },
+      body: JSON.stringify(body),
+    });
+    reply = await response.json();
+  } catch (error) {
+    reply = { ok: false, error: `no answer from the page's server (${error})` };
+  }
+  if (!reply.ok) notice("error", reply.error);
+  return reply;
+}
+
+function listen() {
+  const events = new EventSource("/api/events");
+  events.onopen = () => setConnection("live", "live");
+  events.onerror = () => setConnection("lost", "connection lost, retrying…");
+  events.onmessage = (event) => {
+    page.state = JSON.parse(event.data);
+    render();
+  };
+}
+
+function setConnection(state, text) {
+  const element = $("connection");
+  element.dataset.state = state;
+  element.textContent = text;
+}
+
+function notice(level, text) {
+  const element = $("notice");
+  element.dataset.level = level;
+  element.textContent = text;
+}
+
+// --- clicks ----------------------------------------------------------------------------------
+function clickObject(id) {
+  page.selected = page.selected === id ? null : id;
+  renderSelection();
+  drawViews();
+}
+
+async function clickGoal(id) {
+  const reply = await post("/api/action", {
+    object_id: page.selected,
+    goal_id: id,
+    orientation_index: page.orientation,
+  });
+  if (reply.ok) {
+    page.selected = null;
+    page.orientation = null;
+    renderSelection();
+    renderOrientations();
+    drawViews();
+  }
+}
+
+async function clickTray(tray) {
+  await post("/api/action", { tray_action: tray });
+}
+
+async function startEpisode(event) {
+  event.preventDefault();
+  const form = new FormData($("episode-form"));
+  const task = form.get("task");
+  const body = { task, seed: Number(form.get("seed")) };
+  const fields = TASK_FIELDS[task] || ["blocks"];
+  for (const name of fields) {
+    const value = form.get(name);
+    body[name] = name === "preference" ? value : Number(value);
+  }
+  page.selected = null;
+  page.orientation = null;
+  const reply = await post("/api/episode", body);
+  if (reply.ok) notice("info", `episode ${reply.episode_id}: click an object, then where it goes`);
+  renderSelection();
+}
+
+// --- rendering -------------------------------------------------------------------------------
+function render() {
+  const state = page.state;
+  fillForm(state.defaults);
+  const episode = state.episode;
+  $("episode").textContent = episode
+    ? `${episode.id} · ${episode.task ?? "?"} · seed ${episode.seed ?? "?"}`
+    : "none yet: start one";
+  const dishes = state.scene && state.scene.racks.length > 0;
+  const done = dishes
+    ? `${episode?.objects_placed}/${episode?.objects_total} dishes in a slot`
+    : `${episode?.goals_filled}/${episode?.goals_total} goals filled`;
+  $("progress").textContent = episode
+    ? `${done} · ${episode.steps_recorded} ` +
+      `steps demonstrated · ${episode.refused} refused` +
+      (episode.ended ? (episode.success ? " · success" : " · failed") : "")
+    : "–";
+  const robot = $("robot-state");
+  robot.dataset.ready = String(state.busy === null);
+  robot.textContent = state.busy === null ? "ready: your move" : state.busy;
+  const recorded = state.recorded;
+  $("recorded").textContent =
+    `${recorded.demonstrations} demonstration${recorded.demonstrations === 1 ? "" : "s"} ` +
+    `(${recorded.decisions} decisions) → ${recorded.file}`;
+  if (page.recorded !== null && recorded.demonstrations > page.recorded) {
+    $("seed").value = Number($("seed").value) + 1; // the next demonstration: another layout
+  }
+  page.recorded = recorded.demonstrations;
+  renderMessages(state.messages);
+  const racks = state.scene ? state.scene.racks : [];
+  $("racks").hidden = racks.length === 0;
+  for (const rack of racks) {
+    const button = rack.id === "rack_top" ? $("toggle-top") : $("toggle-bottom");
+    button.textContent = `${rack.id === "rack_top" ? "top" : "bottom"} rack: ` +
+      (rack.open ? "push in" : "pull out");
+    button.dataset.open = String(rack.open);
+  }
+  $("orientations").hidden = racks.length === 0;
+  if (state.scene && page.selected && !state.scene.objects.some((o) => o.id === page.selected)) {
+    page.selected = null;
+  }
+  renderSelection();
+  renderOrientations();
+  drawViews();
+}
+
+function fillForm(defaults) {
+  if (page.formFilled || !defaults) return;
+  page.formFilled = true;
+  if (defaults.task === "file") {
+    const option = document.createElement("option");
+    option.value = "file";
+    option.textContent = `file: ${defaults.task_file}`;
+    $("task").appendChild(option);
+  }
+  $("task").value = defaults.task;
+  $("blocks").value = defaults.blocks;
+  $("stacks").value = defaults.stacks;
+  if (defaults.objects) $("objects").value = defaults.objects;
+  if (defaults.preference) $("preference").value = defaults.preference;
+  $("seed").value = defaults.seed;
+  showTaskFields();
+}
+
+function showTaskFields() {
+  const task = $("task").value;
+  const fields = TASK_FIELDS[task] || ["blocks"];
+  for (const label of document.querySelectorAll("label[data-for]")) {
+    label.hidden = !fields.includes(label.dataset.for);
+  }
+}
+
+function renderMessages(messages) {
+  const list = $("messages");
+  list.replaceChildren();
+  for (const message of messages.slice(-8).reverse()) {
+    const item = document.createElement("li");
+    item.dataset.level = message.level;
+    item.textContent = message.text;
+    list.appendChild(item);
+  }
+  const last = messages[messages.length - 1];
+  if (last && last.time !== page.lastMessageTime) {
+    page.lastMessageTime = last.time;
+    notice(last.level, last.text);
+  }
+}
+
+function renderSelection() {
+  const text = page.selected
+    ? `${page.selected} selected: click where it goes`
+    : "Click an object, then where it goes.";
+  $("selection-text").textContent = text;
+  $("selection").dataset.object = page.selected ?? "";
+  $("clear-selection").hidden = !page.selected;
+}
+
+function renderOrientations() {
+  const box = $("orientation-buttons");
+  const names = page.state ? page.state.orientations : [];
+  if (box.childElementCount !== names.length + 1) {
+    box.replaceChildren();
+    const choices = [[null, "the slot's own"], ...names.map((name, index) => [index, `${index} ${name}`])];
+    for (const [index, label] of choices) {
+      const button = document.createElement("button");
+      button.type = "button";
+      button.textContent = label;
+      button.dataset.orientation = index === null ? "auto" : String(index);
+      button.addEventListener("click", () => {
+        page.orientation = index;
+        renderOrientations();
+      });
+      box.appendChild(button);
+    }
+  }
+  for (const button of box.children) {
+    const chosen = page.orientation === null ? "auto" : String(page.orientation);
+    button.classList.toggle("chosen", button.dataset.orientation === chosen);
+  }
+}
+
+// --- the two views ---------------------------------------------------------------------------
+// Drawn in millimetres (the scene is in metres): SVG user units that fonts and strokes suit.
+// Top view: screen right is the robot's right (-y), screen up is forward (+x).
+// Side view, from the robot: screen right is -y, screen up is +z.
+const MM = 1000;
+const VIEWS = {
+  top: { svg: "top-view", u: (p) => -p.y * MM, v: (p) => -p.x * MM, dv: 0, origin: true },
+  side: { svg: "side-view", u: (p) => -p.y * MM, v: (p) => -p.z * MM, dv: 2, origin: false },
+};
+
+function drawViews() {
+  const scene = page.state && page.state.scene;
+  for (const [name, view] of Object.entries(VIEWS)) {
+    const svg = $(view.svg);
+    svg.replaceChildren();
+    if (!scene) continue;
+    const box = growBounds(name, view, scene);
+    svg.setAttribute("viewBox", `${box.u0} ${box.v0} ${box.u1 - box.u0} ${box.v1 - box.v0}`);
+    drawGround(svg, view, box);
+    if (name === "top") drawRacks(svg, view, scene);
+    else drawRackLevels(svg, view, scene, box);
+    for (const item of drawOrder(scene, name)) drawItem(svg, view, item);
+  }
+}
+
+// Extents along the view's two axes, mm (the extent array is along world x, y, z, metres).
+function extents(view, item) {
+  return [item.extent[1] * MM, item.extent[view.dv] * MM];
+}
+
+function growBounds(name, view, scene) {
+  if (!page.bounds || page.bounds.episode !== scene.episode_id) {
+    page.bounds = { episode: scene.episode_id };
+  }
+  const points = [];
+  for (const item of [...scene.objects, ...scene.goals]) {
+    const [eu, ev] = extents(view, item);
+    points.push([view.u(item) - eu / 2, view.v(item) - ev / 2], [view.u(item) + eu / 2, view.v(item) + ev / 2]);
+  }
+  for (const rack of scene.racks) points.push([view.u(rack), view.v(rack)]);
+  points.push([0, 0]); // the robot (top view) or the table under it (side view)
+  let box = page.bounds[name];
+  for (const [u, v] of points) {
+    if (!box) box = { u0: u, u1: u, v0: v, v1: v };
+    box.u0 = Math.min(box.u0, u);
+    box.u1 = Math.max(box.u1, u);
+    box.v0 = Math.min(box.v0, v);
+    box.v1 = Math.max(box.v1, v);
+  }
+  page.bounds[name] = box;
+  const pad = 50;
+  return { u0: box.u0 - pad, u1: box.u1 + pad, v0: box.v0 - pad, v1: box.v1 + pad };
+}
+
+// Things seen from above (or from the robot) cover what lies under (or behind) them, so they
+// are drawn in that order; free goals come last: where a person may put something is never
+// hidden by what stands elsewhere. Among free goals seen from above, a stack's lowest (the
+// next to fill) is on top, while a rack's slots are seen as they are: the top rack's over the
+// bottom rack's.
+function drawOrder(scene, name) {
+  const depth = name === "top" ? (p) => p.z : (p) => -p.x;
+  const things = [
+    ...scene.goals.filter((g) => g.filled).map((g) => ({ ...g, kind: "goal" })),
+    ...scene.objects.map((o) => ({ ...o, kind: "object" })),
+  ].sort((a, b) => depth(a) - depth(b) || (a.kind === "goal" ? -1 : 1));
+  const freeDepth = name === "top" ? (g) => (g.rack ? g.z : -g.z) : depth;
+  const free = scene.goals
+    .filter((g) => !g.filled)
+    .map((g) => ({ ...g, kind: "goal" }))
+    .sort((a, b) => freeDepth(a) - freeDepth(b));
+  return [...things, ...free];
+}
+
+function element(tag, attributes, parent) {
+  const node = document.createElementNS(SVG, tag);
+  for (const [key, value] of Object.entries(attributes)) node.setAttribute(key, value);
+  if (parent) parent.appendChild(node);
+  return node;
+}
+
+function drawGround(svg, view, box) {
+  if (view.origin) {
+    const robot = element("g", { class: "robot" }, svg);
+    element("circle", { cx: 0, cy: 0, r: 40 }, robot);
+    element("text", { x: 0, y: 6, "text-anchor": "middle" }, robot).textContent = "robot";
+  } else {
+    element("line", { class: "table", x1: box.u0, x2: box.u1, y1: 0, y2: 0 }, svg);
+  }
+}
+
+function rackBox(scene, rack, view) {
+  const slots = scene.goals.filter((g) => g.rack === rack.id);
+  let u0 = Infinity, u1 = -Infinity, v0 = Infinity, v1 = -Infinity;
+  for (const slot of [...slots, { ...rack, extent: [0.02, 0.02, 0.02] }]) { // and its handle
+    const [eu, ev] = extents(view, slot);
+    u0 = Math.min(u0, view.u(slot) - eu / 2);
+    u1 = Math.max(u1, view.u(slot) + eu / 2);
+    v0 = Math.min(v0, view.v(slot) - ev / 2);
+    v1 = Math.max(v1, view.v(slot) + ev / 2);
+  }
+  return { u0: u0 - 10, u1: u1 + 10, v0: v0 - 10, v1: v1 + 10 };
+}
+
+function rackName(rack) {
+  return `${rack.id === "rack_top" ? "top" : "bottom"} rack (${rack.open ? "out" : "in"})`;
+}
+
+function drawRacks(svg, view, scene) {
+  const racks = [...scene.racks].sort((a, b) => a.z - b.z); // the bottom rack under the top one
+  for (const rack of racks) {
+    const box = rackBox(scene, rack, view);
+    const group = element("g", { class: `rack ${rack.open ? "open" : "closed"}`, "data-rack": rack.id }, svg);
+    element("rect", { x: box.u0, y: box.v0, width: box.u1 - box.u0, height: box.v1 - box.v0 }, group);
+    element("circle", { class: "handle", cx: view.u(rack), cy: view.v(rack), r: 8 }, group);
+    element("text", { x: box.u0, y: box.v0 - 8 }, group).textContent = rackName(rack);
+  }
+}
+
+function drawRackLevels(svg, view, scene, box) {
+  for (const rack of scene.racks) {
+    const level = view.v(rack);
+    const group = element("g", { class: `rack ${rack.open ? "open" : "closed"}` }, svg);
+    element("line", { x1: box.u0 + 20, x2: box.u1 - 20, y1: level, y2: level }, group);
+    element("text", { x: box.u0 + 20, y: level + 18 }, group).textContent = rackName(rack);
+  }
+}
+
+function drawItem(svg, view, item) {
+  const [eu, ev] = extents(view, item).map((e) => Math.max(e, 12));
+  const classes = [item.kind, `cat-${item.category}`];
+  if (item.filled) classes.push("filled");
+  if (!item.visible) classes.push("hidden");
+  if (item.kind === "object" && item.id === page.selected) classes.push("selected");
+  const group = element("g", { class: classes.join(" "), "data-id": item.id }, svg);
+  element(
+    "rect",
+    { x: view.u(item) - eu / 2, y: view.v(item) - ev / 2, width: eu, height: ev, rx: item.category === "bowl" ? Math.min(eu, ev) / 3 : 2 },
+    group,
+  );
+  const orientation = page.state.orientations[item.orientation];
+  element("title", {}, group).textContent =
+    `${item.id} (${item.category}${item.kind === "goal" ? " goal" : ""}` +
+    `${item.filled ? ", filled" : ""}, ${orientation}) at ` +
+    `x ${item.x.toFixed(3)} y ${item.y.toFixed(3)} z ${item.z.toFixed(3)} m`;
+  if (item.kind === "object" && item.visible && (view.svg === "top-view" || !item.rack)) {
+    const label = element("text", { x: view.u(item), y: view.v(item) + 4, "text-anchor": "middle" }, group);
+    label.textContent = item.id.replace(/^(block|cover|plate|bowl)_/, (_, kind) => kind[0]);
+  }
+  group.addEventListener("click", (event) => {
+    event.stopPropagation();
+    if (item.kind === "object") clickObject(item.id);
+    else clickGoal(item.id);
+  });
+}
+
+// --- wiring ----------------------------------------------------------------------------------
+$("episode-form").addEventListener("submit", startEpisode);
+$("task").addEventListener("change", showTaskFields);
+$("clear-selection").addEventListener("click", () => clickObject(page.selected));
+for (const button of document.querySelectorAll("#racks button")) {
+  button.addEventListener("click", () => clickTray(button.dataset.tray));
+}
+showTaskFields();
+renderOrientations();
+listen();
