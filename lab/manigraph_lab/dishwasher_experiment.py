@@ -16,7 +16,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 from manigraph_shared.cli import Command
 
@@ -142,7 +142,7 @@ def _std(values: list[float]) -> float:
     return round(statistics.pstdev(values), 3) if len(values) > 1 else 0.0
 
 
-def markdown_table(summary: dict) -> str:  # type: ignore[type-arg]
+def markdown_table(summary: dict[str, Any]) -> str:
     header = "| Scenario | " + " | ".join(f"{n} objects" for n in TEST_OBJECTS) + " |"
     lines = [header, "|---|" + "---|" * len(TEST_OBJECTS)]
     names = {"top-bottom": "Top/bottom", "left-right": "Left/right"}
@@ -157,7 +157,7 @@ def markdown_table(summary: dict) -> str:  # type: ignore[type-arg]
     return "\n".join(lines) + "\n" + note
 
 
-def plot(summary: dict, path: Path) -> None:  # type: ignore[type-arg]
+def plot(summary: dict[str, Any], path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
