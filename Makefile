@@ -29,7 +29,9 @@ test-fast: install  ## unit tests only
 lint: install
 	$(RUN) ruff check .
 	$(RUN) ruff format --check .
-	$(RUN) mypy shared/manigraph_shared tools/manigraph_tools
+	$(RUN) mypy shared/manigraph_shared tools/manigraph_tools lab/manigraph_lab \
+		services/sim/manigraph_sim services/planner/manigraph_planner \
+		services/skills/manigraph_skills services/perception/manigraph_perception
 
 format: install
 	$(RUN) ruff format .

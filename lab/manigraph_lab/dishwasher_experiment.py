@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import statistics
 import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 from manigraph_shared.cli import Command
 
@@ -36,58 +37,41 @@ class ExperimentConfig:
     episodes: int = 100
     epochs: int = 300
     checkpoints: Path | None = Path("checkpoints")
+    #: (preference, seed) runs at once, each in its own process.
+    jobs: int = 1
 
 
 def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[str, object]:
+    """Record, train and evaluate every (preference, seed); ``config.jobs`` runs of them at
+    once, each in its own process (the results do not depend on it)."""
     # Imported here: every ``manigraph`` command loads this module to build its parser, and
     # torch with PyG takes seconds (minutes on a loaded machine) to import.
     from manigraph_lab.demos import DemoProtocol, record_demos
-    from manigraph_lab.evaluate import EvalSpec, evaluate
-    from manigraph_planner.gnn import save_checkpoint
-    from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
     from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
-    from manigraph_planner.training.dishwasher import (
-        DishTrainConfig,
-        load_dish_demonstrations,
-        train_dish,
-    )
 
     config.out.mkdir(parents=True, exist_ok=True)
-    table: dict[str, dict[int, list[float]]] = {}
     started = time.perf_counter()
+    runs = []
     for preference in PREFERENCES:
         demo_path = config.out / f"demos-{preference}.mcap"
         protocol = DemoProtocol(("dishwasher",), (4,), config.demos, 0, TRAIN_OBJECTS, preference)
         record_demos(dishwasher_expert(preference), protocol, demo_path)
-        demos = load_dish_demonstrations([demo_path])
-        table[preference] = {n: [] for n in TEST_OBJECTS}
-        for seed in config.seeds:
-            train = DishTrainConfig(config.architecture, seed, config.epochs)
-            net, metrics = train_dish(demos, train)
-            if seed == config.seeds[0] and config.checkpoints is not None:
-                config.checkpoints.mkdir(parents=True, exist_ok=True)
-                save_checkpoint(
-                    config.checkpoints / f"dishwasher-{preference}-{config.architecture}.pt",
-                    net,
-                    training_config={**train.to_dict(), "demos": config.demos},
-                    data_hash=demos.data_hash,
-                    metrics=metrics,
-                )
-            policy = DishwasherGNNPolicy(net)
-            for n in TEST_OBJECTS:
-                spec = EvalSpec(
-                    "dishwasher",
-                    4,
-                    episodes=config.episodes,
-                    seed=EVAL_SEED,
-                    objects=n,
-                    preference=preference,
-                )
-                rate = float(evaluate(policy, spec)["success_rate"])  # type: ignore[arg-type]
-                table[preference][n].append(rate)
-                if log is not None:
-                    log.write(f"{preference} seed {seed} objects {n}: {rate:.2f}\n")
-                    log.flush()
+        runs += [(config, preference, demo_path, seed) for seed in config.seeds]
+    table: dict[str, dict[int, list[float]]] = {
+        p: {n: [] for n in TEST_OBJECTS} for p in PREFERENCES
+    }
+    if config.jobs > 1:
+        context = multiprocessing.get_context("spawn")
+        with context.Pool(min(config.jobs, len(runs))) as pool:
+            results = pool.starmap(_train_and_evaluate, runs)
+    else:
+        results = [_train_and_evaluate(*run) for run in runs]
+    for (_, preference, _, seed), rates in zip(runs, results, strict=True):
+        for n, rate in rates.items():
+            table[preference][n].append(rate)
+            if log is not None:
+                log.write(f"{preference} seed {seed} objects {n}: {rate:.2f}\n")
+                log.flush()
     summary = {
         "architecture": config.architecture,
         "seeds": list(config.seeds),
@@ -106,6 +90,50 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
     return summary
 
 
+def _train_and_evaluate(
+    config: ExperimentConfig, preference: str, demo_path: Path, seed: int
+) -> dict[int, float]:
+    """One training seed of one preference: its success rate for each number of dishes (and
+    the checkpoint, for the first seed)."""
+    import torch
+
+    from manigraph_lab.evaluate import EvalSpec, evaluate
+    from manigraph_planner.gnn import save_checkpoint
+    from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
+    from manigraph_planner.training.dishwasher import (
+        DishTrainConfig,
+        load_dish_demonstrations,
+        train_dish,
+    )
+
+    torch.set_num_threads(1)
+    demos = load_dish_demonstrations([demo_path])
+    train = DishTrainConfig(config.architecture, seed, config.epochs)
+    net, metrics = train_dish(demos, train)
+    if seed == config.seeds[0] and config.checkpoints is not None:
+        config.checkpoints.mkdir(parents=True, exist_ok=True)
+        save_checkpoint(
+            config.checkpoints / f"dishwasher-{preference}-{config.architecture}.pt",
+            net,
+            training_config={**train.to_dict(), "demos": config.demos},
+            data_hash=demos.data_hash,
+            metrics=metrics,
+        )
+    policy = DishwasherGNNPolicy(net)
+    rates = {}
+    for n in TEST_OBJECTS:
+        spec = EvalSpec(
+            "dishwasher",
+            4,
+            episodes=config.episodes,
+            seed=EVAL_SEED,
+            objects=n,
+            preference=preference,
+        )
+        rates[n] = float(evaluate(policy, spec)["success_rate"])  # type: ignore[arg-type]
+    return rates
+
+
 def _mean(values: list[float]) -> float:
     return round(statistics.fmean(values), 3)
 
@@ -114,7 +142,7 @@ def _std(values: list[float]) -> float:
     return round(statistics.pstdev(values), 3) if len(values) > 1 else 0.0
 
 
-def markdown_table(summary: dict) -> str:  # type: ignore[type-arg]
+def markdown_table(summary: dict[str, Any]) -> str:
     header = "| Scenario | " + " | ".join(f"{n} objects" for n in TEST_OBJECTS) + " |"
     lines = [header, "|---|" + "---|" * len(TEST_OBJECTS)]
     names = {"top-bottom": "Top/bottom", "left-right": "Left/right"}
@@ -129,7 +157,7 @@ def markdown_table(summary: dict) -> str:  # type: ignore[type-arg]
     return "\n".join(lines) + "\n" + note
 
 
-def plot(summary: dict, path: Path) -> None:  # type: ignore[type-arg]
+def plot(summary: dict[str, Any], path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -161,6 +189,9 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--checkpoints", type=Path, default=Path("checkpoints"), help="where seed 0's nets go"
     )
+    parser.add_argument(
+        "--jobs", type=int, default=1, help="(preference, seed) runs at once, one process each"
+    )
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -168,7 +199,14 @@ def _run(args: argparse.Namespace) -> int:
 
     torch.set_num_threads(1)
     config = ExperimentConfig(
-        args.out, args.arch, tuple(args.seeds), 5, args.episodes, args.epochs, args.checkpoints
+        args.out,
+        args.arch,
+        tuple(args.seeds),
+        5,
+        args.episodes,
+        args.epochs,
+        args.checkpoints,
+        args.jobs,
     )
     summary = run_experiment(config, sys.stderr)
     print((config.out / "table.md").read_text(), end="")

@@ -160,7 +160,7 @@ def test_the_shipped_dishwasher_checkpoints_load_and_act(preference: str) -> Non
 def test_dropping_dishes_keeps_the_demonstrated_decision(demos) -> None:  # type: ignore[no-untyped-def]
     import random
 
-    from manigraph_planner.training.dishwasher import drop_dishes
+    from manigraph_planner.training.dish_augment import drop_dishes
 
     rng = random.Random(0)
     shrunk = 0
