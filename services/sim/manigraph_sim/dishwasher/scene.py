@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from manigraph_shared.messages import (
     GoalCategory,
     ObjectCategory,
@@ -11,14 +9,10 @@ from manigraph_shared.messages import (
     SceneGoal,
     SceneObject,
     SceneRack,
-    Vector3,
 )
 from manigraph_shared.orientations import orientation
 from manigraph_sim.dishwasher.world import DishwasherWorld
-
-
-def _vector(values: np.ndarray) -> Vector3:
-    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
+from manigraph_sim.observation import vector
 
 
 def dishwasher_scene(
@@ -30,9 +24,9 @@ def dishwasher_scene(
         SceneObject(
             id=dish.id,
             category=ObjectCategory(dish.kind),
-            position=_vector(dish.position),
+            position=vector(dish.position),
             orientation=orientation(dish.orientation),
-            size=_vector(dish.size),
+            size=vector(dish.size),
             filled=dish.slot is not None,
         )
         for dish in world.dishes.values()
@@ -41,7 +35,7 @@ def dishwasher_scene(
         SceneGoal(
             id=slot.id,
             category=GoalCategory(slot.kind),
-            position=_vector(world.slot_position(slot)),
+            position=vector(world.slot_position(slot)),
             orientation=orientation(slot.orientation),
             filled=world.occupant(slot.id) is not None,
             rack=slot.rack,
@@ -49,7 +43,7 @@ def dishwasher_scene(
         for slot in world.slots.values()
     ]
     racks = [
-        SceneRack(id=rack.id, position=_vector(rack.handle), open=rack.open)
+        SceneRack(id=rack.id, position=vector(rack.handle), open=rack.open)
         for rack in world.racks.values()
     ]
     return Scene(
