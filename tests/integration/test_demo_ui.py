@@ -120,7 +120,15 @@ class Person:
 
     def click_thing(self, thing_id: str) -> None:
         """Click ``thing_id`` where it is not covered: in the top view, else in the side view
-        (a person clicks where they see it)."""
+        (a person clicks where they see it). The views are redrawn on every Scene, so it is
+        looked for again until the page settles."""
+        deadline = time.monotonic() + WAIT_MS / 1000
+        while not self._click_where_visible(thing_id):
+            if time.monotonic() > deadline:
+                raise AssertionError(f"{thing_id} is covered in both views")
+            time.sleep(0.2)
+
+    def _click_where_visible(self, thing_id: str) -> bool:
         for view in ("#top-view", "#side-view"):
             selector = f'{view} [data-id="{thing_id}"]'
             if self.page.locator(selector).count() and self.page.evaluate(
@@ -134,8 +142,8 @@ class Person:
                 selector,
             ):
                 self.click(selector)
-                return
-        raise AssertionError(f"{thing_id} is covered in both views")
+                return True
+        return False
 
     def move(self, object_id: str, goal_id: str) -> None:
         """Select ``object_id`` (unless the page shows it selected still), then ``goal_id``."""
