@@ -54,3 +54,21 @@ def test_demos_and_train_draw_bars_on_a_terminal_and_nothing_in_a_pipe(
     bars = stderr.getvalue()
     assert "demos:" in bars and "2/2 [" in bars
     assert "train gcn seed 0:" in bars and "loss " in bars
+
+
+def test_train_takes_its_thread_count_and_refuses_zero(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import torch
+
+    demos, checkpoint = tmp_path / "demos.mcap", tmp_path / "gcn.pt"
+    assert main(["demos", "-o", str(demos), "--trajectories", "1", "--blocks", "3"]) == 0
+    train_argv = ["train", str(demos), "--arch", "gcn", "--epochs", "1", "-o", str(checkpoint)]
+    before = torch.get_num_threads()
+    try:
+        assert main([*train_argv, "--threads", "0"]) == 2
+        assert "threads" in capsys.readouterr().err and not checkpoint.exists()
+        assert main([*train_argv, "--threads", "1"]) == 0
+        assert torch.get_num_threads() == 1 and checkpoint.exists()
+    finally:
+        torch.set_num_threads(before)

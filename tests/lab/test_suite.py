@@ -17,6 +17,7 @@ def test_suite_writes_table_plot_and_numbers(tmp_path: Path) -> None:
     assert "| paper |" in table and "| gcn |" in table
     gcn_row = next(line for line in table.splitlines() if line.startswith("| gcn |"))
     assert gcn_row.count("±") == len(cells(2))
+    assert gcn_row.count("(min ") == len(cells(2))  # the worst seed beside the mean
     png = (tmp_path / "success_vs_k.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
     numbers = json.loads((tmp_path / "suite.json").read_text())
@@ -28,3 +29,14 @@ def test_suite_writes_table_plot_and_numbers(tmp_path: Path) -> None:
         "gcn-seed0.pt",
         "gcn-seed1.pt",
     ]
+
+
+@pytest.mark.slow
+def test_suite_on_validation_seeds_without_the_curve(tmp_path: Path) -> None:
+    summary = run_suite(
+        tmp_path, ["gcn"], [0], episodes=1, curve_episodes=0, epochs=1, eval_seed=1000
+    )
+    assert summary["eval_seed"] == 1000
+    assert "from seed 1000" in (tmp_path / "generalization.md").read_text()
+    assert not (tmp_path / "success_vs_k.png").exists()
+    assert summary["curves"] == {"gcn": {}}
