@@ -9,9 +9,11 @@ bodies, all built from boxes (nothing downloaded).
   slot (plates stand between them), and a handle: a tab at one side of its front, sticking
   out towards the robot, grasped where ``manigraph_shared.grasp_points.RACK_GRIP_OFFSET``
   says (the top rack's in the middle, the bottom rack's beside its left side).
-* **Dishes**: a plate is a thin box (the geometric world's 8 x 8 x 1.5 cm); a bowl is an open
-  box (a base and four walls), 5 cm across so neighbouring bowl slots (5.5 cm apart) both
-  take one, 3.5 cm deep.
+* **Dishes**: a plate is a thin box, 6.4 x 6.4 x 1.5 cm (the geometric world's is 8 cm across,
+  as wide as the fingers open: the skills could not tilt it); a bowl is an open box (a base
+  and four walls), 5 cm across so neighbouring bowl slots (5.5 cm apart) both take one,
+  3.5 cm deep. They start where the geometric world's do, resting
+  on the counter at their own height.
 
 The task's state is read back off the simulated poses as a
 :class:`~manigraph_sim.dishwasher.world.DishwasherWorld` (:meth:`PhysicsDishwasher.view`), so
@@ -43,8 +45,10 @@ from manigraph_sim.physics.world import PhysicsWorld
 
 Part = tuple[sapien.Pose, np.ndarray]  # a box: pose relative to its body, half size
 
-#: The physical dishes' extents (x, y, z), metres.
-PHYSICAL_DISH_SIZE: Final = {PLATE: (0.08, 0.08, 0.015), BOWL: (0.05, 0.05, 0.035)}
+#: The physical dishes' extents (x, y, z), metres. A plate is 6.4 cm across (the geometric
+#: world's is 8 cm, as wide as the Panda's fingers open): the turn-over manoeuvre takes a
+#: plate lying flat across its width.
+PHYSICAL_DISH_SIZE: Final = {PLATE: (0.064, 0.064, 0.015), BOWL: (0.05, 0.05, 0.035)}
 BOWL_WALL: Final = 0.004
 #: A rack's floor relative to its centre: x from the front (robot side) to the back, half
 #: width along y, top surface height, thickness.
@@ -202,7 +206,10 @@ class PhysicsDishwasher:
                 builder.add_box_visual(pose, half, material=DISH_COLOUR[dish.kind])
         entity = builder.build(name=dish.id)
         q = _sapien_quaternion(ORIENTATIONS[dish.orientation])
-        entity.set_pose(sapien.Pose(dish.position, q))
+        position = dish.position.copy()
+        up_axis = (2, 2, 1, 1, 0, 0)[dish.orientation]
+        position[2] = PHYSICAL_DISH_SIZE[dish.kind][up_axis] / 2  # resting on the counter
+        entity.set_pose(sapien.Pose(position, q))
         return entity
 
     # --- state ------------------------------------------------------------------------------

@@ -11,8 +11,9 @@ Checks, each reported as a ``SkillError`` reason:
   less than ``min_grasp_width``, so nothing is between them;
 * ``placement_missed``: after release the object's centre is more than
   ``placement_tolerance`` from the target (when the transport can observe objects);
-* ``orientation_unreachable``: a placement asks for another up axis than the object has
-  (top-down grasps turn an object about the vertical only), refused before any motion;
+* ``orientation_unreachable``: a placement asks for another up axis than the object has and
+  the fingers span it across no axis that would tilt it there (``dish_turning``: the
+  turn-over manoeuvre tilts it on the counter first, then the top-down grasp places it);
 * ``handle_missed``: the fingers closed on nothing at a rack's handle; ``rack_stuck``: after a
   toggle the scene still shows the rack where it was.
 """
@@ -42,8 +43,9 @@ from manigraph_shared.messages import (
     SceneRack,
     Vector3,
 )
-from manigraph_shared.orientations import ORIENTATION_NAMES, up_axis_orientation
+from manigraph_shared.orientations import up_axis_orientation
 from manigraph_skills.drivers.base import Grasp, Motion, RobotDriver
+from manigraph_skills.drivers.dish_turning import turn_dish
 from manigraph_skills.drivers.registry import MotionOptions
 from manigraph_skills.motion import GraspPlanner, JointTrajectory, PandaModel, PlanConfig
 from manigraph_skills.motion.collision import ArmCollisionModel, Contact
@@ -158,14 +160,20 @@ class PandaMotionDriver(RobotDriver):
         self._picked: tuple[str, np.ndarray, float, Grasp] | None = None
 
     def pick(self, motion: Motion) -> None:
-        decision_id, object_id, grasp = motion.decision_id, motion.object_id, motion.grasp
-        position, orientation = motion.position, motion.orientation
-        target = np.array(position.as_tuple()) + grasp.height * UP
+        grasp, orientation = motion.grasp, motion.orientation
+        target = np.array(motion.position.as_tuple()) + grasp.height * UP
         yaw = (
             self.planner.config.hand_yaw
             + grasp.turn
             + grasp_yaw((orientation.x, orientation.y, orientation.z, orientation.w))
         )
+        self.pick_at(motion.decision_id, motion.object_id, target, yaw, grasp)
+
+    def pick_at(
+        self, decision_id: str, object_id: str, target: np.ndarray, yaw: float, grasp: Grasp
+    ) -> None:
+        """Take ``object_id`` top-down with the TCP at ``target`` and the hand at ``yaw`` (or
+        turned by ``grasp.other_turn`` if that is what clears the arm), and lift it."""
         self._picked = None
         result = self._run(
             decision_id,
@@ -175,7 +183,9 @@ class PandaMotionDriver(RobotDriver):
                 target,
             ),
         )
-        self._picked = (object_id, target, yaw, grasp)
+        # The yaw the hand took (``_avoiding`` may have turned it): put back with it.
+        taken = self.planner.yaw_of(np.array(result.positions)) if result.positions else yaw
+        self._picked = (object_id, target, taken, grasp)
         if result.gripper_width < self.min_grasp_width:
             self._open(decision_id, grasp.obstacles)
             raise SkillError(
@@ -233,15 +243,19 @@ class PandaMotionDriver(RobotDriver):
             log.info("could not put %s back: %s", object_id, exc)
 
     def check_orientation(self, object_id: str, current: Quaternion, target: Quaternion) -> None:
-        """Top-down grasps turn an object about the vertical only: the axis that points up
-        stays up."""
-        now, wanted = up_axis_orientation(current), up_axis_orientation(target)
-        if now != wanted:
-            raise SkillError(
-                "orientation_unreachable",
-                f"{object_id} lies {ORIENTATION_NAMES[now]}; a top-down grasp cannot set it "
-                f"down {ORIENTATION_NAMES[wanted]}",
-            )
+        """An object whose up axis must change is tilted first (:meth:`turn_over`): refused
+        only if the fingers span it across no axis that would turn it there (its size is
+        checked by :meth:`turn_over` itself, which has the scene)."""
+
+    def turn_over(
+        self, decision_id: str, item: SceneObject, target: Quaternion, scene: Scene
+    ) -> SceneObject:
+        """Tilt ``item`` on the counter until its up axis is ``target``'s (``dish_turning``):
+        the object as it then lies."""
+        wanted = up_axis_orientation(target)
+        if up_axis_orientation(item.orientation) == wanted:
+            return item
+        return turn_dish(self, decision_id, item, wanted, scene)
 
     def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3, is_open: bool) -> None:
         """Down onto the rack's handle tab (``grasp_points.rack_grip``), close across it,
@@ -309,7 +323,11 @@ class PandaMotionDriver(RobotDriver):
         def plan(q: np.ndarray) -> JointTrajectory:
             contact = None
             failure: SkillError | None = None
-            for planner, turn, carry in options:
+            # Last: across at the hand's own height, when it starts above the ceiling (just
+            # out of a rack's slot: coming down to the ceiling there meets the dish in it).
+            start_z = float(self.model.tcp_pose(q).translation[2])
+            high = [(p, t, start_z) for p in planners for t in (0.0, grasp.other_turn)]
+            for planner, turn, carry in options + (high if start_z > heights[-1] else []):
                 self._raise_if_stopped()  # a re-plan takes 50-500 ms: stop between them
                 try:
                     trajectory = make(planner, q, turn, carry)
