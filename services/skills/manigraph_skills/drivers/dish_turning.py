@@ -20,6 +20,7 @@ from manigraph_shared.messages import Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATION_NAMES
 from manigraph_shared.panda import FINGER_BELOW_TCP
 from manigraph_skills.drivers.base import Grasp
+from manigraph_skills.grasp_choice import room
 from manigraph_skills.motion.tilt import let_go_sideways, set_down_sideways
 from manigraph_skills.motion.trajectory import JointTrajectory
 from manigraph_skills.obstacles import Obstacle, scene_obstacles
@@ -42,16 +43,17 @@ MAX_TILTS = 3
 #: How far above the counter a turned dish is let go, metres, lowest first: the sideways
 #: hand and wrist need room under them.
 DROPS = (0.006, 0.02, 0.035)
-#: Other set-down spots: the counter grid's pitch, how far from every other dish's centre a
-#: spot must be, and how far from the robot's base (radius, metres; nearer, top-down grasps
-#: have no IK solution) and along x (beyond it the racks slide out over the counter).
-SPOT_PITCH = 0.1
+#: Other set-down spots: the physical counter grid's pitch (x, y), how far from every other
+#: dish's centre a spot must be, and how far from the robot's base (radius, metres; nearer,
+#: top-down grasps have no IK solution) and along x (beyond it the racks slide out over the
+#: counter).
+SPOT_PITCH = np.array([0.08, 0.1])
 SPOT_FREE = 0.09
 SPOT_RADIUS = (0.29, 0.6)
-SPOT_MAX_X = 0.42
+SPOT_MAX_X = 0.46
 MAX_SPOTS = 4
 SPARE_Y = 0.42
-SPARE_X = (0.35, 0.45)
+SPARE_X = (0.36, 0.44)
 #: Lowest TCP for a top-down grasp: the fingertips (``FINGER_BELOW_TCP`` under it) stay this
 #: far above the counter.
 FINGERTIP_CLEARANCE = 0.002
@@ -133,7 +135,12 @@ def _tilt_once(
     height = grasp_height_for(float(position[2]))
     grasp = Grasp(height, 0.0, 0.0, scene_obstacles(scene, current, position), np.pi)
     tcp = position + np.array([0.0, 0.0, height])
-    driver.pick_at(decision_id, item.id, tcp, candidates[0].pick_yaw, grasp)
+    # Closing along the axis with more room beside the dish first (``grasp_choice.room``).
+    yaws = list(dict.fromkeys(t.pick_yaw for t in candidates))
+    yaws.sort(
+        key=lambda yaw: -room(scene, tcp, 0 if abs(np.sin(yaw)) > abs(np.cos(yaw)) else 1, item.id)
+    )
+    driver.pick_at(decision_id, item.id, tcp, yaws[0], grasp)
     hand = driver.model.tcp_pose(driver.transport.joint_positions()).rotation
     held = hand.T @ dish
     # The dish's centre from the TCP, in the hand's frame (the grasp may be above it).

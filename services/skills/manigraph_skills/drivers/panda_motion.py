@@ -47,7 +47,13 @@ from manigraph_shared.orientations import up_axis_orientation
 from manigraph_skills.drivers.base import Grasp, Motion, RobotDriver
 from manigraph_skills.drivers.dish_turning import turn_dish
 from manigraph_skills.drivers.registry import MotionOptions
-from manigraph_skills.motion import GraspPlanner, JointTrajectory, PandaModel, PlanConfig
+from manigraph_skills.motion import (
+    HOME_Q,
+    GraspPlanner,
+    JointTrajectory,
+    PandaModel,
+    PlanConfig,
+)
 from manigraph_skills.motion.collision import ArmCollisionModel, Contact
 from manigraph_skills.motion.plan import UP, grasp_yaw
 from manigraph_skills.obstacles import Obstacle
@@ -182,6 +188,7 @@ class PandaMotionDriver(RobotDriver):
                 grasp,
                 target,
             ),
+            home_around=grasp.obstacles,
         )
         # The yaw the hand took (``_avoiding`` may have turned it): put back with it.
         taken = self.planner.yaw_of(np.array(result.positions)) if result.positions else yaw
@@ -265,7 +272,9 @@ class PandaMotionDriver(RobotDriver):
         shift = np.array([RACK_TRAVEL if is_open else -RACK_TRAVEL, 0.0, 0.0])
         # Yaw 0: the fingers close along y, across the tab.
         held = self._run(
-            decision_id, self._checked(lambda q: self.planner.slide(q, grip, shift, 0.0), ())
+            decision_id,
+            self._checked(lambda q: self.planner.slide(q, grip, shift, 0.0), ()),
+            home_around=(),
         )
         if held.gripper_width < self.min_grasp_width:
             self._open(decision_id, ())
@@ -373,13 +382,21 @@ class PandaMotionDriver(RobotDriver):
         return self.collision.first_contact(trajectory, obstacles)
 
     def _run(
-        self, decision_id: str, plan: Callable[[np.ndarray], JointTrajectory]
+        self,
+        decision_id: str,
+        plan: Callable[[np.ndarray], JointTrajectory],
+        home_around: tuple[Obstacle, ...] | None = None,
     ) -> JointTrajectoryResult:
-        """Plan from the arm's joints and execute; plan once more if the arm was elsewhere."""
+        """Plan from the arm's joints and execute; plan once more if the arm was elsewhere.
+        With ``home_around`` (the hand is empty): if nothing can be planned from where the
+        arm is, it goes home first (``GraspPlanner.home``, checked against those
+        obstacles) and plans from there."""
         if decision_id != self._decision:
             self._decision, self._decision_stops = decision_id, self._stops
         self._raise_if_stopped()
         q = self.transport.joint_positions()
+        if home_around is not None:
+            plan = self._homing_first(decision_id, plan, home_around)
         for _attempt in range(2):
             trajectory = plan(q)  # raises SkillError('no_ik_solution') before any motion
             self._raise_if_stopped()  # the stop (and maybe resume) came while planning
@@ -390,6 +407,29 @@ class PandaMotionDriver(RobotDriver):
                 raise SkillError(result.reason or "driver_error", result.detail)
             q = np.array(result.positions)
         raise SkillError("start_mismatch", "the arm keeps moving away from the planned start")
+
+    def _homing_first(
+        self,
+        decision_id: str,
+        plan: Callable[[np.ndarray], JointTrajectory],
+        obstacles: tuple[Obstacle, ...],
+    ) -> Callable[[np.ndarray], JointTrajectory]:
+        def from_home_if_stuck(q: np.ndarray) -> JointTrajectory:
+            try:
+                return plan(q)
+            except SkillError as exc:
+                if exc.reason != "no_ik_solution" or np.allclose(q, HOME_Q, atol=0.05):
+                    raise
+                homing = self.planner.home(q)
+                if self._contact(homing, obstacles) is not None:
+                    raise
+                log.info("going home first: %s", exc.detail)
+                result = self.transport.execute(self._command(decision_id, homing))
+                if not result.ok:
+                    raise
+                return plan(np.array(result.positions))
+
+        return from_home_if_stuck
 
     def _raise_if_stopped(self) -> None:
         if self._stopped:

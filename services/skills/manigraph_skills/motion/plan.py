@@ -11,6 +11,7 @@ the previous sample, so the hand really moves along the line and no joint flips 
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,7 +19,7 @@ import pinocchio as pin
 
 from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_skills.motion.ik import IKSolver
-from manigraph_skills.motion.model import PandaModel, top_down
+from manigraph_skills.motion.model import HOME_Q, PandaModel, top_down
 from manigraph_skills.motion.trajectory import JointTrajectory
 
 UP = np.array([0.0, 0.0, 1.0])
@@ -26,6 +27,8 @@ UP = np.array([0.0, 0.0, 1.0])
 #: most any joint may move between two samples.
 ANGLE_SPACING = 0.05
 MAX_JOINT_STEP = 0.3
+#: Joint-space samples of a move home (``GraspPlanner.home``).
+HOMING_SAMPLES = 30
 
 
 @dataclass(frozen=True)
@@ -145,6 +148,22 @@ class GraspPlanner:
         top = max(hand[2] + c.approach, min(hand[2] + c.retreat, c.max_carry_z))
         above = np.array([hand[0] - back, hand[1], top])
         self.line(trajectory, above, self.yaw_of(q), False, c.slow_speed, "retreat")
+        return trajectory
+
+    def home(self, q: np.ndarray, rise: float = 0.08) -> JointTrajectory:
+        """From ``q`` (hand empty): straight up by ``rise`` (as far as IK allows), then to the
+        home pose in joint space. For an arm left where no straight line leads on (a wrist
+        near its limit after turning a dish over): every motion plans well from home."""
+        c = self.config
+        trajectory = JointTrajectory()
+        trajectory.add(0.0, q, closed=False)
+        pose = self.model.tcp_pose(q)
+        with contextlib.suppress(SkillError):  # no straight rise from here: straight home
+            up = pin.SE3(pose.rotation, pose.translation + rise * UP)
+            self.pose_line(trajectory, up, False, c.slow_speed, "rise")
+        start = trajectory.final
+        path = start + np.linspace(0.0, 1.0, HOMING_SAMPLES)[:, None] * (HOME_Q - start)
+        trajectory.add_segment(path, False, 0.0, c.speed, self.joint_speed)
         return trajectory
 
     # --- segments -------------------------------------------------------------------------

@@ -47,7 +47,10 @@ def set_down_sideways(
     turn_at = np.array([spot[0], spot[1], max(TURN_HEIGHT, carry_z)])
     trajectory = JointTrajectory()
     trajectory.add(0.0, q, closed=True)
-    planner._transit(trajectory, turn_at, closing_yaw(hand), closed=True, what="turn-over transfer")
+    # The same hand either way round: turn the shorter way from the hand's yaw now.
+    now = planner.yaw_of(q)
+    yaw = now + (closing_yaw(hand) - now + np.pi) % (2 * np.pi) - np.pi
+    planner._transit(trajectory, turn_at, yaw, closed=True, what="turn-over transfer")
     planner.pose_line(trajectory, pin.SE3(hand, turn_at), True, c.slow_speed, "turn over")
     planner.pose_line(trajectory, pin.SE3(hand, spot), True, c.slow_speed, "set down turned")
     return trajectory
