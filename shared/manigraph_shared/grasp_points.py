@@ -55,3 +55,14 @@ def rack_grip(rack_id: str) -> np.ndarray:
         return np.array(RACK_GRIP_OFFSET[rack_id])
     except KeyError:
         raise ConfigError("rack_id", f"'{rack_id}' has no handle to grasp") from None
+
+
+#: A rack's floor, relative to the rack's centre (the reported handle is ``RACK_HANDLE_X``
+#: from it along x), metres: x from its front (robot side) to its back, half width along y,
+#: top surface height, thickness. Shared so the skills can keep the arm off a pulled-out
+#: rack's floor (it reaches over the counter's far row).
+RACK_HANDLE_X = -0.09
+RACK_FLOOR_X = (-0.08, 0.075)
+RACK_FLOOR_HALF_Y = 0.34
+RACK_FLOOR_TOP = 0.005
+RACK_FLOOR_THICKNESS = 0.01

@@ -7,8 +7,8 @@
   within their width across the closing axis. So a block in a box is taken between free
   sides (``manigraph_sim.physics.box_layout`` leaves room on one side of every cell it uses),
   and stacks and pyramid rows, which have room along x, are grasped as before.
-* **Dishes**: a plate standing on an edge is taken across its thickness (``plate_turn``); a
-  bowl as a block.
+* **Dishes**: a plate standing on an edge is taken across its thickness (``plate_turn``) and
+  set into its slot with its thickness across y, between the slot's ribs; a bowl as a block.
 * **How high to carry**: a cover sticks out far beyond the hand, so it is carried with its
   underside above every object's top and every goal (a box's rim is under its lid goal); a
   held block is carried the same way (its underside 2 cm over every top), and the empty hand
@@ -21,7 +21,6 @@ import numpy as np
 
 from manigraph_shared.grasp_points import grasp_height
 from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, Vector3
-from manigraph_shared.orientations import up_axis_orientation
 from manigraph_shared.panda import (
     FINGER_ABOVE_TCP,
     FINGER_BELOW_TCP,
@@ -31,6 +30,7 @@ from manigraph_shared.panda import (
 )
 from manigraph_skills.drivers.base import Grasp
 from manigraph_skills.obstacles import scene_obstacles
+from manigraph_skills.turn_over import HORIZONTAL, rotation_of
 
 #: Added to the fingers' reach before an axis counts as free, metres.
 MARGIN = 0.005
@@ -93,13 +93,14 @@ def _point(position: Vector3, height: float) -> np.ndarray:
 
 
 def plate_turn(item: SceneObject) -> float | None:
-    """A plate is taken across its thickness, and keeps its turn to the goal (a slot's ribs
-    hold it across y): ``TURN_TO_Y`` standing on a rim along x (the thin axis along y), 0
-    standing on a side; None for anything else (a flat plate is wider than the fingers open)."""
+    """A plate is taken across its thickness: ``TURN_TO_Y`` if its thin axis lies along y,
+    0 along x; None if it lies flat (wider than the fingers span that way)."""
     if item.category.value != "plate":
         return None
-    index = up_axis_orientation(item.orientation)
-    return {2: TURN_TO_Y, 3: TURN_TO_Y, 4: 0.0, 5: 0.0}.get(index)
+    thin = rotation_of(item.orientation)[:, 2]
+    if abs(thin[2]) > HORIZONTAL:
+        return None
+    return TURN_TO_Y if abs(thin[1]) > abs(thin[0]) else 0.0
 
 
 def choose_grasps(scene: Scene, item: SceneObject, goal: Vector3) -> tuple[Grasp, Grasp]:
@@ -110,9 +111,10 @@ def choose_grasps(scene: Scene, item: SceneObject, goal: Vector3) -> tuple[Grasp
     here, there = np.array(item.position.as_tuple()), np.array(goal.as_tuple())
     turn = plate_turn(item)
     if turn is not None:
+        # Into its slot across y whichever way it was taken: the slot's ribs hold it so.
         return (
             Grasp(height, turn, carry, scene_obstacles(scene, item, here), np.pi),
-            Grasp(height, turn, carry, scene_obstacles(scene, item, there), np.pi),
+            Grasp(height, TURN_TO_Y, carry, scene_obstacles(scene, item, there), np.pi),
         )
     pick = Grasp(
         height,

@@ -15,6 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from manigraph_shared.grasp_points import (
+    RACK_FLOOR_HALF_Y,
+    RACK_FLOOR_THICKNESS,
+    RACK_FLOOR_TOP,
+    RACK_FLOOR_X,
+    RACK_HANDLE_X,
+)
 from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneObject
 
 #: Assumed box wall thickness, metres (the physics world's boxes: 1 cm).
@@ -58,7 +65,25 @@ def scene_obstacles(scene: Scene, moving: SceneObject, at: np.ndarray) -> tuple[
             )
         )
     found.extend(box_walls(scene))
+    found.extend(open_rack_floors(scene))
     return tuple(found)
+
+
+def open_rack_floors(scene: Scene) -> list[Obstacle]:
+    """The floor of every pulled-out dishwasher rack: it reaches over the counter's far row,
+    where a hand lifting a dish would meet it. (A pushed-in rack stands inside the cabinet,
+    beyond the counter; the slots' ribs and the dishes in them are not floors.)"""
+    found = []
+    for rack in scene.racks:
+        if not rack.open:
+            continue
+        centre = np.array(rack.position.as_tuple()) - np.array([RACK_HANDLE_X, 0.0, 0.0])
+        bottom = RACK_FLOOR_TOP - RACK_FLOOR_THICKNESS
+        low = centre + np.array([RACK_FLOOR_X[0], -RACK_FLOOR_HALF_Y, bottom])
+        high = centre + np.array([RACK_FLOOR_X[1], RACK_FLOOR_HALF_Y, RACK_FLOOR_TOP])
+        middle = tuple(((low + high) / 2).tolist())
+        found.append(Obstacle(f"{rack.id}:floor", middle, tuple((high - low).tolist())))
+    return found
 
 
 def box_walls(scene: Scene) -> list[Obstacle]:

@@ -70,8 +70,17 @@ class PickAndPlace:
             if action.orientation_index is not None:
                 self.driver.check_orientation(item.id, item.orientation, turn)
             status(SkillState.RUNNING)
-            pick, place = choose_grasps(scene, item, goal.position)
             decision = action.decision_id
+            if action.orientation_index is not None:
+                turned = self.driver.turn_over(decision, item, turn, scene)
+                if turned is not item:
+                    scene = scene.model_copy(
+                        update={
+                            "objects": [turned if o.id == item.id else o for o in scene.objects]
+                        }
+                    )
+                    item = turned
+            pick, place = choose_grasps(scene, item, goal.position)
             self.driver.pick(Motion(decision, item.id, item.position, item.orientation, pick))
             self.driver.place(Motion(decision, item.id, goal.position, turn, place))
         except SkillError as exc:

@@ -194,7 +194,10 @@ def _up_run(args: argparse.Namespace) -> int:
         else spec(
             "planner",
             ["planner", "--policy", args.policy]
-            + (["--explain-decisions"] if args.explain_decisions else []),
+            + (["--explain-decisions"] if args.explain_decisions else [])
+            # A decision may run as long as the run lets an episode go without news (a
+            # physics PickAndPlace that turns a dish over first takes 20-60 s).
+            + (["--decision-timeout", f"{plan.stall_timeout:g}"] if plan is not None else []),
         ),
         spec("skills", ["skills", "--driver", _skills_driver(args.sim)]),
     ]

@@ -15,6 +15,7 @@ import numpy as np
 
 from manigraph_shared.dishwasher_rules import BOTTOM_RACK, TOP_RACK
 from manigraph_shared.errors import TaskError
+from manigraph_shared.grasp_points import RACK_HANDLE_X
 from manigraph_shared.grasp_points import RACK_TRAVEL as RACK_PULL
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN
 from manigraph_sim.world_model import Layout
@@ -35,7 +36,7 @@ RACK_TRAVEL: Final = RACK_PULL
 SLOTS_PER_ROW: Final = 12
 SLOT_PITCH: Final = 0.055
 #: A rack's handle (the position a Scene reports for it) relative to its centre along x.
-HANDLE_X: Final = -0.09
+HANDLE_X: Final = RACK_HANDLE_X
 #: Most dishes an episode may hold: every preference must have a slot for each.
 MAX_DISHES: Final = SLOTS_PER_ROW
 

@@ -9,9 +9,12 @@ bodies, all built from boxes (nothing downloaded).
   slot (plates stand between them), and a handle: a tab at one side of its front, sticking
   out towards the robot, grasped where ``manigraph_shared.grasp_points.RACK_GRIP_OFFSET``
   says (the top rack's in the middle, the bottom rack's beside its left side).
-* **Dishes**: a plate is a thin box (the geometric world's 8 x 8 x 1.5 cm); a bowl is an open
-  box (a base and four walls), 5 cm across so neighbouring bowl slots (5.5 cm apart) both
-  take one, 3.5 cm deep.
+* **Dishes**: a plate is a thin box, 6.4 x 6.4 x 1.5 cm (the geometric world's is 8 cm across,
+  as wide as the fingers open: the skills could not tilt it); a bowl is an open box (a base
+  and four walls), 5 cm across so neighbouring bowl slots (5.5 cm apart) both take one,
+  3.5 cm deep. They start on the geometric world's counter cells,
+  its rows moved out of the Panda's blind spot near its base and drawn together
+  (``physical_counter_x``), resting at their own height.
 
 The task's state is read back off the simulated poses as a
 :class:`~manigraph_sim.dishwasher.world.DishwasherWorld` (:meth:`PhysicsDishwasher.view`), so
@@ -27,7 +30,14 @@ import numpy as np
 import sapien
 from sapien import physx
 
-from manigraph_shared.grasp_points import RACK_GRIP_OFFSET, RACK_TAB_THICKNESS
+from manigraph_shared.grasp_points import (
+    RACK_FLOOR_HALF_Y,
+    RACK_FLOOR_THICKNESS,
+    RACK_FLOOR_TOP,
+    RACK_FLOOR_X,
+    RACK_GRIP_OFFSET,
+    RACK_TAB_THICKNESS,
+)
 from manigraph_shared.messages import Quaternion
 from manigraph_shared.orientations import ORIENTATIONS, up_axis_orientation
 from manigraph_sim.dishwasher.model import (
@@ -43,15 +53,24 @@ from manigraph_sim.physics.world import PhysicsWorld
 
 Part = tuple[sapien.Pose, np.ndarray]  # a box: pose relative to its body, half size
 
-#: The physical dishes' extents (x, y, z), metres.
-PHYSICAL_DISH_SIZE: Final = {PLATE: (0.08, 0.08, 0.015), BOWL: (0.05, 0.05, 0.035)}
+#: The physical dishes' extents (x, y, z), metres. A plate is 6.4 cm across (the geometric
+#: world's is 8 cm, as wide as the Panda's fingers open): the turn-over manoeuvre takes a
+#: plate lying flat across its width.
+PHYSICAL_DISH_SIZE: Final = {PLATE: (0.064, 0.064, 0.015), BOWL: (0.05, 0.05, 0.035)}
 BOWL_WALL: Final = 0.004
+#: The physical counter's rows: the geometric world's cells (x = 0.20, 0.30, 0.40 m, dishes
+#: jittered by up to 1 cm) moved to start at 0.30 m, 8 cm apart (0.30, 0.38, 0.46 m), each
+#: dish at half its jitter. The Panda has no top-down IK solution within ~0.29 m of its base
+#: at counter height, where the geometric near row is; much beyond 0.46 m a dish lies under a
+#: pulled-out rack's front (x = 0.52 m).
+COUNTER_ROWS: Final = ((0.20, 0.30), (0.30, 0.38), (0.40, 0.46))
+COUNTER_JITTER_SCALE: Final = 0.5
 #: A rack's floor relative to its centre: x from the front (robot side) to the back, half
 #: width along y, top surface height, thickness.
-FLOOR_X: Final = (-0.08, 0.075)
-FLOOR_HALF_Y: Final = 0.34
-FLOOR_TOP: Final = 0.005
-FLOOR_THICKNESS: Final = 0.01
+FLOOR_X: Final = RACK_FLOOR_X
+FLOOR_HALF_Y: Final = RACK_FLOOR_HALF_Y
+FLOOR_TOP: Final = RACK_FLOOR_TOP
+FLOOR_THICKNESS: Final = RACK_FLOOR_THICKNESS
 #: Ribs around each plate slot: gap between them (a plate is 1.5 cm thick), height,
 #: thickness, and their extent along x relative to the rack centre.
 RIB_GAP: Final = 0.023
@@ -73,6 +92,12 @@ OPEN_FRACTION: Final = 0.5
 CABINET_COLOUR = [0.8, 0.8, 0.82, 1.0]
 RACK_COLOUR = [0.35, 0.4, 0.5, 1.0]
 DISH_COLOUR = {PLATE: [0.95, 0.95, 0.92, 1.0], BOWL: [0.55, 0.75, 0.9, 1.0]}
+
+
+def physical_counter_x(x: float) -> float:
+    """Where a dish the geometric layout puts at ``x`` on the counter lies in physics."""
+    geometric, physical = min(COUNTER_ROWS, key=lambda row: abs(row[0] - x))
+    return physical + COUNTER_JITTER_SCALE * (x - geometric)
 
 
 def _box(low: tuple[float, float, float], high: tuple[float, float, float]) -> Part:
@@ -202,7 +227,11 @@ class PhysicsDishwasher:
                 builder.add_box_visual(pose, half, material=DISH_COLOUR[dish.kind])
         entity = builder.build(name=dish.id)
         q = _sapien_quaternion(ORIENTATIONS[dish.orientation])
-        entity.set_pose(sapien.Pose(dish.position, q))
+        position = dish.position.copy()
+        position[0] = physical_counter_x(float(position[0]))
+        up_axis = (2, 2, 1, 1, 0, 0)[dish.orientation]
+        position[2] = PHYSICAL_DISH_SIZE[dish.kind][up_axis] / 2  # resting on the counter
+        entity.set_pose(sapien.Pose(position, q))
         return entity
 
     # --- state ------------------------------------------------------------------------------

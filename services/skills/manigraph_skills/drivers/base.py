@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from manigraph_shared.errors import SkillError
-from manigraph_shared.messages import Quaternion, Vector3
+from manigraph_shared.messages import Quaternion, Scene, SceneObject, Vector3
 from manigraph_skills.obstacles import Obstacle
 
 
@@ -87,6 +87,14 @@ class RobotDriver(ABC):
     def check_orientation(self, object_id: str, current: Quaternion, target: Quaternion) -> None:
         """Refuse (``orientation_unreachable``) before any motion if this robot cannot turn
         ``object_id`` from ``current`` to ``target`` as it places it; a magic gripper can."""
+
+    def turn_over(
+        self, decision_id: str, item: SceneObject, target: Quaternion, scene: Scene
+    ) -> SceneObject:
+        """Turn ``item`` so its up axis is ``target``'s before it is picked, and return it as
+        it then lies; a robot that turns an object as it places it (a magic gripper) leaves
+        it as it is."""
+        return item
 
     @abstractmethod
     def stop(self) -> None:

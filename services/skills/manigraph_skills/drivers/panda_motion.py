@@ -11,8 +11,9 @@ Checks, each reported as a ``SkillError`` reason:
   less than ``min_grasp_width``, so nothing is between them;
 * ``placement_missed``: after release the object's centre is more than
   ``placement_tolerance`` from the target (when the transport can observe objects);
-* ``orientation_unreachable``: a placement asks for another up axis than the object has
-  (top-down grasps turn an object about the vertical only), refused before any motion;
+* ``orientation_unreachable``: a placement asks for another up axis than the object has and
+  the fingers span it across no axis that would tilt it there (``dish_turning``: the
+  turn-over manoeuvre tilts it on the counter first, then the top-down grasp places it);
 * ``handle_missed``: the fingers closed on nothing at a rack's handle; ``rack_stuck``: after a
   toggle the scene still shows the rack where it was.
 """
@@ -42,10 +43,17 @@ from manigraph_shared.messages import (
     SceneRack,
     Vector3,
 )
-from manigraph_shared.orientations import ORIENTATION_NAMES, up_axis_orientation
+from manigraph_shared.orientations import up_axis_orientation
 from manigraph_skills.drivers.base import Grasp, Motion, RobotDriver
+from manigraph_skills.drivers.dish_turning import turn_dish
 from manigraph_skills.drivers.registry import MotionOptions
-from manigraph_skills.motion import GraspPlanner, JointTrajectory, PandaModel, PlanConfig
+from manigraph_skills.motion import (
+    HOME_Q,
+    GraspPlanner,
+    JointTrajectory,
+    PandaModel,
+    PlanConfig,
+)
 from manigraph_skills.motion.collision import ArmCollisionModel, Contact
 from manigraph_skills.motion.plan import UP, grasp_yaw
 from manigraph_skills.obstacles import Obstacle
@@ -158,14 +166,20 @@ class PandaMotionDriver(RobotDriver):
         self._picked: tuple[str, np.ndarray, float, Grasp] | None = None
 
     def pick(self, motion: Motion) -> None:
-        decision_id, object_id, grasp = motion.decision_id, motion.object_id, motion.grasp
-        position, orientation = motion.position, motion.orientation
-        target = np.array(position.as_tuple()) + grasp.height * UP
+        grasp, orientation = motion.grasp, motion.orientation
+        target = np.array(motion.position.as_tuple()) + grasp.height * UP
         yaw = (
             self.planner.config.hand_yaw
             + grasp.turn
             + grasp_yaw((orientation.x, orientation.y, orientation.z, orientation.w))
         )
+        self.pick_at(motion.decision_id, motion.object_id, target, yaw, grasp)
+
+    def pick_at(
+        self, decision_id: str, object_id: str, target: np.ndarray, yaw: float, grasp: Grasp
+    ) -> None:
+        """Take ``object_id`` top-down with the TCP at ``target`` and the hand at ``yaw`` (or
+        turned by ``grasp.other_turn`` if that is what clears the arm), and lift it."""
         self._picked = None
         result = self._run(
             decision_id,
@@ -174,8 +188,11 @@ class PandaMotionDriver(RobotDriver):
                 grasp,
                 target,
             ),
+            home_around=grasp.obstacles,
         )
-        self._picked = (object_id, target, yaw, grasp)
+        # The yaw the hand took (``_avoiding`` may have turned it): put back with it.
+        taken = self.planner.yaw_of(np.array(result.positions)) if result.positions else yaw
+        self._picked = (object_id, target, taken, grasp)
         if result.gripper_width < self.min_grasp_width:
             self._open(decision_id, grasp.obstacles)
             raise SkillError(
@@ -233,15 +250,19 @@ class PandaMotionDriver(RobotDriver):
             log.info("could not put %s back: %s", object_id, exc)
 
     def check_orientation(self, object_id: str, current: Quaternion, target: Quaternion) -> None:
-        """Top-down grasps turn an object about the vertical only: the axis that points up
-        stays up."""
-        now, wanted = up_axis_orientation(current), up_axis_orientation(target)
-        if now != wanted:
-            raise SkillError(
-                "orientation_unreachable",
-                f"{object_id} lies {ORIENTATION_NAMES[now]}; a top-down grasp cannot set it "
-                f"down {ORIENTATION_NAMES[wanted]}",
-            )
+        """An object whose up axis must change is tilted first (:meth:`turn_over`): refused
+        only if the fingers span it across no axis that would turn it there (its size is
+        checked by :meth:`turn_over` itself, which has the scene)."""
+
+    def turn_over(
+        self, decision_id: str, item: SceneObject, target: Quaternion, scene: Scene
+    ) -> SceneObject:
+        """Tilt ``item`` on the counter until its up axis is ``target``'s (``dish_turning``):
+        the object as it then lies."""
+        wanted = up_axis_orientation(target)
+        if up_axis_orientation(item.orientation) == wanted:
+            return item
+        return turn_dish(self, decision_id, item, wanted, scene)
 
     def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3, is_open: bool) -> None:
         """Down onto the rack's handle tab (``grasp_points.rack_grip``), close across it,
@@ -251,7 +272,9 @@ class PandaMotionDriver(RobotDriver):
         shift = np.array([RACK_TRAVEL if is_open else -RACK_TRAVEL, 0.0, 0.0])
         # Yaw 0: the fingers close along y, across the tab.
         held = self._run(
-            decision_id, self._checked(lambda q: self.planner.slide(q, grip, shift, 0.0), ())
+            decision_id,
+            self._checked(lambda q: self.planner.slide(q, grip, shift, 0.0), ()),
+            home_around=(),
         )
         if held.gripper_width < self.min_grasp_width:
             self._open(decision_id, ())
@@ -309,7 +332,11 @@ class PandaMotionDriver(RobotDriver):
         def plan(q: np.ndarray) -> JointTrajectory:
             contact = None
             failure: SkillError | None = None
-            for planner, turn, carry in options:
+            # Last: across at the hand's own height, when it starts above the ceiling (just
+            # out of a rack's slot: coming down to the ceiling there meets the dish in it).
+            start_z = float(self.model.tcp_pose(q).translation[2])
+            high = [(p, t, start_z) for p in planners for t in (0.0, grasp.other_turn)]
+            for planner, turn, carry in options + (high if start_z > heights[-1] else []):
                 self._raise_if_stopped()  # a re-plan takes 50-500 ms: stop between them
                 try:
                     trajectory = make(planner, q, turn, carry)
@@ -355,13 +382,21 @@ class PandaMotionDriver(RobotDriver):
         return self.collision.first_contact(trajectory, obstacles)
 
     def _run(
-        self, decision_id: str, plan: Callable[[np.ndarray], JointTrajectory]
+        self,
+        decision_id: str,
+        plan: Callable[[np.ndarray], JointTrajectory],
+        home_around: tuple[Obstacle, ...] | None = None,
     ) -> JointTrajectoryResult:
-        """Plan from the arm's joints and execute; plan once more if the arm was elsewhere."""
+        """Plan from the arm's joints and execute; plan once more if the arm was elsewhere.
+        With ``home_around`` (the hand is empty): if nothing can be planned from where the
+        arm is, it goes home first (``GraspPlanner.home``, checked against those
+        obstacles) and plans from there."""
         if decision_id != self._decision:
             self._decision, self._decision_stops = decision_id, self._stops
         self._raise_if_stopped()
         q = self.transport.joint_positions()
+        if home_around is not None:
+            plan = self._homing_first(decision_id, plan, home_around)
         for _attempt in range(2):
             trajectory = plan(q)  # raises SkillError('no_ik_solution') before any motion
             self._raise_if_stopped()  # the stop (and maybe resume) came while planning
@@ -372,6 +407,29 @@ class PandaMotionDriver(RobotDriver):
                 raise SkillError(result.reason or "driver_error", result.detail)
             q = np.array(result.positions)
         raise SkillError("start_mismatch", "the arm keeps moving away from the planned start")
+
+    def _homing_first(
+        self,
+        decision_id: str,
+        plan: Callable[[np.ndarray], JointTrajectory],
+        obstacles: tuple[Obstacle, ...],
+    ) -> Callable[[np.ndarray], JointTrajectory]:
+        def from_home_if_stuck(q: np.ndarray) -> JointTrajectory:
+            try:
+                return plan(q)
+            except SkillError as exc:
+                if exc.reason != "no_ik_solution" or np.allclose(q, HOME_Q, atol=0.05):
+                    raise
+                homing = self.planner.home(q)
+                if self._contact(homing, obstacles) is not None:
+                    raise
+                log.info("going home first: %s", exc.detail)
+                result = self.transport.execute(self._command(decision_id, homing))
+                if not result.ok:
+                    raise
+                return plan(np.array(result.positions))
+
+        return from_home_if_stuck
 
     def _raise_if_stopped(self) -> None:
         if self._stopped:

@@ -11,16 +11,24 @@ the previous sample, so the hand really moves along the line and no joint flips 
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_skills.motion.ik import IKSolver
-from manigraph_skills.motion.model import PandaModel, top_down
+from manigraph_skills.motion.model import HOME_Q, PandaModel, top_down
 from manigraph_skills.motion.trajectory import JointTrajectory
 
 UP = np.array([0.0, 0.0, 1.0])
+#: Radians between IK samples while the hand turns (``GraspPlanner.pose_line``), and the
+#: most any joint may move between two samples.
+ANGLE_SPACING = 0.05
+MAX_JOINT_STEP = 0.3
+#: Joint-space samples of a move home (``GraspPlanner.home``).
+HOMING_SAMPLES = 30
 
 
 @dataclass(frozen=True)
@@ -142,6 +150,22 @@ class GraspPlanner:
         self.line(trajectory, above, self.yaw_of(q), False, c.slow_speed, "retreat")
         return trajectory
 
+    def home(self, q: np.ndarray, rise: float = 0.08) -> JointTrajectory:
+        """From ``q`` (hand empty): straight up by ``rise`` (as far as IK allows), then to the
+        home pose in joint space. For an arm left where no straight line leads on (a wrist
+        near its limit after turning a dish over): every motion plans well from home."""
+        c = self.config
+        trajectory = JointTrajectory()
+        trajectory.add(0.0, q, closed=False)
+        pose = self.model.tcp_pose(q)
+        with contextlib.suppress(SkillError):  # no straight rise from here: straight home
+            up = pin.SE3(pose.rotation, pose.translation + rise * UP)
+            self.pose_line(trajectory, up, False, c.slow_speed, "rise")
+        start = trajectory.final
+        path = start + np.linspace(0.0, 1.0, HOMING_SAMPLES)[:, None] * (HOME_Q - start)
+        trajectory.add_segment(path, False, 0.0, c.speed, self.joint_speed)
+        return trajectory
+
     # --- segments -------------------------------------------------------------------------
     def _transit(
         self,
@@ -186,8 +210,49 @@ class GraspPlanner:
         path = [q]
         for s in np.arange(1, count + 1) / count:
             pose = top_down(start + s * (end - start), first_yaw + s * (yaw - first_yaw))
-            path.append(self.ik.solve_or_raise(pose, path[-1], what, restart=False))
+            path.append(self._follow(pose, path[-1], what))
         trajectory.add_segment(np.array(path), closed, length, speed, self.joint_speed)
+
+    def pose_line(
+        self,
+        trajectory: JointTrajectory,
+        end: pin.SE3,
+        closed: bool,
+        speed: float,
+        what: str,
+    ) -> None:
+        """A straight TCP line from the trajectory's last point to the pose ``end``, the hand
+        turning about one fixed axis on the way (the geodesic between the two rotations):
+        the moves of the turn-over manoeuvre, where the hand is not top-down."""
+        q = trajectory.final
+        start = self.model.tcp_pose(q)
+        length = float(np.linalg.norm(end.translation - start.translation))
+        turn = pin.log3(start.rotation.T @ end.rotation)
+        angle = float(np.linalg.norm(turn))
+        if length < 1e-4 and angle < 1e-4:
+            return
+        count = max(
+            1,
+            int(np.ceil(length / self.config.sample_spacing)),
+            int(np.ceil(angle / ANGLE_SPACING)),
+        )
+        path = [q]
+        for s in np.arange(1, count + 1) / count:
+            rotation = start.rotation @ pin.exp3(s * turn)
+            position = start.translation + s * (end.translation - start.translation)
+            pose = pin.SE3(rotation, position)
+            path.append(self._follow(pose, path[-1], what))
+        # A turn in place is timed by the joints' speeds alone.
+        trajectory.add_segment(np.array(path), closed, length, speed, self.joint_speed)
+
+    def _follow(self, pose: pin.SE3, previous: np.ndarray, what: str) -> np.ndarray:
+        """IK for the next sample along a line, from the previous one; ``no_ik_solution``
+        if the descent found the pose only in another arm configuration (a joint clamped
+        at its limit, say): the arm would swing through the workspace between samples."""
+        q = self.ik.solve_or_raise(pose, previous, what, restart=False)
+        if float(np.max(np.abs(q - previous))) > MAX_JOINT_STEP:
+            raise SkillError("no_ik_solution", f"{what}: the arm would flip between samples")
+        return q
 
     def yaw_of(self, q: np.ndarray) -> float:
         rotation = self.model.tcp_pose(q).rotation

@@ -1,0 +1,199 @@
+"""The Panda drivers' turn-over manoeuvre: tilt a dish on the counter until its up axis is
+the one its placement asks for (``manigraph_skills.turn_over`` says which tilts;
+``motion.tilt`` plans them), Pinocchio-planned and arm-collision-checked like every motion.
+
+Each tilt: the usual top-down pick, with the fingers closing along the axis the dish turns
+about; the hand turned sideways and the dish set down on a free counter spot (where it was
+first, else a free neighbouring cell of the counter's 10 cm grid); let go and back off. The
+skill then takes the dish top-down, which finishes the turn about the vertical.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from manigraph_shared.errors import SkillError
+from manigraph_shared.messages import Scene, SceneObject, Vector3
+from manigraph_shared.orientations import ORIENTATION_NAMES
+from manigraph_shared.panda import FINGER_BELOW_TCP
+from manigraph_skills.drivers.base import Grasp
+from manigraph_skills.grasp_choice import room
+from manigraph_skills.motion.tilt import let_go_sideways, set_down_sideways
+from manigraph_skills.motion.trajectory import JointTrajectory
+from manigraph_skills.obstacles import Obstacle, scene_obstacles
+from manigraph_skills.turn_over import (
+    next_tilts,
+    quaternion_of,
+    rotation_of,
+    set_down_hands,
+    up_index,
+)
+
+if TYPE_CHECKING:
+    from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+
+log = logging.getLogger("manigraph.skills.turn_over")
+
+#: At most this many tilts per placement (two reach any orientation; one spare for a dish
+#: that settled otherwise than planned).
+MAX_TILTS = 3
+#: How far above the counter a turned dish is let go, metres, lowest first: the sideways
+#: hand and wrist need room under them.
+DROPS = (0.006, 0.02, 0.035)
+#: Other set-down spots: the physical counter grid's pitch (x, y), how far from every other
+#: dish's centre a spot must be, and how far from the robot's base (radius, metres; nearer,
+#: top-down grasps have no IK solution) and along x (beyond it the racks slide out over the
+#: counter).
+SPOT_PITCH = np.array([0.08, 0.1])
+SPOT_FREE = 0.09
+SPOT_RADIUS = (0.29, 0.6)
+SPOT_MAX_X = 0.46
+MAX_SPOTS = 4
+SPARE_Y = 0.42
+SPARE_X = (0.36, 0.44)
+#: Lowest TCP for a top-down grasp: the fingertips (``FINGER_BELOW_TCP`` under it) stay this
+#: far above the counter.
+FINGERTIP_CLEARANCE = 0.002
+
+
+def set_down_spots(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np.ndarray]:
+    """Where the dish may be set down turned (x, y): where it is, a free neighbouring cell
+    within reach, then spare spots beside the counter."""
+    others = [
+        np.array(o.position.as_tuple()[:2])
+        for o in scene.objects
+        if o.id != item.id and o.visible and o.position.z < 0.1  # on the counter
+    ]
+    spots = [here[:2].copy()]
+    # Beyond the counter's side columns (|y| <= 0.31 m) nothing ever lies: the spare spots,
+    # on the dish's side first.
+    side = 1.0 if here[1] >= 0 else -1.0
+    spare = [np.array([x, s * SPARE_Y]) for s in (side, -side) for x in SPARE_X]
+    offsets = [np.array([dx, dy]) * SPOT_PITCH for dx in (-1, 0, 1) for dy in (-1, 0, 1)]
+    offsets.sort(key=lambda o: float(np.linalg.norm(o)))
+    for offset in offsets[1:]:
+        spot = here[:2] + offset
+        radius = float(np.linalg.norm(spot))
+        if not SPOT_RADIUS[0] <= radius <= SPOT_RADIUS[1] or spot[0] > SPOT_MAX_X:
+            continue
+        if all(np.linalg.norm(spot - other) >= SPOT_FREE for other in others):
+            spots.append(spot)
+    free = [s for s in spare if all(np.linalg.norm(s - o) >= SPOT_FREE for o in others)]
+    return spots[: MAX_SPOTS - 1] + free[:2]
+
+
+def grasp_height_for(centre_z: float) -> float:
+    """TCP above a dish's centre for a top-down grasp: at the centre unless the fingertips
+    would touch the counter (a plate lying flat)."""
+    return max(0.0, FINGER_BELOW_TCP + FINGERTIP_CLEARANCE - centre_z)
+
+
+def turn_dish(
+    driver: PandaMotionDriver, decision_id: str, item: SceneObject, target: int, scene: Scene
+) -> SceneObject:
+    """Tilt ``item`` until its up axis is ``target``; the dish as it then lies (its position
+    observed when the transport can, its orientation as turned)."""
+    position = np.array(item.position.as_tuple())
+    dish = rotation_of(item.orientation)
+    for _ in range(MAX_TILTS):
+        if up_index(dish) == target:
+            break
+        position, dish = _tilt_once(driver, decision_id, item, target, scene, position, dish)
+    if up_index(dish) != target:
+        raise SkillError(
+            "orientation_unreachable", f"{item.id} did not turn {ORIENTATION_NAMES[target]}"
+        )
+    return item.model_copy(
+        update={"position": _vector(position), "orientation": quaternion_of(dish)}
+    )
+
+
+def _tilt_once(
+    driver: PandaMotionDriver,
+    decision_id: str,
+    item: SceneObject,
+    target: int,
+    scene: Scene,
+    position: np.ndarray,
+    dish: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One tilt of ``item`` (centre at ``position``, rotation ``dish``) towards up axis
+    ``target``: where it then lies and its rotation."""
+    size = np.array(item.size.as_tuple())
+    candidates = next_tilts(dish, size, target)
+    if not candidates:
+        raise SkillError(
+            "orientation_unreachable",
+            f"{item.id} lies {ORIENTATION_NAMES[up_index(dish)]}; the fingers span it "
+            f"across no axis that turns it {ORIENTATION_NAMES[target]}",
+        )
+    wanted = list(dict.fromkeys([target, *(t.up_after for t in candidates)]))
+    current = item.model_copy(update={"position": _vector(position)})
+    height = grasp_height_for(float(position[2]))
+    grasp = Grasp(height, 0.0, 0.0, scene_obstacles(scene, current, position), np.pi)
+    tcp = position + np.array([0.0, 0.0, height])
+    # Closing along the axis with more room beside the dish first (``grasp_choice.room``).
+    yaws = list(dict.fromkeys(t.pick_yaw for t in candidates))
+    yaws.sort(
+        key=lambda yaw: -room(scene, tcp, 0 if abs(np.sin(yaw)) > abs(np.cos(yaw)) else 1, item.id)
+    )
+    driver.pick_at(decision_id, item.id, tcp, yaws[0], grasp)
+    hand = driver.model.tcp_pose(driver.transport.joint_positions()).rotation
+    held = hand.T @ dish
+    # The dish's centre from the TCP, in the hand's frame (the grasp may be above it).
+    centre_in_hand = hand.T @ np.array([0.0, 0.0, -height])
+    chosen: list[tuple[np.ndarray, np.ndarray, tuple[Obstacle, ...]]] = []
+
+    def plan(q: np.ndarray) -> JointTrajectory:
+        failure: SkillError | None = None
+        contact = None
+        for spot in set_down_spots(scene, current, position):
+            obstacles = scene_obstacles(scene, current, np.array([*spot, 0.0]))
+            for side in set_down_hands(hand, dish, wanted):
+                up = up_index(side @ held)
+                half = float(size[[2, 2, 1, 1, 0, 0][up]]) / 2
+                for drop in DROPS:
+                    driver._raise_if_stopped()
+                    centre = np.array([*spot, half + drop])
+                    try:
+                        trajectory = set_down_sideways(
+                            driver.planner, q, side, centre - side @ centre_in_hand
+                        )
+                    except SkillError as exc:
+                        failure = failure or exc
+                        continue
+                    found = driver._contact(trajectory, obstacles)
+                    if found is None:
+                        log.info(
+                            "setting %s down turned at %s, fingers towards %s",
+                            item.id,
+                            np.round(centre, 3),
+                            np.round(side[:, 2], 2),
+                        )
+                        chosen[:] = [(side, centre, obstacles)]
+                        return trajectory
+                    contact = contact or found
+        if contact is not None:
+            raise SkillError("collision", f"turning {item.id} over: {contact}")
+        raise failure or SkillError("no_ik_solution", f"no spot to set {item.id} down")
+
+    try:
+        driver._run(decision_id, plan)
+    except SkillError as exc:
+        if exc.reason in ("collision", "no_ik_solution"):
+            driver._put_back(decision_id, item.id)
+        raise
+    side, centre, obstacles = chosen[0]
+    released = driver._run(
+        decision_id, driver._checked(lambda q: let_go_sideways(driver.planner, q), obstacles)
+    )
+    seen = driver.transport.object_position(item.id, after=released.stamp)
+    log.info("turned %s %s", item.id, ORIENTATION_NAMES[up_index(side @ held)])
+    return (seen if seen is not None else centre), side @ held
+
+
+def _vector(point: np.ndarray) -> Vector3:
+    return Vector3(x=float(point[0]), y=float(point[1]), z=float(point[2]))
