@@ -9,17 +9,26 @@ tower's top (0.28 m), and dragged across it.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from manigraph_shared.messages import (
     GoalCategory,
+    JointTrajectoryCommand,
+    JointTrajectoryResult,
     ObjectCategory,
+    Quaternion,
     Scene,
     SceneGoal,
     SceneObject,
     Vector3,
 )
+from manigraph_skills.drivers.base import Motion
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.grasp_choice import choose_grasps
-from manigraph_skills.motion import HOME_Q, GraspPlanner, PandaModel
+from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, JointTrajectory, PandaModel
+from manigraph_skills.motion.collision import ArmCollisionModel
+from manigraph_skills.motion.model import top_down
+from manigraph_skills.motion.plan import turn_ways
 
 SIDE = 0.04
 TOWER = (0.5, 0.2)
@@ -69,3 +78,101 @@ def test_towers_the_ceiling_already_clears_keep_the_planners_heights() -> None:
     scene = _tower(6)
     _, place = choose_grasps(scene, scene.object("block_5"), scene.goals[0].position)
     assert place.carry_z < GraspPlanner(PandaModel()).config.max_carry_z
+
+
+class PerfectArm:
+    """Executes every trajectory exactly and holds a block after closing (the hardware
+    boundary of the driver)."""
+
+    def __init__(self, q: np.ndarray) -> None:
+        self.q = q
+        self.sent: list[JointTrajectoryCommand] = []
+
+    def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
+        self.sent.append(command)
+        self.q = np.array(command.points[-1].positions)
+        closed = command.points[-1].gripper.value == "closed"
+        return JointTrajectoryResult(
+            command_id=command.command_id,
+            ok=True,
+            positions=self.q.tolist(),
+            gripper_width=0.04 if closed else 0.08,
+            stamp=1.0,
+        )
+
+    def joint_positions(self) -> np.ndarray:
+        return self.q.copy()
+
+    def object_position(self, object_id: str, after: float) -> np.ndarray | None:
+        return None
+
+
+def test_after_topping_an_eight_block_tower_the_hand_moves_off_before_coming_down() -> None:
+    # K = 9 stacking failed here (validation seeds 1002, 1009, 1010, 1016): the hand has set
+    # the eighth block on the goal tower (top 0.32 m) and retreated to 0.36 m; every plan to
+    # the last block first came down to the 0.30 m ceiling where it was, fingers into the
+    # tower's top block, and was refused as a collision on every re-plan.
+    goal_xy = (0.525, 0.0)
+    tower = [
+        SceneObject(
+            id=f"block_{8 - i}",
+            category=ObjectCategory.BLOCK,
+            position=Vector3(x=goal_xy[0], y=goal_xy[1], z=(i + 0.5) * SIDE),
+            size=Vector3(x=SIDE, y=SIDE, z=SIDE),
+        )
+        for i in range(8)
+    ]
+    last = SceneObject(
+        id="block_0",
+        category=ObjectCategory.BLOCK,
+        position=Vector3(x=0.63, y=0.076, z=SIDE / 2),
+        size=Vector3(x=SIDE, y=SIDE, z=SIDE),
+    )
+    top_goal = Vector3(x=goal_xy[0], y=goal_xy[1], z=8.5 * SIDE)
+    scene = Scene(episode_id="e", stamp=0.0, sequence=0, objects=[*tower, last], goals=[])
+    model = PandaModel()
+    yaw = GraspPlanner(model).config.hand_yaw
+    retreated = np.array([*goal_xy, 7.5 * SIDE + 0.003 + 0.06])  # release + approach
+    arm = PerfectArm(IKSolver(model).solve_or_raise(top_down(retreated, yaw), HOME_Q, "start"))
+    pick, place = choose_grasps(scene, last, top_goal)
+    driver = PandaMotionDriver(arm)
+    driver.pick(Motion("e:0", last.id, last.position, last.orientation, pick))
+    driver.place(Motion("e:0", last.id, top_goal, Quaternion(), place))
+    collision = ArmCollisionModel(model)
+    picked, carried, _released = arm.sent
+    assert collision.first_contact(trajectory_of(picked), pick.obstacles) is None
+    assert collision.first_contact(trajectory_of(carried), place.obstacles) is None
+    assert np.allclose(
+        model.tcp_pose(np.array(carried.points[-1].positions)).translation[:2], goal_xy, atol=1e-3
+    )
+
+
+def test_a_hand_read_back_across_the_angle_wrap_turns_the_short_way() -> None:
+    # K = 9, validation seed 1004: the last block, near the robot's side, picked with the hand
+    # turned a quarter (yaw pi + a little) to keep the forearm off the goal tower, reads back
+    # as -pi + a little; turning from there to the place's yaw "directly" spun the wrist
+    # 270 or 360 degrees into its joint limit (``no_ik_solution`` on the way across).
+    model = PandaModel()
+    planner = GraspPlanner(model)
+    start = IKSolver(model).solve_or_raise(
+        top_down(np.array([0.3, -0.259, 0.1]), np.pi + 0.02), HOME_Q, "start"
+    )
+    assert planner.yaw_of(start) < 0  # read back across the wrap
+    for yaw in (np.pi / 2, np.pi):
+        place = planner.place(start, np.array([0.355, -0.084, 0.343]), yaw)
+        turned = planner.yaw_of(place.final)
+        assert np.isclose(np.cos(turned - yaw), 1.0)
+
+
+def test_turn_ways_prefers_the_short_turn_and_keeps_the_long_one() -> None:
+    # From yaw -pi + 0.01 (that is, pi + 0.01) to pi/2: a quarter turn down, not 3/4 up.
+    short, long = turn_ways(-np.pi + 0.01, np.pi / 2)
+    assert short == pytest.approx(-3 * np.pi / 2) and long == pytest.approx(np.pi / 2)
+    assert turn_ways(0.1, 0.3)[0] == pytest.approx(0.3)
+
+
+def trajectory_of(command: JointTrajectoryCommand) -> JointTrajectory:
+    trajectory = JointTrajectory()
+    for point in command.points:
+        trajectory.add(point.time_from_start, np.array(point.positions), point.gripper == "closed")
+    return trajectory

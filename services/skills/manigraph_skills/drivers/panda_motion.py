@@ -60,10 +60,11 @@ from manigraph_skills.obstacles import Obstacle
 
 log = logging.getLogger("manigraph.skills.motion")
 
-#: After the planned motion collides: the carry height as chosen, then the planner's
-#: ceiling (``PlanConfig.max_carry_z``); at each, the arm as planned and with its elbow swung
-#: to either side of the target's bearing (``ELBOW_SWING``), each with the hand as chosen and
-#: turned a quarter (a block or a square cover is held the same either way).
+#: After the planned motion collides: the carry height as chosen, then the hand's own
+#: height if it is above the planner's ceiling, then the ceiling (``PlanConfig.max_carry_z``);
+#: at each, the arm as planned and with its elbow swung to either side of the target's bearing
+#: (``ELBOW_SWING``), each with the hand as chosen and turned a quarter (a block or a square
+#: cover is held the same either way).
 QUARTER = np.pi / 2
 #: Gains of the null-space elbow swing (``IKSolver.elbow_push``), gentle first: it acts at
 #: every IK sample along the motion, so it adds up over a long one (at 0.05 the elbow of a
@@ -314,7 +315,6 @@ class PandaMotionDriver(RobotDriver):
         """``make(planner, q, turn, carry_z)`` as planned; if an arm link would touch
         something, re-planned with the hand turned, the elbow swung aside and higher, until
         one is clear."""
-        heights = [grasp.carry_z, max(grasp.carry_z, self.planner.config.max_carry_z)]
         bearing = float(np.arctan2(target[1], target[0]))
         aside = np.array([-np.sin(bearing), np.cos(bearing), 0.0])
         planners = [self.planner] + [
@@ -322,14 +322,14 @@ class PandaMotionDriver(RobotDriver):
             for gain in ELBOW_SWING
             for side in (1.0, -1.0)
         ]
-        options = [
-            (planner, turn, carry)
-            for carry in heights
-            for planner in planners
-            for turn in (0.0, grasp.other_turn)
-        ]
 
         def plan(q: np.ndarray) -> JointTrajectory:
+            options = [
+                (planner, turn, carry)
+                for carry in self._carry_heights(q, grasp.carry_z)
+                for planner in planners
+                for turn in (0.0, grasp.other_turn)
+            ]
             contact = None
             failure: SkillError | None = None
             # Last: across at the hand's own height, when it starts above the ceiling (just
@@ -361,6 +361,24 @@ class PandaMotionDriver(RobotDriver):
             raise failure
 
         return plan
+
+    def _carry_heights(self, q: np.ndarray, carry_z: float) -> list[float]:
+        """The carry heights to plan at, in turn: as chosen; the hand's own height, if it is
+        above the planner's ceiling (``PlanConfig.max_carry_z``); the ceiling.
+
+        A hand above the ceiling first comes down to it where it is, before moving across.
+        After setting a block on a tower taller than the ceiling (K = 9: its top at 0.36 m)
+        the hand retreats above it, and coming down there would put the fingers into the
+        tower's top block, on every re-plan at or under the ceiling; moving across at the
+        hand's own height first does not."""
+        ceiling = self.planner.config.max_carry_z
+        hand = float(self.model.tcp_pose(q).translation[2])
+        heights = [carry_z]
+        if hand > max(ceiling, carry_z):
+            heights.append(hand)
+        if ceiling > carry_z:
+            heights.append(ceiling)
+        return heights
 
     def _checked(
         self, make: Callable[[np.ndarray], JointTrajectory], obstacles: tuple[Obstacle, ...]

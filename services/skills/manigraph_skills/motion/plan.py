@@ -73,6 +73,18 @@ def grasp_yaw(quaternion_xyzw: tuple[float, float, float, float]) -> float:
     return float((yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4)
 
 
+def turn_ways(start_yaw: float, yaw: float) -> tuple[float, float]:
+    """``yaw`` as the end of a turn from ``start_yaw``: the short way round first, then the
+    long way (the same pose; the wrist's joint limit may allow only one of them).
+
+    Yaws are angles: a hand picked at yaw pi - 0.01 reads back as -pi + 0.01, and turning
+    from there to pi/2 "directly" spins the wrist 270 degrees into its joint limit
+    (``no_ik_solution`` across the table, where a quarter turn back was all it took)."""
+    short = (yaw - start_yaw + np.pi) % (2 * np.pi) - np.pi
+    long = short - 2 * np.pi if short > 0 else short + 2 * np.pi
+    return start_yaw + short, start_yaw + long
+
+
 class GraspPlanner:
     """Plans pick and place trajectories for the Panda from its current joint state."""
 
@@ -184,8 +196,17 @@ class GraspPlanner:
         carry = max(c.min_carry_z, min(start[2], c.max_carry_z), target[2], carry_z)
         speed = self.config.speed
         self.line(trajectory, [*start[:2], carry], start_yaw, closed, speed, f"{what} carry height")
-        self.line(trajectory, [*target[:2], carry], yaw, closed, speed, what, start_yaw)
-        self.line(trajectory, target, yaw, closed, speed, what)
+        across = [*target[:2], carry]
+        turns = turn_ways(start_yaw, yaw)
+        for index, end_yaw in enumerate(turns):
+            try:
+                self.line(trajectory, across, end_yaw, closed, speed, what, start_yaw)
+            except SkillError:
+                if index == len(turns) - 1:
+                    raise
+                continue  # a failed line adds nothing: try the other way round
+            break
+        self.line(trajectory, target, end_yaw, closed, speed, what)
 
     def line(
         self,
