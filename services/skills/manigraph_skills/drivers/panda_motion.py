@@ -332,11 +332,7 @@ class PandaMotionDriver(RobotDriver):
             ]
             contact = None
             failure: SkillError | None = None
-            # Last: across at the hand's own height, when it starts above the ceiling (just
-            # out of a rack's slot: coming down to the ceiling there meets the dish in it).
-            start_z = float(self.model.tcp_pose(q).translation[2])
-            high = [(p, t, start_z) for p in planners for t in (0.0, grasp.other_turn)]
-            for planner, turn, carry in options + (high if start_z > heights[-1] else []):
+            for planner, turn, carry in options:
                 self._raise_if_stopped()  # a re-plan takes 50-500 ms: stop between them
                 try:
                     trajectory = make(planner, q, turn, carry)
@@ -370,7 +366,7 @@ class PandaMotionDriver(RobotDriver):
         After setting a block on a tower taller than the ceiling (K = 9: its top at 0.36 m)
         the hand retreats above it, and coming down there would put the fingers into the
         tower's top block, on every re-plan at or under the ceiling; moving across at the
-        hand's own height first does not."""
+        hand's own height first does not; nor, just out of a rack's slot, into the dish in it."""
         ceiling = self.planner.config.max_carry_z
         hand = float(self.model.tcp_pose(q).translation[2])
         heights = [carry_z]
