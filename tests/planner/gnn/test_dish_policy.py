@@ -10,9 +10,9 @@ import torch
 from manigraph_lab.demos import DemoProtocol, record_demos
 from manigraph_planner.gnn.checkpoint import load_checkpoint, save_checkpoint
 from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC, dish_scene_to_graph
-from manigraph_planner.gnn.models.dish_net import DishPolicyNet
+from manigraph_planner.gnn.models.dish_net import DishHeads, DishPolicyNet
 from manigraph_planner.policies import load_policy
-from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
+from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy, decision_from_heads
 from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
 from manigraph_planner.training.dishwasher import (
     DishTrainConfig,
@@ -109,6 +109,19 @@ def test_the_policy_decodes_a_tray_action_or_a_feasible_placement() -> None:
         assert decision.orientation_index is not None
     else:
         assert decision.object_id == decision.goal_id == decision.tray_action.rack_id
+
+
+def test_a_placement_with_both_racks_in_becomes_the_more_likely_toggle() -> None:
+    """Both racks start in: no dish can be placed, so a tray head that says "none" is read
+    as its more likely toggle rather than as nothing to do (which ends the episode)."""
+    graph = dish_scene_to_graph(scene(4))
+    n = graph.x.shape[0]
+    heads = DishHeads(torch.zeros(n), torch.zeros(n, 6), torch.tensor([0.5, 1.0, 3.0]))
+    decision = decision_from_heads(graph, heads)
+    assert decision is not None and decision.tray_action.value == "toggle_bottom"
+    heads = DishHeads(torch.zeros(n), torch.zeros(n, 6), torch.tensor([2.0, 1.0, 3.0]))
+    decision = decision_from_heads(graph, heads)
+    assert decision is not None and decision.object_id == decision.goal_id == "rack_top"
 
 
 def test_ranked_alternatives_start_with_the_decision_and_offer_every_loadable_dish() -> None:

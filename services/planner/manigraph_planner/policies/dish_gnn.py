@@ -19,6 +19,7 @@ __all__ = ["DishwasherGNNPolicy", "decision_from_heads"]
 
 #: Slot category code (dish_features) that each dish code fills: plate 0 -> 2, bowl 1 -> 3.
 _SLOT_FOR_DISH = {0: 2, 1: 3}
+_NONE_INDEX = TRAY_ACTIONS.index(TrayAction.NONE)
 
 
 class DishwasherGNNPolicy(Policy):
@@ -71,20 +72,30 @@ class DishwasherGNNPolicy(Policy):
 
 
 def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
-    """The decision the four heads of one graph make (see :class:`DishwasherGNNPolicy`)."""
-    tray = TRAY_ACTIONS[int(heads.tray.argmax())]
+    """The decision the four heads of one graph make (see :class:`DishwasherGNNPolicy`).
+
+    "None" (PickAndPlace) when no dish fits a free slot of a usable rack is an action the
+    world would refuse, like the pairs :func:`_pair_scores` leaves out: then the tray head's
+    more likely toggle is the decision (a net that has not yet learnt to pull a rack out for
+    more dishes than it was shown would otherwise stop before the first move)."""
+    scores = _pair_scores(graph, heads)
+    tray_logits = heads.tray if scores is not None else _without_none(heads.tray)
+    tray = TRAY_ACTIONS[int(tray_logits.argmax())]
     if tray is not TrayAction.NONE:
         rack = tray.rack_id
         assert rack is not None
         return Decision(rack, rack, None, tray)
-    scores = _pair_scores(graph, heads)
-    if scores is None:
-        return None
+    assert scores is not None
     m = graph.num_goals
     flat = int(scores.flatten().argmax())
     o, g = flat // m, flat % m
     orientation = int(heads.orientation[o].argmax())
     return Decision(graph.object_ids[o], graph.goal_ids[g], orientation)
+
+
+def _without_none(tray: torch.Tensor) -> torch.Tensor:
+    """The tray logits with "none" ruled out."""
+    return tray.masked_fill(torch.arange(len(TRAY_ACTIONS)) == _NONE_INDEX, float("-inf"))
 
 
 def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[Decision]:

@@ -5,8 +5,8 @@ held, changed only where that cannot change what the expert would do.
 The five demonstrations all hold 10 dishes (5 plates, 5 bowls); the policy is tested on 6 to
 12. Without more dishes, a network never sees a sixth plate still waiting when five stand
 in the rack, and may push the rack in before it (the 12-dish failures of the table).
-:func:`add_dishes` is meant against that (``DishTrainConfig.grow_copies``, off until the
-table is re-run with it; see docs/dishwasher.md).
+:func:`add_dishes` is meant against that (``DishTrainConfig.grow_copies``; see
+docs/dishwasher.md).
 """
 
 from __future__ import annotations
