@@ -10,6 +10,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from manigraph_planner.threads import add_threads_option, use_threads
 from manigraph_shared.cli import Command
 from manigraph_shared.options import (
     Interval,
@@ -119,14 +120,13 @@ def _suite_configure(parser: argparse.ArgumentParser) -> None:
         default=0,
         help="first episode seed of the table (reported: 0; choosing a recipe: 1000+)",
     )
+    add_threads_option(parser)
 
 
 def _suite_run(args: argparse.Namespace) -> int:
-    import torch
-
     from manigraph_lab.suite import run_suite
 
-    torch.set_num_threads(2)
+    use_threads(args.threads)
     run_suite(
         args.out,
         args.archs,
@@ -153,14 +153,13 @@ def _select_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", type=Path, required=True, help="where the kept one goes")
     parser.add_argument("--episodes", type=int, default=30, help="validation episodes per cell")
     parser.add_argument("--table", type=Path, help="also write the Markdown table here")
+    add_threads_option(parser)
 
 
 def _select_run(args: argparse.Namespace) -> int:
-    import torch
-
     from manigraph_lab.selection import select_checkpoint
 
-    torch.set_num_threads(2)
+    use_threads(args.threads)
     chosen, table = select_checkpoint(
         args.checkpoints, args.output, args.episodes, progress=sys.stderr
     )

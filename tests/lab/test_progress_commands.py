@@ -72,3 +72,14 @@ def test_train_takes_its_thread_count_and_refuses_zero(
         assert torch.get_num_threads() == 1 and checkpoint.exists()
     finally:
         torch.set_num_threads(before)
+
+
+def test_suite_and_select_refuse_zero_threads_before_any_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "suite"
+    assert main(["suite", "--out", str(out), "--archs", "gcn", "--threads", "0"]) == 2
+    assert "threads" in capsys.readouterr().err and not out.exists()
+    kept = tmp_path / "kept.pt"
+    assert main(["select", str(tmp_path / "a.pt"), "-o", str(kept), "--threads", "0"]) == 2
+    assert "threads" in capsys.readouterr().err and not kept.exists()

@@ -59,6 +59,50 @@ def test_a_block_dropped_beside_a_stack_rests_on_the_table() -> None:
     assert rest[2] == pytest.approx(0.5 * BLOCK_SIZE)
 
 
+def pyramid_missing_one() -> GeometricWorld:
+    """A 6-pyramid with its bottom row and the middle row's left block in place, and a
+    spare block on the table."""
+    from manigraph_sim.tasks.pyramid import pyramid_goals
+
+    goals = pyramid_goals(np.array([0.5, 0.0, 0.0]), 6)
+    present = [goals[i] for i in (0, 1, 2, 3)]  # bottom row and the middle row's left block
+    bodies = [Body(f"b{i}", "block", SIZE.copy(), g.position.copy()) for i, g in enumerate(present)]
+    bodies.append(block("spare", 0.35, -0.2, 0))
+    return GeometricWorld(bodies, goals)
+
+
+def test_a_block_set_on_a_pyramid_top_over_one_block_tips_off_into_the_gap() -> None:
+    world = pyramid_missing_one()
+    top, missing = world.goals["goal_5"], world.goals["goal_4"]
+    world.pick("spare")
+    rest = world.place("spare", top.position)
+    # its centre was 2 mm past the edge of the one block under it: it tips off that edge and
+    # lands one level lower, beside it, which is the missing middle block's goal
+    assert rest[2] == pytest.approx(missing.position[2])
+    assert world.occupancy().get("goal_5") is None
+    assert world.occupancy()["goal_4"] == "spare"
+
+
+def test_a_block_centred_over_two_blocks_or_a_stack_stays() -> None:
+    world = pyramid_missing_one()
+    world.pick("b3")  # the middle row's left block, onto the right one's goal: two under it
+    world.place("b3", world.goals["goal_4"].position)
+    assert world.occupancy()["goal_4"] == "b3"
+    world = two_stack_world()
+    world.pick("b")
+    rest = world.place("b", np.array([0.5 + 0.019, 0.0, 0.2]))  # 1 mm inside a's edge
+    assert rest == pytest.approx([0.519, 0.0, 1.5 * BLOCK_SIZE])
+
+
+def test_a_block_overhanging_a_single_block_slides_off_to_the_table() -> None:
+    world = two_stack_world()
+    world.pick("b")
+    rest = world.place("b", np.array([0.5 + 0.025, 0.0, 0.2]))  # centre 5 mm past the edge
+    assert rest[2] == pytest.approx(0.5 * BLOCK_SIZE)
+    assert rest[0] == pytest.approx(0.5 + BLOCK_SIZE + 0.002)  # just beyond a's edge
+    assert world.support_extent(rest, SIZE, ignore="b") is None
+
+
 def test_gripper_holds_one_object_at_a_time() -> None:
     world = GeometricWorld([block("a", 0.5, 0, 0), block("c", 0.6, 0, 0)], [])
     world.pick("a")

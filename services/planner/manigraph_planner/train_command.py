@@ -12,6 +12,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from manigraph_planner.threads import add_threads_option, use_threads
 from manigraph_shared.cli import Command
 
 
@@ -39,13 +40,7 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         type=int,
         help="draw fresh copies every N epochs (default: 10; gcn: 0, never)",
     )
-    parser.add_argument(
-        "--threads",
-        type=int,
-        default=2,
-        help="torch threads (default 2); 1 on a busy machine: threads that wait for each other "
-        "on a loaded CPU made an epoch 50x slower here",
-    )
+    add_threads_option(parser)
     parser.add_argument("-o", "--output", type=Path, help="checkpoint (default checkpoints/)")
 
 
@@ -66,13 +61,7 @@ def _heads(args: argparse.Namespace) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    import torch
-
-    from manigraph_shared.errors import ConfigError
-
-    if args.threads < 1:
-        raise ConfigError("threads", f"must be >= 1, got {args.threads}")
-    torch.set_num_threads(args.threads)
+    use_threads(args.threads)
     if _heads(args) == "dishwasher":
         return _train_dishwasher(args)
     from manigraph_planner.gnn import save_checkpoint

@@ -3,6 +3,9 @@
 Bodies are axis-aligned boxes. A body rests on the highest body under its footprint, or on the
 table; picking a body that has another body on top of it fails; a body released above a goal
 falls until it rests on something, so a goal is filled only when what is below it is there.
+A body whose centre is not over what it lands on tips off over the edge it overhangs and
+falls again (a block set on a pyramid's top goal with one of the two blocks under it
+missing ends beside the other, one level lower), as it would on a real table.
 Containers (open-top boxes) are static: a body that fits inside rests on the floor, a wider
 one (a cover) rests on the rim and closes the box; what is inside a closed box can be hidden.
 """
@@ -18,6 +21,19 @@ from manigraph_sim.world_model import CONTACT_MARGIN, Body, Container, Goal
 def footprints_overlap(a_pos: np.ndarray, a_size: np.ndarray, b: Body) -> bool:
     gap = np.abs(a_pos[:2] - b.position[:2]) - (a_size[:2] + b.size[:2]) / 2
     return bool(np.all(gap < -CONTACT_MARGIN))
+
+
+#: Times a released body may tip off an edge before it is left where it lands.
+MAX_TIPS = 4
+
+
+def overlap_extent(
+    a_pos: np.ndarray, a_size: np.ndarray, b_pos: np.ndarray, b_size: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The (lo, hi) corners in x, y of where two footprints overlap."""
+    lo = np.maximum(a_pos[:2] - a_size[:2] / 2, b_pos[:2] - b_size[:2] / 2)
+    hi = np.minimum(a_pos[:2] + a_size[:2] / 2, b_pos[:2] + b_size[:2] / 2)
+    return lo, hi
 
 
 class GeometricWorld:
@@ -65,6 +81,59 @@ class GeometricWorld:
             if other.id != ignore and footprints_overlap(position, size, other):
                 floor = max(floor, other.top)
         return floor + float(size[2]) / 2
+
+    def support_extent(
+        self, position: np.ndarray, size: np.ndarray, ignore: str
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """The x, y bounding box of what holds a body resting at ``position``: the tops and
+        container rims its bottom touches. ``None`` on the table (or a container's floor),
+        which holds anything."""
+        bottom = float(position[2] - size[2] / 2)
+        if bottom <= self.table_z + CONTACT_MARGIN:
+            return None
+        corners: list[tuple[np.ndarray, np.ndarray]] = []
+        for box in self.containers:
+            rim = self.table_z + box.height
+            if abs(rim - bottom) <= CONTACT_MARGIN and box.touches(position, size):
+                outer = np.append(box.inner + 2 * box.wall, 0.0)
+                corners.append(overlap_extent(position, size, np.append(box.centre, 0.0), outer))
+        for other in self.resting():
+            if (
+                other.id != ignore
+                and abs(other.top - bottom) <= CONTACT_MARGIN
+                and footprints_overlap(position, size, other)
+            ):
+                corners.append(overlap_extent(position, size, other.position, other.size))
+        if not corners:
+            return None
+        return np.min([lo for lo, _ in corners], axis=0), np.max([hi for _, hi in corners], axis=0)
+
+    def tip_shift(self, position: np.ndarray, size: np.ndarray, ignore: str) -> np.ndarray | None:
+        """How far (x, y) a body resting at ``position`` slides as it tips off the edge its
+        centre overhangs, to lie just beyond that edge; ``None`` if its centre is supported."""
+        extent = self.support_extent(position, size, ignore)
+        if extent is None:
+            return None
+        lo, hi = extent
+        centre = position[:2]
+        if np.all(centre >= lo) and np.all(centre <= hi):
+            return None
+        beyond_hi = hi + size[:2] / 2 + CONTACT_MARGIN - centre
+        beyond_lo = lo - size[:2] / 2 - CONTACT_MARGIN - centre
+        return np.where(centre > hi, beyond_hi, np.where(centre < lo, beyond_lo, 0.0))
+
+    def settle(self, position: np.ndarray, size: np.ndarray, ignore: str) -> np.ndarray:
+        """Where a body of ``size`` released above ``position`` comes to rest, tipping off
+        edges it overhangs (at most ``MAX_TIPS`` times)."""
+        rest = np.array(position, dtype=float)
+        rest[2] = self.rest_height(rest, size, ignore)
+        for _ in range(MAX_TIPS):
+            shift = self.tip_shift(rest, size, ignore)
+            if shift is None:
+                break
+            rest[:2] += shift
+            rest[2] = self.rest_height(rest, size, ignore)
+        return rest
 
     def is_closed(self, box: Container) -> bool:
         """A body rests on the rim over the whole opening."""
@@ -128,8 +197,7 @@ class GeometricWorld:
         if self.held != body_id:
             raise SkillError("not_holding", f"not holding {body_id}")
         body = self.bodies[body_id]
-        rest = np.array(target, dtype=float)
-        rest[2] = self.rest_height(rest, body.size, ignore=body_id)
+        rest = self.settle(target, body.size, ignore=body_id)
         body.position = rest
         self.held = None
         return rest
