@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from arm_helpers import PerfectArm, trajectory_of
 
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
     GoalCategory,
-    JointTrajectoryCommand,
-    JointTrajectoryResult,
     ObjectCategory,
     Quaternion,
     Scene,
@@ -29,33 +28,6 @@ from manigraph_skills.obstacles import Obstacle, box_walls
 BLOCK = 0.04
 
 
-class PerfectArm:
-    """Executes every trajectory exactly and holds a block after closing (the hardware
-    boundary of the driver)."""
-
-    def __init__(self) -> None:
-        self.q = HOME_Q.copy()
-        self.sent: list[JointTrajectoryCommand] = []
-
-    def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
-        self.sent.append(command)
-        self.q = np.array(command.points[-1].positions)
-        closed = command.points[-1].gripper.value == "closed"
-        return JointTrajectoryResult(
-            command_id=command.command_id,
-            ok=True,
-            positions=self.q.tolist(),
-            gripper_width=0.04 if closed else 0.08,
-            stamp=1.0,
-        )
-
-    def joint_positions(self) -> np.ndarray:
-        return self.q.copy()
-
-    def object_position(self, object_id: str, after: float) -> np.ndarray | None:
-        return None
-
-
 def block(name: str, x: float, y: float, level: int = 0) -> SceneObject:
     return SceneObject(
         id=name,
@@ -71,13 +43,6 @@ def tower(name: str, x: float, y: float, height: int) -> list[SceneObject]:
 
 def scene(*objects: SceneObject, goals: tuple[SceneGoal, ...] = ()) -> Scene:
     return Scene(episode_id="e", stamp=1.0, sequence=0, objects=list(objects), goals=list(goals))
-
-
-def trajectory_of(command: JointTrajectoryCommand) -> JointTrajectory:
-    trajectory = JointTrajectory()
-    for point in command.points:
-        trajectory.add(point.time_from_start, np.array(point.positions), point.gripper == "closed")
-    return trajectory
 
 
 @pytest.fixture(scope="module")

@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from arm_helpers import PerfectArm, trajectory_of
 
 from manigraph_shared.messages import (
     GoalCategory,
-    JointTrajectoryCommand,
-    JointTrajectoryResult,
     ObjectCategory,
     Quaternion,
     Scene,
@@ -25,7 +24,7 @@ from manigraph_shared.messages import (
 from manigraph_skills.drivers.base import Motion
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.grasp_choice import choose_grasps
-from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, JointTrajectory, PandaModel
+from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, PandaModel
 from manigraph_skills.motion.collision import ArmCollisionModel
 from manigraph_skills.motion.model import top_down
 from manigraph_skills.motion.plan import turn_ways
@@ -78,33 +77,6 @@ def test_towers_the_ceiling_already_clears_keep_the_planners_heights() -> None:
     scene = _tower(6)
     _, place = choose_grasps(scene, scene.object("block_5"), scene.goals[0].position)
     assert place.carry_z < GraspPlanner(PandaModel()).config.max_carry_z
-
-
-class PerfectArm:
-    """Executes every trajectory exactly and holds a block after closing (the hardware
-    boundary of the driver)."""
-
-    def __init__(self, q: np.ndarray) -> None:
-        self.q = q
-        self.sent: list[JointTrajectoryCommand] = []
-
-    def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
-        self.sent.append(command)
-        self.q = np.array(command.points[-1].positions)
-        closed = command.points[-1].gripper.value == "closed"
-        return JointTrajectoryResult(
-            command_id=command.command_id,
-            ok=True,
-            positions=self.q.tolist(),
-            gripper_width=0.04 if closed else 0.08,
-            stamp=1.0,
-        )
-
-    def joint_positions(self) -> np.ndarray:
-        return self.q.copy()
-
-    def object_position(self, object_id: str, after: float) -> np.ndarray | None:
-        return None
 
 
 def test_after_topping_an_eight_block_tower_the_hand_moves_off_before_coming_down() -> None:
@@ -169,10 +141,3 @@ def test_turn_ways_prefers_the_short_turn_and_keeps_the_long_one() -> None:
     short, long = turn_ways(-np.pi + 0.01, np.pi / 2)
     assert short == pytest.approx(-3 * np.pi / 2) and long == pytest.approx(np.pi / 2)
     assert turn_ways(0.1, 0.3)[0] == pytest.approx(0.3)
-
-
-def trajectory_of(command: JointTrajectoryCommand) -> JointTrajectory:
-    trajectory = JointTrajectory()
-    for point in command.points:
-        trajectory.add(point.time_from_start, np.array(point.positions), point.gripper == "closed")
-    return trajectory
