@@ -152,3 +152,24 @@ def test_the_heap_is_trimmed_again_once_a_burst_has_been_written(
         assert not recorder.trim_heap()
         recorder.samples_seen += 5  # heartbeats
         assert not recorder.trim_heap()
+
+
+def test_a_sample_the_foxglove_view_cannot_draw_is_still_logged_and_the_writer_goes_on(
+    running_stack: Stack, tmp_path: Path
+) -> None:
+    class BrokenView:
+        def convert(self, key: str, data: bytes) -> list[object]:
+            raise KeyError("a category the view does not know")
+
+    running_stack.start("router")
+    path = tmp_path / "r.mcap"
+    with running_stack.client() as bus:
+        recorder = Recorder(bus, path)  # not started: the writer loop runs here
+        recorder._foxglove = BrokenView()  # type: ignore[assignment]
+        recorder._open(path)
+        for step in range(5):
+            recorder._samples.put((Action.key, action(step).encode(), time.time_ns()))
+        recorder._samples.put(None)
+        recorder._write_loop()
+    assert standard_read(path) == [0, 1, 2, 3, 4]
+    assert recorder.messages_written == 5 and recorder.foxglove_failures == 5

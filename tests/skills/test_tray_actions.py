@@ -82,3 +82,28 @@ def test_a_driver_without_tray_support_refuses_as_unsupported() -> None:
     with pytest.raises(SkillError) as refused:
         ArmWithoutTrays().toggle_tray("e:0", "rack_top", Vector3(x=0.5, y=0.0, z=0.3), False)
     assert refused.value.reason == "unsupported"
+
+
+def test_an_open_rack_floor_supports_a_dish_set_into_its_slot_and_nothing_else() -> None:
+    import numpy as np
+
+    from manigraph_skills.obstacles import scene_obstacles
+
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
+    skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
+    toggle = action(0, "rack_top", "rack_top", tray_action=TrayAction.TOGGLE_TOP)
+    assert skill.execute(toggle, backend.scene(1.0), lambda _: None).state.value == "succeeded"
+    scene = backend.scene(2.0)
+    assert scene is not None
+    bowl = scene.object("bowl_0")
+
+    def floor(at: np.ndarray) -> bool:
+        (found,) = [o for o in scene_obstacles(scene, bowl, at) if o.id == "rack_top:floor"]
+        return found.support
+
+    slot = np.array(scene.goal("top_bowl_00").position.as_tuple())
+    on_counter = np.array(bowl.position.as_tuple())
+    assert floor(slot)  # set down into the rack: the fingers may come close to its floor
+    assert not floor(on_counter)  # taken off the counter below it: the floor is an obstacle
+    assert not floor(slot + np.array([0.0, 0.0, 0.10]))  # far above the floor: not under it

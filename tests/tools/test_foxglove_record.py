@@ -100,3 +100,18 @@ def test_the_json_channels_are_the_contract_as_before(recorded: Path) -> None:
     assert {Scene.key, Action.key, Explanation.key, SCENE_TOPIC, TF_TOPIC} <= topics
     for item in read_log(recorded, ["manigraph/**"]):
         assert item.decode().encode() == item.data  # each sample byte for byte as published
+
+
+def test_a_dishwasher_run_is_logged_whole_with_its_scene_updates(
+    tmp_path: Path, decode_protobuf: ProtobufDecoder
+) -> None:
+    log = tmp_path / "dishwasher.mcap"
+    run_up(
+        "--task", "dishwasher", "--objects", "2", "--policy", "dishwasher-top-bottom",
+        "--episodes", "1", "--record", str(log),
+    )  # fmt: skip
+    actions = [Action.decode(i.data) for i in read_log(log, [Action.key])]
+    assert len(actions) >= 4  # top rack out, a bowl, the rack in, ...: every decision is there
+    _, updates = foxglove_messages(log, SCENE_TOPIC, decode_protobuf)
+    slots = {e["id"] for u in updates for e in u["entities"] if e["id"].startswith("goal/")}
+    assert "goal/top_bowl_00" in slots and "goal/bottom_plate_00" in slots

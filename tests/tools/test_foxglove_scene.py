@@ -210,3 +210,21 @@ def test_the_documented_layout_is_the_one_the_tools_build() -> None:
     panel = json.loads(documented.read_text())["content"]["items"][0]["content"]
     assert panel["panelType"] == "ThreeDee"
     assert panel["config"]["topics"] == {SCENE_TOPIC: {"visible": True}}
+
+
+def test_dish_slots_are_drawn_sized_like_their_dishes(decode_protobuf: ProtobufDecoder) -> None:
+    # A recorder once lost every later sample of a dishwasher run: its view had no size for
+    # a plate slot and the writer thread died on the KeyError.
+    from manigraph_shared.messages import EpisodeRequest
+    from manigraph_sim.geometric.backend import GeometricBackend
+
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=3), 0.0)
+    scene = backend.scene(1.0)
+    assert scene is not None
+    entities = decoded_update(decode_protobuf, scene_update(scene))
+    plate, bowl = scene.object("plate_0"), scene.object("bowl_0")
+    for goal, dish in (("top_plate_00", plate), ("bottom_bowl_11", bowl)):
+        size = entities[f"goal/{goal}"]["cubes"][0]["size"]
+        assert (size["x"], size["y"], size["z"]) == pytest.approx(dish.size.as_tuple())
+    assert {f"object/{o.id}" for o in scene.objects} <= entities.keys()

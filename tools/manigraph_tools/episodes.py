@@ -85,6 +85,8 @@ class EpisodeOptions(Options):
     def label(self) -> str:
         """What episodes are named after: the task file's name (its stem, as an identifier),
         else the task and K."""
+        if self.task_file is None and self.task == "dishwasher":
+            return f"dishwasher-{self.objects}" if self.objects else "dishwasher"
         if self.task_file is None:
             return f"{self.task}-{self.blocks}"
         return re.sub(r"[^A-Za-z0-9_.\-]+", "-", self.task_file.stem)[:40] or "task-file"
@@ -370,14 +372,20 @@ def _run_one(
             )
 
 
+def _size(plan: EpisodePlan) -> dict[str, object]:
+    """What the episodes hold: dishes and the preference, or blocks and stacks."""
+    if plan.task == "dishwasher":
+        return {"objects": plan.objects, "preference": plan.preference}
+    return {"blocks": plan.blocks, "stacks": plan.stacks}
+
+
 def summarize(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, object]:
     count = len(results)
     named = {"task_file": plan.task_file_name, "name": plan.name} if plan.task_file else {}
     return {
         "task": plan.task,
         **named,
-        "blocks": plan.blocks,
-        "stacks": plan.stacks,
+        **_size(plan),
         "seed": plan.seed,
         "episodes": count,
         "success_rate": sum(r.success for r in results) / count if count else 0.0,

@@ -103,10 +103,12 @@ def block_colour(object_id: str, alpha: float) -> Color:
 
 
 def _size_of(scene: Scene, category: ObjectCategory) -> tuple[float, float, float]:
+    """The size of the scene's first object of ``category``, else a default: a cover's for
+    covers, a block's for everything else (a dish slot with no dish of its kind left)."""
     for item in scene.objects:
         if item.category is category:
             return item.size.as_tuple()
-    return DEFAULT_BLOCK_SIZE if category is ObjectCategory.BLOCK else DEFAULT_COVER_SIZE
+    return DEFAULT_COVER_SIZE if category is ObjectCategory.COVER else DEFAULT_BLOCK_SIZE
 
 
 class SceneEntities:
@@ -132,11 +134,11 @@ class SceneEntities:
     def objects(self) -> None:
         for item in self.scene.objects:
             alpha = 1.0 if item.visible else 0.35
-            if item.category is ObjectCategory.BLOCK:
-                colour = block_colour(item.id, alpha)
-            else:
+            if item.category is ObjectCategory.COVER:
                 r, g, b = COVER
                 colour = Color(r=r, g=g, b=b, a=alpha)
+            else:  # blocks and dishes: a colour of their own, stable per id
+                colour = block_colour(item.id, alpha)
             self.add(f"object/{item.id}", cubes=[self._cube(item, colour)])
 
     def _cube(self, item: SceneObject, colour: Color) -> CubePrimitive:
@@ -148,9 +150,10 @@ class SceneEntities:
         )
 
     def goals(self) -> None:
+        # a goal takes the object category of its own name (block, cover, plate, bowl)
         sizes = {
-            GoalCategory.BLOCK: _size_of(self.scene, ObjectCategory.BLOCK),
-            GoalCategory.COVER: _size_of(self.scene, ObjectCategory.COVER),
+            category: _size_of(self.scene, ObjectCategory(category.value))
+            for category in GoalCategory
         }
         for goal in self.scene.goals:
             r, g, b = GOAL_FILLED if goal.filled else GOAL_FREE

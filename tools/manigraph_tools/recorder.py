@@ -89,6 +89,9 @@ class Recorder(Service):
         self._seen_at_trim = 0
         self._trim_when_drained = False
         self.messages_written = 0
+        #: Samples the Foxglove view could not draw (each is in the log as it was on the bus).
+        self.foxglove_failures = 0
+        self._foxglove_failed_keys: set[str] = set()
 
     def setup(self) -> None:
         if is_directory(self.output) and self.output.is_dir():
@@ -152,12 +155,27 @@ class Recorder(Service):
                 self._queued_bytes -= len(item[1])
             self._log.write(*item)
             if self._foxglove is not None:
-                key, data, log_time_ns = item
-                for converted in self._foxglove.convert(key, data):
-                    self._log.write(converted.topic, converted.message.encode(), log_time_ns)
+                self._write_foxglove(self._foxglove, *item)
             self.messages_written += 1
             self._maybe_rotate()
         self._log.close()
+
+    def _write_foxglove(
+        self, bridge: FoxgloveBridge, key: str, data: bytes, log_time_ns: int
+    ) -> None:
+        """The sample's Foxglove view, if it has one. One the view cannot draw costs only
+        the view: the sample is already written, the writer goes on, and the first failure
+        per key is logged with its traceback."""
+        try:
+            converted = list(bridge.convert(key, data))
+        except Exception:
+            self.foxglove_failures += 1
+            if key not in self._foxglove_failed_keys:
+                self._foxglove_failed_keys.add(key)
+                self.log.exception("cannot draw %s for Foxglove (the sample is logged)", key)
+            return
+        for item in converted:
+            self._log.write(item.topic, item.message.encode(), log_time_ns)
 
     def trim_heap(self) -> bool:
         """Give freed heap back to the OS (glibc keeps it) during a burst, and once more when

@@ -65,14 +65,19 @@ def scene_obstacles(scene: Scene, moving: SceneObject, at: np.ndarray) -> tuple[
             )
         )
     found.extend(box_walls(scene))
-    found.extend(open_rack_floors(scene))
+    found.extend(open_rack_floors(scene, moving, at))
     return tuple(found)
 
 
-def open_rack_floors(scene: Scene) -> list[Obstacle]:
+def open_rack_floors(
+    scene: Scene, moving: SceneObject | None = None, at: np.ndarray | None = None
+) -> list[Obstacle]:
     """The floor of every pulled-out dishwasher rack: it reaches over the counter's far row,
     where a hand lifting a dish would meet it. (A pushed-in rack stands inside the cabinet,
-    beyond the counter; the slots' ribs and the dishes in them are not floors.)"""
+    beyond the counter; the slots' ribs and the dishes in them are not floors.) A floor under
+    ``at``, where ``moving`` is set down (a slot of that rack: within the floor's footprint,
+    no higher above it than the dish's largest half extent, whichever way up it stands), is
+    a support, like a block under a goal: the fingers may come close to it."""
     found = []
     for rack in scene.racks:
         if not rack.open:
@@ -81,8 +86,16 @@ def open_rack_floors(scene: Scene) -> list[Obstacle]:
         bottom = RACK_FLOOR_TOP - RACK_FLOOR_THICKNESS
         low = centre + np.array([RACK_FLOOR_X[0], -RACK_FLOOR_HALF_Y, bottom])
         high = centre + np.array([RACK_FLOOR_X[1], RACK_FLOOR_HALF_Y, RACK_FLOOR_TOP])
+        support = False
+        if moving is not None and at is not None:
+            reach = max(moving.size.as_tuple()) / 2 + SUPPORT_GAP
+            above = at[2] - high[2]
+            support = bool(
+                np.all((at[:2] >= low[:2]) & (at[:2] <= high[:2])) and 0 <= above <= reach
+            )
         middle = tuple(((low + high) / 2).tolist())
-        found.append(Obstacle(f"{rack.id}:floor", middle, tuple((high - low).tolist())))
+        size = tuple((high - low).tolist())
+        found.append(Obstacle(f"{rack.id}:floor", middle, size, support=support))
     return found
 
 
