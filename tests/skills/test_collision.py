@@ -108,6 +108,7 @@ def test_a_target_walled_in_by_towers_is_refused_as_collision_before_any_motion(
     with pytest.raises(SkillError) as caught:
         PandaMotionDriver(arm).pick(Motion("e:0", item.id, item.position, item.orientation, pick))
     assert caught.value.reason == "collision"
+    assert caught.value.detail.startswith("taking it: ")  # which motion of the skill
     assert "would touch" in caught.value.detail
     assert arm.sent == []
 

@@ -188,6 +188,7 @@ class PandaMotionDriver(RobotDriver):
                 lambda planner, q, turn, carry: planner.pick(q, target, yaw + turn, carry),
                 grasp,
                 target,
+                "taking it",
             ),
             home_around=grasp.obstacles,
         )
@@ -215,6 +216,7 @@ class PandaMotionDriver(RobotDriver):
                     lambda planner, q, turn, carry_z: planner.place(q, hand, yaw + turn, carry_z),
                     grasp,
                     hand,
+                    "carrying it to its goal",
                 ),
             )
         except SkillError as exc:
@@ -311,10 +313,12 @@ class PandaMotionDriver(RobotDriver):
         make: Callable[[GraspPlanner, np.ndarray, float, float], JointTrajectory],
         grasp: Grasp,
         target: np.ndarray,
+        motion: str,
     ) -> Callable[[np.ndarray], JointTrajectory]:
         """``make(planner, q, turn, carry_z)`` as planned; if an arm link would touch
         something, re-planned with the hand turned, the elbow swung aside and higher, until
-        one is clear."""
+        one is clear. ``motion`` names it in the refusal ("taking it: panda_hand would
+        touch ...")."""
         bearing = float(np.arctan2(target[1], target[0]))
         aside = np.array([-np.sin(bearing), np.cos(bearing), 0.0])
         planners = [self.planner] + [
@@ -352,7 +356,7 @@ class PandaMotionDriver(RobotDriver):
                     return trajectory
                 contact = contact or found
             if contact is not None:
-                raise SkillError("collision", f"{contact} (and on every re-plan)")
+                raise SkillError("collision", f"{motion}: {contact} (and on every re-plan)")
             assert failure is not None
             raise failure
 
