@@ -3,7 +3,8 @@
 For each preference: record 5 expert demonstrations of the 5-plate, 5-bowl task through the
 demo recorder (MCAP), train the four-headed policy with 3 seeds, and evaluate each on 6, 8, 10
 and 12 dishes; write the table (Markdown and JSON, mean ± std over the seeds) and a plot.
-The seed-0 network of each preference is also kept as a checkpoint.
+The seed-0 network (an ensemble of the recipe's members) of each preference is also kept as a
+checkpoint.
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
     # torch with PyG takes seconds (minutes on a loaded machine) to import.
     from manigraph_lab.demos import DemoProtocol, record_demos
     from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
+    from manigraph_planner.training.dishwasher import DishTrainConfig
 
     config.out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
@@ -74,6 +76,7 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
                 log.flush()
     summary = {
         "architecture": config.architecture,
+        "members_per_seed": DishTrainConfig().members,
         "seeds": list(config.seeds),
         "demos": config.demos,
         "train_objects": TRAIN_OBJECTS,
@@ -93,8 +96,8 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
 def _train_and_evaluate(
     config: ExperimentConfig, preference: str, demo_path: Path, seed: int
 ) -> dict[int, float]:
-    """One training seed of one preference: its success rate for each number of dishes (and
-    the checkpoint, for the first seed)."""
+    """One training seed of one preference (the recipe's members, :class:`DishTrainConfig`):
+    its success rate for each number of dishes (and the checkpoint, for the first seed)."""
     import torch
 
     from manigraph_lab.evaluate import EvalSpec, evaluate
@@ -149,8 +152,10 @@ def markdown_table(summary: dict[str, Any]) -> str:
     for preference, row in summary["success"].items():
         cells = [f"{row[str(n)]['mean']:.2f} ± {row[str(n)]['std']:.2f}" for n in TEST_OBJECTS]
         lines.append(f"| {names[preference]} | " + " | ".join(cells) + " |")
+    members = summary.get("members_per_seed", 1)
+    ensemble = f" (ensembles of {members} per seed)" if members > 1 else ""
     note = (
-        f"\n{summary['architecture']}, {summary['demos']} demonstrations of "
+        f"\n{summary['architecture']}{ensemble}, {summary['demos']} demonstrations of "
         f"{summary['train_objects']} dishes, seeds {summary['seeds']}, "
         f"{summary['episodes_per_cell']} episodes per cell.\n"
     )

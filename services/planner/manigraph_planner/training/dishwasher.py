@@ -27,6 +27,7 @@ from torch import Tensor
 
 from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC, TRAY_ACTIONS, dish_scene_to_graph
 from manigraph_planner.gnn.models import ModelConfig
+from manigraph_planner.gnn.models.dish_ensemble import DishEnsembleNet
 from manigraph_planner.gnn.models.dish_net import DishPolicyNet
 from manigraph_planner.training.dataset import read_decisions
 from manigraph_planner.training.dish_augment import (
@@ -38,7 +39,18 @@ from manigraph_planner.training.dish_augment import (
 from manigraph_shared.errors import ConfigError, LogError
 from manigraph_shared.messages import TrayAction
 
-__all__ = ["DishSample", "DishTrainConfig", "dish_loss", "load_dish_demonstrations", "train_dish"]
+__all__ = [
+    "DishSample",
+    "DishTrainConfig",
+    "dish_loss",
+    "load_dish_demonstrations",
+    "member_seed",
+    "train_dish",
+]
+
+
+#: Member seeds of one training seed are this far apart (:func:`member_seed`).
+MEMBER_SEED_STRIDE = 1000
 
 
 @dataclass(frozen=True)
@@ -91,12 +103,19 @@ class DishTrainConfig:
     #: the table's seeds 0 and 1 reached 1.00 in every cell but seed 2 fell to 0.68 at 12
     #: dishes (top/bottom), below the recipe without it (docs/dishwasher.md).
     grow_copies: int = 0
+    #: Networks trained per seed (member m with seed ``seed + MEMBER_SEED_STRIDE * m``, its
+    #: own dropped-dish copies too) and decoded as one by the mean of their logits
+    #: (:class:`DishEnsembleNet`); 1 is one plain network. One network in two fails at 12
+    #: dishes on some seed; three outvote it (validation numbers: docs/dishwasher.md).
+    members: int = 3
 
     def __post_init__(self) -> None:
         if self.epochs < 1:
             raise ConfigError("epochs", "must be >= 1")
         if self.learning_rate <= 0:
             raise ConfigError("learning_rate", "must be > 0")
+        if self.members < 1:
+            raise ConfigError("members", "must be >= 1")
         self.model_config()
 
     def model_config(self) -> ModelConfig:
@@ -170,12 +189,33 @@ def dish_loss(net: DishPolicyNet, samples: list[DishSample]) -> Tensor:
     return (loss + torch.where(batch.place, place_terms, torch.zeros_like(loss))).mean()
 
 
+def member_seed(seed: int, member: int) -> int:
+    """The seed of ensemble member ``member`` of training seed ``seed`` (member 0: ``seed``)."""
+    return seed + MEMBER_SEED_STRIDE * member
+
+
 def train_dish(demos: DishDemos, config: DishTrainConfig) -> tuple[DishPolicyNet, dict]:
-    """Full-batch Adam on the demonstrations; returns the net and its final metrics."""
-    torch.manual_seed(config.seed)
-    random.seed(config.seed)
+    """Full-batch Adam on the demonstrations, once per member; returns the net (an
+    :class:`DishEnsembleNet` for more than one member) and its final metrics."""
+    nets, metrics = [], []
+    for m in range(config.members):
+        net, member_metrics = _train_one(demos, config, member_seed(config.seed, m))
+        nets.append(net)
+        metrics.append(member_metrics)
+    if config.members == 1:
+        return nets[0], metrics[0]
+    return DishEnsembleNet.of(nets), {
+        "final_loss": [m["final_loss"] for m in metrics],
+        "samples": metrics[0]["samples"],
+        "member_seeds": [member_seed(config.seed, m) for m in range(config.members)],
+    }
+
+
+def _train_one(demos: DishDemos, config: DishTrainConfig, seed: int) -> tuple[DishPolicyNet, dict]:
+    torch.manual_seed(seed)
+    random.seed(seed)
     net = DishPolicyNet(config.model_config())
-    rng = random.Random(config.seed)
+    rng = random.Random(seed)
     samples = list(demos.samples)
     samples += [drop_dishes(s, rng) for _ in range(config.copies) for s in demos.samples]
     if config.grow_copies:

@@ -40,6 +40,8 @@ class ModelConfig:
             ``(1, 10, 10, 10, 1)`` would express positions in decimetres. Recorded in the
             checkpoint so inference scales exactly like training. Default: all ones.
         heads: ``object-goal`` (the block tasks) or ``dishwasher`` (:data:`HEADS`).
+        ensemble: independently trained members whose logits are averaged (``dishwasher``
+            heads only; 1, the default, is one plain network).
 
     Raises:
         ConfigError: (a ``ValueError``) naming the offending field.
@@ -51,6 +53,7 @@ class ModelConfig:
     in_channels: int | None = None
     feature_scale: tuple[float, ...] | None = None
     heads: str = "object-goal"
+    ensemble: int = 1
 
     @property
     def input_size(self) -> int:
@@ -65,7 +68,7 @@ class ModelConfig:
             object.__setattr__(self, "in_channels", spec.num_features)
         if self.feature_scale is None:
             object.__setattr__(self, "feature_scale", (1.0,) * spec.num_features)
-        for name in ("hidden_channels", "num_layers", "in_channels"):
+        for name in ("hidden_channels", "num_layers", "in_channels", "ensemble"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 4096:
                 raise ConfigError(name, f"must be an integer in [1, 4096], got {value!r}")
@@ -74,6 +77,10 @@ class ModelConfig:
                 "in_channels",
                 f"must equal the feature spec's {spec.num_features} features, "
                 f"got {self.in_channels}",
+            )
+        if self.ensemble > 1 and self.heads != "dishwasher":
+            raise ConfigError(
+                "ensemble", f"only 'dishwasher' heads have members, not {self.heads!r}"
             )
         assert self.feature_scale is not None
         scale = tuple(self.feature_scale)
@@ -87,8 +94,9 @@ class ModelConfig:
         object.__setattr__(self, "feature_scale", tuple(float(s) for s in scale))
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain types only, for checkpoints."""
-        return {
+        """Plain types only, for checkpoints (``ensemble`` only when above 1, so a
+        single network's file is what it was before ensembles)."""
+        values: dict[str, Any] = {
             "architecture": self.architecture,
             "hidden_channels": self.hidden_channels,
             "num_layers": self.num_layers,
@@ -96,6 +104,9 @@ class ModelConfig:
             "feature_scale": list(self.feature_scale or ()),
             "heads": self.heads,
         }
+        if self.ensemble > 1:
+            values["ensemble"] = self.ensemble
+        return values
 
     @classmethod
     def from_dict(cls, values: dict[str, Any]) -> ModelConfig:
