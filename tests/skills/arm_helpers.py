@@ -1,12 +1,31 @@
-"""What the skills tests share: an ideal arm at the driver's hardware boundary, and a sent
-trajectory command read back as the planner's trajectory."""
+"""What the skills tests share: a block at a level of a tower, an ideal arm at the driver's
+hardware boundary, and a sent trajectory command read back as the planner's trajectory."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from manigraph_shared.messages import JointTrajectoryCommand, JointTrajectoryResult
+from manigraph_shared.messages import (
+    JointTrajectoryCommand,
+    JointTrajectoryResult,
+    ObjectCategory,
+    SceneObject,
+    Vector3,
+)
 from manigraph_skills.motion import HOME_Q, JointTrajectory
+
+#: A block's side, metres.
+BLOCK = 0.04
+
+
+def block(name: str, x: float, y: float, level: int = 0) -> SceneObject:
+    """A block standing at ``level`` (0: on the table) of a tower at ``x``, ``y``."""
+    return SceneObject(
+        id=name,
+        category=ObjectCategory.BLOCK,
+        position=Vector3(x=x, y=y, z=BLOCK / 2 + level * BLOCK),
+        size=Vector3(x=BLOCK, y=BLOCK, z=BLOCK),
+    )
 
 
 class PerfectArm:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from arm_helpers import PerfectArm, trajectory_of
+from arm_helpers import PerfectArm, block, trajectory_of
 
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
@@ -24,17 +24,6 @@ from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, JointTraject
 from manigraph_skills.motion.collision import ArmCollisionModel
 from manigraph_skills.motion.model import top_down
 from manigraph_skills.obstacles import Obstacle, box_walls
-
-BLOCK = 0.04
-
-
-def block(name: str, x: float, y: float, level: int = 0) -> SceneObject:
-    return SceneObject(
-        id=name,
-        category=ObjectCategory.BLOCK,
-        position=Vector3(x=x, y=y, z=BLOCK / 2 + level * BLOCK),
-        size=Vector3(x=BLOCK, y=BLOCK, z=BLOCK),
-    )
 
 
 def tower(name: str, x: float, y: float, height: int) -> list[SceneObject]:

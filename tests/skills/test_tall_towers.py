@@ -10,15 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from arm_helpers import PerfectArm, trajectory_of
+from arm_helpers import BLOCK, PerfectArm, block, trajectory_of
 
 from manigraph_shared.messages import (
     GoalCategory,
-    ObjectCategory,
     Quaternion,
     Scene,
     SceneGoal,
-    SceneObject,
     Vector3,
 )
 from manigraph_skills.drivers.base import Motion
@@ -29,21 +27,12 @@ from manigraph_skills.motion.collision import ArmCollisionModel
 from manigraph_skills.motion.model import top_down
 from manigraph_skills.motion.plan import turn_ways
 
-SIDE = 0.04
 TOWER = (0.5, 0.2)
 GOAL = (0.45, -0.2)
 
 
 def _tower(k: int) -> Scene:
-    blocks = [
-        SceneObject(
-            id=f"block_{i}",
-            category=ObjectCategory.BLOCK,
-            position=Vector3(x=TOWER[0], y=TOWER[1], z=(i + 0.5) * SIDE),
-            size=Vector3(x=SIDE, y=SIDE, z=SIDE),
-        )
-        for i in range(k)
-    ]
+    blocks = [block(f"block_{i}", *TOWER, i) for i in range(k)]
     goal = SceneGoal(
         id="goal_0", category=GoalCategory.BLOCK, position=Vector3(x=GOAL[0], y=GOAL[1], z=0.02)
     )
@@ -54,8 +43,8 @@ def test_the_top_block_of_an_eight_block_tower_clears_the_tower_on_its_way() -> 
     scene = _tower(8)
     top = scene.object("block_7")
     pick_grasp, place_grasp = choose_grasps(scene, top, scene.goals[0].position)
-    rest = 7 * SIDE  # the tower's top once the block is lifted off
-    assert place_grasp.carry_z >= rest + SIDE / 2 + 0.01
+    rest = 7 * BLOCK  # the tower's top once the block is lifted off
+    assert place_grasp.carry_z >= rest + BLOCK / 2 + 0.01
     assert pick_grasp.carry_z == 0.0  # the empty hand: the planner's own heights
 
     model = PandaModel()
@@ -65,9 +54,9 @@ def test_the_top_block_of_an_eight_block_tower_clears_the_tower_on_its_way() -> 
     hand_at_goal = np.array([*GOAL, 0.02])
     place = planner.place(pick.final, hand_at_goal, yaw, place_grasp.carry_z)
     over_tower = [
-        tcp[2] - SIDE / 2  # the held block's underside
+        tcp[2] - BLOCK / 2  # the held block's underside
         for tcp in (model.tcp_pose(q).translation for q in place.positions)
-        if np.all(np.abs(tcp[:2] - np.array(TOWER)) < SIDE)  # held block over the tower
+        if np.all(np.abs(tcp[:2] - np.array(TOWER)) < BLOCK)  # held block over the tower
     ]
     assert over_tower and min(over_tower) >= rest + 0.01
 
@@ -85,26 +74,13 @@ def test_after_topping_an_eight_block_tower_the_hand_moves_off_before_coming_dow
     # the last block first came down to the 0.30 m ceiling where it was, fingers into the
     # tower's top block, and was refused as a collision on every re-plan.
     goal_xy = (0.525, 0.0)
-    tower = [
-        SceneObject(
-            id=f"block_{8 - i}",
-            category=ObjectCategory.BLOCK,
-            position=Vector3(x=goal_xy[0], y=goal_xy[1], z=(i + 0.5) * SIDE),
-            size=Vector3(x=SIDE, y=SIDE, z=SIDE),
-        )
-        for i in range(8)
-    ]
-    last = SceneObject(
-        id="block_0",
-        category=ObjectCategory.BLOCK,
-        position=Vector3(x=0.63, y=0.076, z=SIDE / 2),
-        size=Vector3(x=SIDE, y=SIDE, z=SIDE),
-    )
-    top_goal = Vector3(x=goal_xy[0], y=goal_xy[1], z=8.5 * SIDE)
+    tower = [block(f"block_{8 - i}", *goal_xy, i) for i in range(8)]
+    last = block("block_0", 0.63, 0.076)
+    top_goal = Vector3(x=goal_xy[0], y=goal_xy[1], z=8.5 * BLOCK)
     scene = Scene(episode_id="e", stamp=0.0, sequence=0, objects=[*tower, last], goals=[])
     model = PandaModel()
     yaw = GraspPlanner(model).config.hand_yaw
-    retreated = np.array([*goal_xy, 7.5 * SIDE + 0.003 + 0.06])  # release + approach
+    retreated = np.array([*goal_xy, 7.5 * BLOCK + 0.003 + 0.06])  # release + approach
     arm = PerfectArm(IKSolver(model).solve_or_raise(top_down(retreated, yaw), HOME_Q, "start"))
     pick, place = choose_grasps(scene, last, top_goal)
     driver = PandaMotionDriver(arm)
