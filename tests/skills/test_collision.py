@@ -3,6 +3,8 @@ against blocks, towers, box walls and the table, and the driver's re-planning ar
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from arm_helpers import PerfectArm, block, trajectory_of
@@ -21,7 +23,7 @@ from manigraph_skills.drivers.base import Motion
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.grasp_choice import choose_grasps
 from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, JointTrajectory, PandaModel
-from manigraph_skills.motion.collision import ArmCollisionModel
+from manigraph_skills.motion.collision import ESCAPE_TIME, ArmCollisionModel
 from manigraph_skills.motion.model import top_down
 from manigraph_skills.obstacles import Obstacle, box_walls
 
@@ -64,10 +66,50 @@ def test_a_tower_on_the_path_is_found_between_the_planned_points(
     sweep.add(1.0, end, False)
     hand = PandaModel().tcp_pose(HOME_Q).translation
     pole = (Obstacle("pole", (hand[0], hand[1], 0.3), (0.01, 0.01, 0.6)),)
-    assert collision.first_contact(JointTrajectory([0.0], [start], [False]), pole) is None
-    assert collision.first_contact(JointTrajectory([0.0], [end], [False]), pole) is None
+    assert collision.touching(start, pole) == [] and collision.touching(end, pole) == []
     contact = collision.first_contact(sweep, pole)
     assert contact is not None and contact.obstacle == "pole" and 0.0 < contact.time < 1.0
+
+
+def _hand_at(x: float, y: float, z: float) -> tuple[GraspPlanner, JointTrajectory]:
+    """A trajectory starting with the hand top-down, TCP at (x, y, z)."""
+    planner = GraspPlanner(PandaModel())
+    q = planner.ik.solve_or_raise(top_down(np.array([x, y, z]), np.pi / 2), HOME_Q, "start")
+    return planner, JointTrajectory([0.0], [q], [False])
+
+
+#: A slab the open fingers reach into when the TCP is 5 mm above its top at (0.5, 0.1).
+SLAB = (Obstacle("slab", (0.5, 0.1, 0.05), (0.3, 0.3, 0.04)),)
+
+
+def test_a_pair_touching_at_the_start_may_move_apart(collision: ArmCollisionModel) -> None:
+    planner, start = _hand_at(0.5, 0.1, 0.075)
+    assert {c.obstacle for c in collision.touching(start.final, SLAB)} == {"slab"}
+    planner.line(start, [0.5, 0.1, 0.2], np.pi / 2, False, 0.2, "rise")
+    assert collision.first_contact(start, SLAB) is None
+
+
+def test_a_pair_touching_at_the_start_must_not_stay_touching(
+    collision: ArmCollisionModel,
+) -> None:
+    planner, drag = _hand_at(0.5, 0.1, 0.075)
+    # Along the slab, still in it, for longer than the escape allows.
+    planner.line(drag, [0.5, -0.03, 0.075], np.pi / 2, False, 0.05, "drag")
+    assert drag.duration > ESCAPE_TIME
+    contact = collision.first_contact(drag, SLAB)
+    assert contact is not None and contact.obstacle == "slab"
+    assert contact.time == pytest.approx(ESCAPE_TIME, abs=0.1)
+
+
+def test_a_pair_that_came_apart_touches_again_as_any_other(
+    collision: ArmCollisionModel,
+) -> None:
+    planner, back = _hand_at(0.5, 0.1, 0.075)
+    planner.line(back, [0.5, 0.1, 0.2], np.pi / 2, False, 0.2, "rise")
+    risen = back.duration
+    planner.line(back, [0.5, 0.1, 0.075], np.pi / 2, False, 0.5, "down again")
+    contact = collision.first_contact(back, SLAB)
+    assert contact is not None and contact.obstacle == "slab" and contact.time > risen
 
 
 def test_a_tall_tower_beside_the_path_is_passed_higher_or_turned(
@@ -98,7 +140,12 @@ def test_a_target_walled_in_by_towers_is_refused_as_collision_before_any_motion(
         PandaMotionDriver(arm).pick(Motion("e:0", item.id, item.position, item.orientation, pick))
     assert caught.value.reason == "collision"
     assert caught.value.detail.startswith("taking it: ")  # which motion of the skill
-    assert "would touch" in caught.value.detail
+    # What refused the re-plans too, each link and tower once: turned a quarter, the
+    # fingers meet the other pair of towers.
+    touched = re.findall(r"(panda_\w+) would touch (\w+)", caught.value.detail)
+    assert len(touched) == len(set(touched)) >= 2, caught.value.detail
+    towers = {obstacle.split("_")[0] for _, obstacle in touched}
+    assert towers & {"left", "right"} and towers & {"front", "back"}, caught.value.detail
     assert arm.sent == []
 
 

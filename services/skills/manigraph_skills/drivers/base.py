@@ -16,6 +16,10 @@ from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Quaternion, Scene, SceneObject, Vector3
 from manigraph_skills.obstacles import Obstacle
 
+#: Refusals that come from planning, before the robot moved: a held object is put back, and
+#: another way of doing the same motion may be tried.
+PLANNING_FAILURES = frozenset({"collision", "no_ik_solution"})
+
 
 @dataclass(frozen=True)
 class Grasp:

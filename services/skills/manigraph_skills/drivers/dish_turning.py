@@ -19,8 +19,9 @@ from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATION_NAMES
 from manigraph_shared.panda import FINGER_BELOW_TCP
-from manigraph_skills.drivers.base import Grasp
+from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp
 from manigraph_skills.grasp_choice import room
+from manigraph_skills.motion.collision import Contact, refusal
 from manigraph_skills.motion.tilt import let_go_sideways, set_down_sideways
 from manigraph_skills.motion.trajectory import JointTrajectory
 from manigraph_skills.obstacles import Obstacle, scene_obstacles
@@ -140,7 +141,7 @@ def _tilt_once(
     yaws.sort(
         key=lambda yaw: -room(scene, tcp, 0 if abs(np.sin(yaw)) > abs(np.cos(yaw)) else 1, item.id)
     )
-    driver.pick_at(decision_id, item.id, tcp, yaws[0], grasp)
+    _pick_for_tilt(driver, decision_id, item.id, tcp, yaws, grasp)
     hand = driver.model.tcp_pose(driver.transport.joint_positions()).rotation
     held = hand.T @ dish
     # The dish's centre from the TCP, in the hand's frame (the grasp may be above it).
@@ -149,7 +150,7 @@ def _tilt_once(
 
     def plan(q: np.ndarray) -> JointTrajectory:
         failure: SkillError | None = None
-        contact = None
+        contacts: dict[tuple[str, str], Contact] = {}
         for spot in set_down_spots(scene, current, position):
             obstacles = scene_obstacles(scene, current, np.array([*spot, 0.0]))
             for side in set_down_hands(hand, dish, wanted):
@@ -175,9 +176,9 @@ def _tilt_once(
                         )
                         chosen[:] = [(side, centre, obstacles)]
                         return trajectory
-                    contact = contact or found
-        if contact is not None:
-            raise SkillError("collision", f"turning {item.id} over: {contact}")
+                    contacts.setdefault((found.link, found.obstacle), found)
+        if contacts:
+            raise SkillError("collision", f"turning {item.id} over: {refusal(contacts)}")
         raise failure or SkillError("no_ik_solution", f"no spot to set {item.id} down")
 
     try:
@@ -187,12 +188,44 @@ def _tilt_once(
             driver._put_back(decision_id, item.id)
         raise
     side, centre, obstacles = chosen[0]
-    released = driver._run(
-        decision_id, driver._checked(lambda q: let_go_sideways(driver.planner, q), obstacles)
-    )
+    released = driver._run(decision_id, lambda q: _clear_let_go(driver, q, obstacles))
     seen = driver.transport.object_position(item.id, after=released.stamp)
     log.info("turned %s %s", item.id, ORIENTATION_NAMES[up_index(side @ held)])
     return (seen if seen is not None else centre), side @ held
+
+
+def _pick_for_tilt(
+    driver: PandaMotionDriver,
+    decision_id: str,
+    object_id: str,
+    tcp: np.ndarray,
+    yaws: list[float],
+    grasp: Grasp,
+) -> None:
+    """Take the dish with the first of ``yaws`` (each closes along an axis some tilt turns
+    it about) whose pick can be planned: the axis with more room may pass a rack's floor or
+    a neighbour the other clears."""
+    for index, yaw in enumerate(yaws):
+        try:
+            driver.pick_at(decision_id, object_id, tcp, yaw, grasp)
+            return
+        except SkillError as exc:
+            if exc.reason not in PLANNING_FAILURES or index == len(yaws) - 1:
+                raise
+            log.info("taking %s for a tilt at yaw %.2f: %s", object_id, yaw, exc)
+
+
+def _clear_let_go(
+    driver: PandaMotionDriver, q: np.ndarray, obstacles: tuple[Obstacle, ...]
+) -> JointTrajectory:
+    """The first way of letting go (``tilt.let_go_sideways``) that touches nothing."""
+    contact = None
+    for way in let_go_sideways(driver.planner, q):
+        found = driver._contact(way, obstacles)
+        if found is None:
+            return way
+        contact = contact or found
+    raise SkillError("collision", f"letting go: {contact} (backing off less, or not at all)")
 
 
 def _vector(point: np.ndarray) -> Vector3:

@@ -44,7 +44,7 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_shared.orientations import up_axis_orientation
-from manigraph_skills.drivers.base import Grasp, Motion, RobotDriver
+from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp, Motion, RobotDriver
 from manigraph_skills.drivers.dish_turning import turn_dish
 from manigraph_skills.drivers.registry import MotionOptions
 from manigraph_skills.motion import (
@@ -54,7 +54,7 @@ from manigraph_skills.motion import (
     PandaModel,
     PlanConfig,
 )
-from manigraph_skills.motion.collision import ArmCollisionModel, Contact
+from manigraph_skills.motion.collision import ArmCollisionModel, Contact, refusal
 from manigraph_skills.motion.plan import UP, grasp_yaw
 from manigraph_skills.obstacles import Obstacle
 
@@ -71,8 +71,6 @@ QUARTER = np.pi / 2
 #: far, low grasp from the home pose swings ~0.3 m aside) but not over a short one (from
 #: above a tower to a block beside it only 0.3 cleared the tower).
 ELBOW_SWING = (0.05, 0.3)
-#: A place refused with these reasons never moved: the held object is put back.
-PLANNING_FAILURES = frozenset({"collision", "no_ik_solution"})
 #: After letting go of a rack's handle the hand rises and backs off this far towards the
 #: robot, metres, clear of the handle and the rack.
 HANDLE_BACK_OFF = 0.1
@@ -334,7 +332,7 @@ class PandaMotionDriver(RobotDriver):
                 for planner in planners
                 for turn in (0.0, grasp.other_turn)
             ]
-            contact = None
+            contacts: dict[tuple[str, str], Contact] = {}
             failure: SkillError | None = None
             for planner, turn, carry in options:
                 self._raise_if_stopped()  # a re-plan takes 50-500 ms: stop between them
@@ -345,18 +343,18 @@ class PandaMotionDriver(RobotDriver):
                     continue
                 found = self._contact(trajectory, grasp.obstacles)
                 if found is None:
-                    if contact is not None:
+                    if contacts:
                         log.info(
                             "re-planned around %s: carry %.2f m, turn %.2f, elbow %s",
-                            contact,
+                            next(iter(contacts.values())),
                             carry,
                             turn,
                             "as planned" if planner is self.planner else "swung aside",
                         )
                     return trajectory
-                contact = contact or found
-            if contact is not None:
-                raise SkillError("collision", f"{motion}: {contact} (and on every re-plan)")
+                contacts.setdefault((found.link, found.obstacle), found)
+            if contacts:
+                raise SkillError("collision", f"{motion}: {refusal(contacts)}")
             assert failure is not None
             raise failure
 

@@ -16,6 +16,12 @@ from joint j's axis moves at most r |dq_j|, and no point of the Panda is farther
 ``REACH`` from any joint axis, so ``ceil(REACH * sum|dq| / resolution)`` steps suffice.
 The default 1 cm is under half the smallest obstacle (a 4 cm block) and the ~1.3 cm gaps the
 box layout leaves the fingers.
+
+A pair already touching at the trajectory's first point (the arm is where it is: a dish just
+set down settled against the hand, say) is not a contact of the motion: it is ignored until
+the two separate, as long as they do within ``ESCAPE_TIME``; past it, or touching again
+after separating, it is a contact like any other. Without this, an arm that ends a motion
+touching something in the next scene could never plan its way out.
 """
 
 from __future__ import annotations
@@ -39,6 +45,9 @@ TABLE_ID = "table"
 ON_TABLE = ("panda_link0", "panda_link1")
 #: Links allowed to touch a support.
 HAND_LINKS = ("panda_hand", "panda_leftfinger", "panda_rightfinger")
+#: Seconds from a trajectory's start within which pairs touching at its first point must
+#: come apart (``ArmCollisionModel.first_contact``).
+ESCAPE_TIME = 1.5
 
 
 @dataclass(frozen=True)
@@ -49,6 +58,17 @@ class Contact:
 
     def __str__(self) -> str:
         return f"{self.link} would touch {self.obstacle} at {self.time:.2f} s"
+
+
+def refusal(contacts: dict[tuple[str, str], Contact]) -> str:
+    """The contacts that refused a motion and its re-plans (each link and obstacle once,
+    in the order found), as a ``collision`` refusal's detail."""
+    first, *others = contacts.values()
+    if not others:
+        return f"{first} (and on every re-plan)"
+    shown = ", ".join(f"{c.link} would touch {c.obstacle}" for c in others[:3])
+    more = f" and {len(others) - 3} more" if len(others) > 3 else ""
+    return f"{first}; re-plans: {shown}{more}"
 
 
 class ArmCollisionModel:
@@ -74,11 +94,16 @@ class ArmCollisionModel:
     def first_contact(
         self, trajectory: JointTrajectory, obstacles: tuple[Obstacle, ...] = ()
     ) -> Contact | None:
-        """The first contact along ``trajectory`` (points and the motion between them)."""
+        """The first contact along ``trajectory`` (points and the motion between them),
+        except of pairs touching at its first point while they move apart (module doc)."""
         geometry = self._with(obstacles)
         data = pin.GeometryData(geometry)
         times = trajectory.times
         positions = trajectory.positions
+        start = times[0] if times else 0.0
+        escaping = self._touching(geometry, data, positions[0]) if positions else []
+        for pair in escaping:
+            data.deactivateCollisionPair(pair)
         for index, q in enumerate(positions):
             if index == 0:
                 samples = [(times[0], q)]
@@ -96,7 +121,30 @@ class ArmCollisionModel:
             for t, sample in samples:
                 if pin.computeCollisions(self.model, self.data, geometry, data, sample, True):
                     return self._contact(geometry, data, t)
+                if escaping:
+                    still = [p for p in escaping if pin.computeCollision(geometry, data, p)]
+                    if still and t - start > ESCAPE_TIME:
+                        return self._pair_contact(geometry, still[0], t)
+                    for pair in set(escaping) - set(still):
+                        data.activateCollisionPair(pair)
+                    escaping = still
         return None
+
+    def touching(self, q: np.ndarray, obstacles: tuple[Obstacle, ...] = ()) -> list[Contact]:
+        """Every contact of the arm standing at ``q`` (time 0)."""
+        geometry = self._with(obstacles)
+        data = pin.GeometryData(geometry)
+        return [self._pair_contact(geometry, p, 0.0) for p in self._touching(geometry, data, q)]
+
+    def _touching(
+        self, geometry: pin.GeometryModel, data: pin.GeometryData, q: np.ndarray
+    ) -> list[int]:
+        pin.computeCollisions(self.model, self.data, geometry, data, q, False)
+        return [
+            index
+            for index in range(len(geometry.collisionPairs))
+            if data.collisionResults[index].isCollision()
+        ]
 
     # --- pieces -------------------------------------------------------------------------------
     def _with(self, obstacles: tuple[Obstacle, ...]) -> pin.GeometryModel:
@@ -123,8 +171,11 @@ class ArmCollisionModel:
         return geometry
 
     def _contact(self, geometry: pin.GeometryModel, data: pin.GeometryData, t: float) -> Contact:
-        for index, pair in enumerate(geometry.collisionPairs):
-            if data.collisionResults[index].isCollision():
-                link = self.links[pair.first]
-                return Contact(link, geometry.geometryObjects[pair.second].name, t)
+        for index in range(len(geometry.collisionPairs)):
+            if data.activeCollisionPairs[index] and data.collisionResults[index].isCollision():
+                return self._pair_contact(geometry, index, t)
         return Contact("arm", "?", t)
+
+    def _pair_contact(self, geometry: pin.GeometryModel, index: int, t: float) -> Contact:
+        pair = geometry.collisionPairs[index]
+        return Contact(self.links[pair.first], geometry.geometryObjects[pair.second].name, t)

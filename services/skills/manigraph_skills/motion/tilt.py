@@ -11,6 +11,8 @@ starts as every other does.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 import pinocchio as pin
 
@@ -21,9 +23,10 @@ from manigraph_skills.motion.trajectory import JointTrajectory
 #: TCP height at which the hand turns, metres: the dish (at most ~4.5 cm from the TCP) and
 #: the wrist swinging sideways stay clear of the counter and the dishes on it.
 TURN_HEIGHT = 0.16
-#: How far the hand backs off along its fingers after letting go (the first that plans), and
-#: then rises, metres.
-BACK_OFFS = (0.08, 0.05, 0.03)
+#: How far the hand backs off along its fingers after letting go, and then rises, metres: the
+#: first that plans and clears the neighbours; 0 rises straight away (the open fingers slide
+#: up past the dish's sides, the palm is beyond them).
+BACK_OFFS = (0.08, 0.05, 0.03, 0.0)
 RISE = 0.1
 
 
@@ -56,17 +59,23 @@ def set_down_sideways(
     return trajectory
 
 
-def let_go_sideways(planner: GraspPlanner, q: np.ndarray) -> JointTrajectory:
-    """Open where the hand is, back off along the fingers, rise, turn top-down (backing off
-    less if the full distance has no IK solution)."""
+def let_go_sideways(planner: GraspPlanner, q: np.ndarray) -> Iterator[JointTrajectory]:
+    """The ways to open where the hand is, back off along the fingers, rise and turn
+    top-down, backing off less each time (``BACK_OFFS``); a way with no IK solution is left
+    out, and if none has one the first's ``no_ik_solution`` is raised."""
     failure: SkillError | None = None
+    planned = False
     for back in BACK_OFFS:
         try:
-            return _let_go(planner, q, back)
+            way = _let_go(planner, q, back)
         except SkillError as exc:
             failure = failure or exc
-    assert failure is not None
-    raise failure
+            continue
+        planned = True
+        yield way
+    if not planned:
+        assert failure is not None
+        raise failure
 
 
 def _let_go(planner: GraspPlanner, q: np.ndarray, back_off: float) -> JointTrajectory:
