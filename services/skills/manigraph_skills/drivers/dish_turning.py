@@ -5,7 +5,10 @@ the one its placement asks for (``manigraph_skills.turn_over`` says which tilts;
 Each tilt: the usual top-down pick, with the fingers closing along the axis the dish turns
 about; the hand turned sideways and the dish set down on a free counter spot (where it was
 first, else a free neighbouring cell of the counter's 10 cm grid); let go and back off. The
-skill then takes the dish top-down, which finishes the turn about the vertical.
+skill then takes the dish top-down, which finishes the turn about the vertical. A dish that
+cannot be taken or set down turned where it lies (neighbours, a pulled-out rack's floor
+over the far row) is first carried top-down to a free neighbouring cell, nearest the robot
+first, and turned there (``move_dish``).
 """
 
 from __future__ import annotations
@@ -19,9 +22,10 @@ from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATION_NAMES
 from manigraph_shared.panda import FINGER_BELOW_TCP
-from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp
+from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp, Motion
 from manigraph_skills.grasp_choice import room
 from manigraph_skills.motion.collision import Contact, refusal
+from manigraph_skills.motion.plan import UP, GraspPlanner
 from manigraph_skills.motion.tilt import let_go_sideways, set_down_sideways
 from manigraph_skills.motion.trajectory import JointTrajectory
 from manigraph_skills.obstacles import Obstacle, scene_obstacles
@@ -99,10 +103,21 @@ def turn_dish(
     observed when the transport can, its orientation as turned)."""
     position = np.array(item.position.as_tuple())
     dish = rotation_of(item.orientation)
+    moved = False
     for _ in range(MAX_TILTS):
         if up_index(dish) == target:
             break
-        position, dish = _tilt_once(driver, decision_id, item, target, scene, position, dish)
+        try:
+            position, dish = _tilt_once(driver, decision_id, item, target, scene, position, dish)
+        except SkillError as exc:
+            cells = free_cells(scene, item, position)
+            if exc.reason not in PLANNING_FAILURES or moved or not cells:
+                raise
+            # No room to take it or set it down turned here: to a free cell, and turn it there.
+            log.info("moving %s to turn it over elsewhere: %s", item.id, exc)
+            position, dish = move_dish(driver, decision_id, item, scene, position, dish, cells)
+            moved = True
+            position, dish = _tilt_once(driver, decision_id, item, target, scene, position, dish)
     if up_index(dish) != target:
         raise SkillError(
             "orientation_unreachable", f"{item.id} did not turn {ORIENTATION_NAMES[target]}"
@@ -192,6 +207,67 @@ def _tilt_once(
     seen = driver.transport.object_position(item.id, after=released.stamp)
     log.info("turned %s %s", item.id, ORIENTATION_NAMES[up_index(side @ held)])
     return (seen if seen is not None else centre), side @ held
+
+
+def free_cells(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np.ndarray]:
+    """Free counter cells next to the dish (``set_down_spots`` without where it is and the
+    spare spots), nearest the robot first: farther from a pulled-out rack's front."""
+    current = item.model_copy(update={"position": _vector(here)})
+    spots = set_down_spots(scene, current, here)[1:]
+    cells = [s for s in spots if abs(s[1]) < SPARE_Y - 0.01]
+    return sorted(cells, key=lambda spot: float(spot[0]))
+
+
+def move_dish(
+    driver: PandaMotionDriver,
+    decision_id: str,
+    item: SceneObject,
+    scene: Scene,
+    position: np.ndarray,
+    dish: np.ndarray,
+    cells: list[np.ndarray],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Carry the dish top-down, lying as it lies, to the first of ``cells`` it can be set down
+    on: where it then lies and its rotation (turned about the vertical as the hand turned)."""
+    current = item.model_copy(update={"position": _vector(position)})
+    height = grasp_height_for(float(position[2]))
+    taking = Grasp(height, 0.0, 0.0, scene_obstacles(scene, current, position))
+    driver.pick(Motion(decision_id, item.id, _vector(position), item.orientation, taking))
+    taken = driver.planner.yaw_of(driver.transport.joint_positions())
+    failure: SkillError | None = None
+    for cell in cells:
+        there = np.array([*cell, position[2]])
+        obstacles = scene_obstacles(scene, current, there)
+        hand = there + height * UP
+
+        def to_cell(
+            planner: GraspPlanner, q: np.ndarray, turn: float, carry_z: float, at: np.ndarray = hand
+        ) -> JointTrajectory:
+            return planner.place(q, at, taken + turn, carry_z)
+
+        carry = driver._avoiding(
+            to_cell, Grasp(height, 0.0, 0.0, obstacles, np.pi), there, f"moving {item.id}"
+        )
+        try:
+            driver._run(decision_id, carry)
+        except SkillError as exc:
+            if exc.reason not in PLANNING_FAILURES:
+                raise
+            failure = failure or exc
+            continue
+        placed = driver.planner.yaw_of(driver.transport.joint_positions())
+        released = driver._run(decision_id, driver._checked(driver.planner.release, obstacles))
+        seen = driver.transport.object_position(item.id, after=released.stamp)
+        log.info("moved %s to %s", item.id, np.round(there, 3))
+        return (seen if seen is not None else there), _about_vertical(placed - taken) @ dish
+    driver._put_back(decision_id, item.id)
+    assert failure is not None
+    raise failure
+
+
+def _about_vertical(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def _pick_for_tilt(

@@ -1,0 +1,68 @@
+"""Moving a dish to a free counter cell to turn it over there (``dish_turning``): when it
+cannot be taken or set down turned where it lies (a neighbour, a pulled-out rack's floor)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from arm_helpers import PerfectArm, trajectory_of
+
+from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, Vector3
+from manigraph_shared.orientations import ORIENTATIONS
+from manigraph_skills.drivers.dish_turning import SPARE_Y, SPOT_FREE, free_cells, move_dish
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+from manigraph_skills.turn_over import rotation_of, up_index
+
+#: A bowl (5 cm across, 3.5 cm deep) lying upside down.
+SIZE = Vector3(x=0.05, y=0.05, z=0.035)
+
+
+def bowl(name: str, x: float, y: float) -> SceneObject:
+    return SceneObject(
+        id=name,
+        category=ObjectCategory.BOWL,
+        position=Vector3(x=x, y=y, z=0.0175),
+        orientation=ORIENTATIONS[1],
+        size=SIZE,
+    )
+
+
+#: bowl_0 on the far row (x = 0.46 m, under a pulled-out rack's front), neighbours on its
+#: row and diagonally nearer the robot.
+FAR = bowl("bowl_0", 0.46, 0.0)
+NEIGHBOURS = [bowl("bowl_1", 0.46, 0.1), bowl("bowl_2", 0.46, -0.1), bowl("bowl_3", 0.38, 0.1)]
+SCENE = Scene(episode_id="e", stamp=1.0, sequence=0, objects=[FAR, *NEIGHBOURS], goals=[])
+
+
+def test_free_cells_are_free_counter_cells_nearest_the_robot_first() -> None:
+    cells = free_cells(SCENE, FAR, np.array(FAR.position.as_tuple()))
+    assert cells, "the cell in front of the bowl is free"
+    assert cells[0] == pytest.approx([0.38, 0.0])
+    assert [c[0] for c in cells] == sorted(c[0] for c in cells)
+    for cell in cells:
+        assert abs(cell[1]) < SPARE_Y  # on the counter, not a spare spot beside it
+        assert cell[0] <= FAR.position.x  # never farther out, under the rack
+        for other in NEIGHBOURS:
+            assert np.linalg.norm(cell - np.array(other.position.as_tuple()[:2])) >= SPOT_FREE
+
+
+def test_the_dish_is_carried_top_down_and_set_down_on_the_first_cell() -> None:
+    arm = PerfectArm()
+    driver = PandaMotionDriver(arm)
+    here = np.array(FAR.position.as_tuple())
+    dish = rotation_of(FAR.orientation)
+    cells = free_cells(SCENE, FAR, here)
+    position, turned = move_dish(driver, "e:1", FAR, SCENE, here, dish, cells)
+    assert position == pytest.approx([*cells[0], here[2]])
+    assert up_index(turned) == up_index(dish)  # turned about the vertical only
+    # Pick, carry, release: the hand ends above the cell, open.
+    assert len(arm.sent) == 3 and arm.sent[-1].points[-1].gripper.value == "open"
+    carried = trajectory_of(arm.sent[1])
+    tcp = driver.model.tcp_pose(carried.final).translation
+    assert tcp[:2] == pytest.approx(cells[0], abs=0.002)
+    # The rotation returned is the dish turned as far as the hand turned on the way.
+    hand_turn = driver.planner.yaw_of(carried.final) - driver.planner.yaw_of(
+        trajectory_of(arm.sent[0]).final
+    )
+    c, s = np.cos(hand_turn), np.sin(hand_turn)
+    assert turned == pytest.approx(np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) @ dish)
