@@ -67,27 +67,46 @@ FINGERTIP_CLEARANCE = 0.002
 def set_down_spots(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np.ndarray]:
     """Where the dish may be set down turned (x, y): where it is, a free neighbouring cell
     within reach, then spare spots beside the counter."""
-    others = [
-        np.array(o.position.as_tuple()[:2])
-        for o in scene.objects
-        if o.id != item.id and o.visible and o.position.z < 0.1  # on the counter
-    ]
-    spots = [here[:2].copy()]
+    others = _counter_dishes(scene, item)
     # Beyond the counter's side columns (|y| <= 0.31 m) nothing ever lies: the spare spots,
     # on the dish's side first.
     side = 1.0 if here[1] >= 0 else -1.0
     spare = [np.array([x, s * SPARE_Y]) for s in (side, -side) for x in SPARE_X]
+    free = [s for s in spare if all(np.linalg.norm(s - o) >= SPOT_FREE for o in others)]
+    return [here[:2].copy(), *_neighbour_cells(here, others)[: MAX_SPOTS - 2], *free[:2]]
+
+
+def free_cells(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np.ndarray]:
+    """The free neighbouring cells ``set_down_spots`` offers, those on the counter (not out
+    by the spare spots), nearest the robot first: farther from a pulled-out rack's front."""
+    cells = _neighbour_cells(here, _counter_dishes(scene, item))[: MAX_SPOTS - 2]
+    on_counter = [cell for cell in cells if abs(cell[1]) < SPARE_Y - 0.01]
+    return sorted(on_counter, key=lambda cell: float(cell[0]))
+
+
+def _counter_dishes(scene: Scene, item: SceneObject) -> list[np.ndarray]:
+    """Where every other dish on the counter lies (x, y)."""
+    return [
+        np.array(o.position.as_tuple()[:2])
+        for o in scene.objects
+        if o.id != item.id and o.visible and o.position.z < 0.1  # on the counter
+    ]
+
+
+def _neighbour_cells(here: np.ndarray, others: list[np.ndarray]) -> list[np.ndarray]:
+    """The counter grid's cells around ``here`` within reach and no dish near, nearest
+    first."""
     offsets = [np.array([dx, dy]) * SPOT_PITCH for dx in (-1, 0, 1) for dy in (-1, 0, 1)]
     offsets.sort(key=lambda o: float(np.linalg.norm(o)))
+    cells = []
     for offset in offsets[1:]:
-        spot = here[:2] + offset
-        radius = float(np.linalg.norm(spot))
-        if not SPOT_RADIUS[0] <= radius <= SPOT_RADIUS[1] or spot[0] > SPOT_MAX_X:
+        cell = here[:2] + offset
+        radius = float(np.linalg.norm(cell))
+        if not SPOT_RADIUS[0] <= radius <= SPOT_RADIUS[1] or cell[0] > SPOT_MAX_X:
             continue
-        if all(np.linalg.norm(spot - other) >= SPOT_FREE for other in others):
-            spots.append(spot)
-    free = [s for s in spare if all(np.linalg.norm(s - o) >= SPOT_FREE for o in others)]
-    return spots[: MAX_SPOTS - 1] + free[:2]
+        if all(np.linalg.norm(cell - other) >= SPOT_FREE for other in others):
+            cells.append(cell)
+    return cells
 
 
 def grasp_height_for(centre_z: float) -> float:
@@ -110,8 +129,10 @@ def turn_dish(
         try:
             position, dish = _tilt_once(driver, decision_id, item, target, scene, position, dish)
         except SkillError as exc:
+            if exc.reason not in PLANNING_FAILURES or moved:
+                raise
             cells = free_cells(scene, item, position)
-            if exc.reason not in PLANNING_FAILURES or moved or not cells:
+            if not cells:
                 raise
             # No room to take it or set it down turned here: to a free cell, and turn it there.
             log.info("moving %s to turn it over elsewhere: %s", item.id, exc)
@@ -207,15 +228,6 @@ def _tilt_once(
     seen = driver.transport.object_position(item.id, after=released.stamp)
     log.info("turned %s %s", item.id, ORIENTATION_NAMES[up_index(side @ held)])
     return (seen if seen is not None else centre), side @ held
-
-
-def free_cells(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np.ndarray]:
-    """Free counter cells next to the dish (``set_down_spots`` without where it is and the
-    spare spots), nearest the robot first: farther from a pulled-out rack's front."""
-    current = item.model_copy(update={"position": _vector(here)})
-    spots = set_down_spots(scene, current, here)[1:]
-    cells = [s for s in spots if abs(s[1]) < SPARE_Y - 0.01]
-    return sorted(cells, key=lambda spot: float(spot[0]))
 
 
 def move_dish(
