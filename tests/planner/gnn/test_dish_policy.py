@@ -124,22 +124,84 @@ def test_a_placement_with_both_racks_in_becomes_the_more_likely_toggle() -> None
     assert decision is not None and decision.object_id == decision.goal_id == "rack_top"
 
 
-def test_ranked_alternatives_start_with_the_decision_and_offer_every_loadable_dish() -> None:
+class SlotLikingNet:
+    """Stands in for a trained net: every dish equally likely, and the slots whose ids start
+    with one of ``liked`` far more likely than the others (as a net trained on one
+    preference rates its racks)."""
+
+    architecture = "stub"
+
+    def __init__(self, goal_ids: list[str], liked: tuple[str, ...]) -> None:
+        self.goal_ids = goal_ids
+        self.liked = liked
+
+    def eval(self) -> SlotLikingNet:
+        return self
+
+    def heads_complete(self, x: torch.Tensor) -> DishHeads:
+        # Small steps between the nodes: no ties, so the decision is also a ranked pair.
+        goals = [
+            (5.0 if g.startswith(self.liked) else 0.0) - 0.01 * i
+            for i, g in enumerate(self.goal_ids)
+        ]
+        objects = [-0.01 * i for i in range(len(x) - len(self.goal_ids) - 2)]
+        node = torch.tensor(objects + goals + [0.0, 0.0])
+        return DishHeads(node, torch.zeros(len(x), 6), torch.tensor([0.0, 0.0, 1.0]))
+
+
+def _top_rack_out(objects: int = 4):  # type: ignore[no-untyped-def]
     backend = GeometricBackend()
-    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
-    backend.dishwasher.toggle("rack_top")  # type: ignore[union-attr]  # the top rack out
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=objects), 0.0)
+    backend.dishwasher.toggle("rack_top")  # type: ignore[union-attr]
     s = backend.scene(1.0)
     assert s is not None
-    policy = DishwasherGNNPolicy(dish_net(1))
+    return s
+
+
+def _ranked(s, liked: tuple[str, ...]):  # type: ignore[no-untyped-def]
+    goal_ids = dish_scene_to_graph(s).goal_ids
+    policy = DishwasherGNNPolicy(SlotLikingNet(goal_ids, liked))  # type: ignore[arg-type]
     ranked = policy.ranked(s)
     assert ranked[0] == policy.decide(s)
-    placements = [d for d in ranked if d.tray_action.value == "none"]
-    # Every dish can go into the open top rack's slots of its kind: each is offered once.
-    assert sorted(d.object_id for d in placements) == sorted(o.id for o in s.objects)
-    for d in placements:
+    return ranked
+
+
+def test_ranked_alternatives_start_with_the_decision_and_offer_every_loadable_dish() -> None:
+    s = _top_rack_out()
+    ranked = _ranked(s, liked=("top_",))
+    kinds = [d.tray_action.value == "none" for d in ranked]
+    toggles = kinds.index(False)
+    assert kinds[toggles : toggles + 2] == [False, False]  # both toggles, together
+    first_round = ranked[:toggles]
+    # Every dish can go into the open top rack's slots of its kind: each is offered once
+    # before the toggles, in its likeliest slot.
+    assert sorted(d.object_id for d in first_round) == sorted(o.id for o in s.objects)
+    assert {d.object_id for d in ranked[toggles : toggles + 2]} == {"rack_top", "rack_bottom"}
+    # Then each again in its other free top-rack slots, round by round: every such pair once.
+    later = ranked[toggles + 2 :]
+    assert len({d.pair for d in ranked}) == len(ranked)
+    slots = {
+        o.id: [g.id for g in s.goals if g.category.value == o.category.value] for o in s.objects
+    }
+    assert len(first_round) + len(later) == sum(len(v) // 2 for v in slots.values())
+    assert [d.object_id for d in later[: len(s.objects)]] == [d.object_id for d in first_round]
+    for d in first_round + later:
         assert s.goal(d.goal_id).rack == "rack_top" and not s.goal(d.goal_id).filled
-    toggles = {d.object_id for d in ranked if d.tray_action.value != "none"}
-    assert toggles == {"rack_top", "rack_bottom"}
+
+
+def test_a_dish_whose_likeliest_slot_is_in_a_rack_pushed_in_waits_for_it() -> None:
+    """Bowls on top, plates at the bottom: with the top rack out, a refused bowl's
+    alternatives are the other bowls and the rack toggles, never a plate into the top rack
+    (nothing would take it out again)."""
+    s = _top_rack_out()
+    ranked = _ranked(s, liked=("top_bowl", "bottom_plate"))
+    placements = [d for d in ranked if d.tray_action.value == "none"]
+    assert {d.object_id for d in placements} == {o.id for o in s.objects if o.id.startswith("bowl")}
+    assert all(d.goal_id.startswith("top_bowl") for d in placements)
+    assert {d.object_id for d in ranked if d.tray_action.value != "none"} == {
+        "rack_top",
+        "rack_bottom",
+    }
 
 
 @pytest.mark.skipif(

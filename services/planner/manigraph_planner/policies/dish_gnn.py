@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import torch
 
 from manigraph_planner.gnn.checkpoint import CheckpointInfo
@@ -47,28 +49,29 @@ class DishwasherGNNPolicy(Policy):
         return decision_from_heads(graph, heads)
 
     def ranked(self, scene: Scene) -> list[Decision]:
-        """The decision, then each other dish that can go somewhere now, most likely first,
-        into its most likely slot; then the tray actions by the tray head. The planner takes
-        one of these only after the decision made no progress (e.g. a robot that cannot turn
-        that dish as asked, ``orientation_unreachable``), so one dish a robot cannot load
-        does not hold up the others."""
+        """The decision; each other dish that can go somewhere now, most likely first, into
+        its most likely slot; the tray actions by the tray head; then the dishes into their
+        other slots, round by round (``_pairs_by_dish``). The planner takes one of these
+        only after the decision made no progress (e.g. a robot that cannot turn that dish as
+        asked, ``orientation_unreachable``), so one dish a robot cannot load does not hold
+        up the others."""
         graph = dish_scene_to_graph(scene)
         if graph.num_objects == 0:
             return []
         with torch.inference_mode():
             heads = self.net.heads_complete(graph.x)
         first = decision_from_heads(graph, heads)
-        ranked = [] if first is None else [first]
-        for pair in _pairs_by_dish(graph, heads):
-            if all(pair.pair != d.pair for d in ranked):
-                ranked.append(pair)
-        for index in heads.tray.argsort(descending=True).tolist():
-            tray = TRAY_ACTIONS[int(index)]
-            if tray is not TrayAction.NONE and tray.rack_id is not None:
-                toggle = Decision(tray.rack_id, tray.rack_id, None, tray)
-                if all(toggle.pair != d.pair for d in ranked):
-                    ranked.append(toggle)
-        return ranked
+        toggles = [
+            Decision(tray.rack_id, tray.rack_id, None, tray)
+            for index in heads.tray.argsort(descending=True).tolist()
+            if (tray := TRAY_ACTIONS[int(index)]) is not TrayAction.NONE and tray.rack_id
+        ]
+        first_round, *later = _pairs_by_dish(graph, heads) or [[]]
+        ranked: dict[tuple[str, str], Decision] = {}
+        for decision in [first, *first_round, *toggles, *itertools.chain(*later)]:
+            if decision is not None:
+                ranked.setdefault(decision.pair, decision)
+        return list(ranked.values())
 
 
 def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
@@ -98,39 +101,57 @@ def _without_none(tray: torch.Tensor) -> torch.Tensor:
     return tray.masked_fill(torch.arange(len(TRAY_ACTIONS)) == _NONE_INDEX, float("-inf"))
 
 
-def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[Decision]:
-    """For each dish that fits a usable free slot, most likely dish first: its most likely
-    such slot, in the orientation head's argmax."""
+def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[list[Decision]]:
+    """Rounds of pairs: each dish that fits a usable free slot, most likely dish first, in
+    its most likely such slot; then each in its second most likely slot, and so on; each in
+    the orientation head's argmax. A dish whose most likely free slot of all is in a rack
+    that cannot be loaded now waits for that rack: offered a slot elsewhere, a plate
+    refused on the counter would go into the bowls' rack, where nothing takes it out."""
     scores = _pair_scores(graph, heads)
     if scores is None:
         return []
-    best, slots = scores.max(dim=1)
-    pairs = []
-    for o in best.argsort(descending=True).tolist():
-        if torch.isinf(best[o]):
+    anywhere = _pair_scores(graph, heads, usable_only=False)
+    assert anywhere is not None
+    waiting = ~_usable_slots(graph)[anywhere.argmax(dim=1)]
+    scores = scores.masked_fill(waiting.unsqueeze(1), float("-inf"))
+    dishes = scores.max(dim=1).values.argsort(descending=True).tolist()
+    slots = scores.argsort(dim=1, descending=True)
+    rounds = []
+    for rank in range(graph.num_goals):
+        pairs = [
+            Decision(graph.object_ids[o], graph.goal_ids[g], int(heads.orientation[o].argmax()))
+            for o in dishes
+            if torch.isfinite(scores[o, g := int(slots[o, rank])])
+        ]
+        if not pairs:
             break
-        orientation = int(heads.orientation[o].argmax())
-        pairs.append(Decision(graph.object_ids[o], graph.goal_ids[int(slots[o])], orientation))
-    return pairs
+        rounds.append(pairs)
+    return rounds
 
 
-def _pair_scores(graph: DishGraph, heads: DishHeads) -> torch.Tensor | None:
+def _pair_scores(
+    graph: DishGraph, heads: DishHeads, usable_only: bool = True
+) -> torch.Tensor | None:
     """Log-likelihood of each (dish, slot) pair, -inf where the slot cannot take the dish
-    now; None if no pair can be loaded."""
+    now (with ``usable_only=False``: where it holds a dish or another kind's); None if no
+    pair is left."""
     k, m = graph.num_objects, graph.num_goals
     codes = graph.goal_codes()
     object_logp = heads.node[:k].log_softmax(0)
     goal_logp = heads.node[k : k + m].log_softmax(0)
     free = graph.x[k : k + m, FILLED_COLUMN] == 0
-    usable = torch.tensor(
-        [_rack_usable(graph, rack) for rack in graph.goal_racks], dtype=torch.bool
-    )
-    free &= usable
+    if usable_only:
+        free &= _usable_slots(graph)
     wanted = torch.tensor([_SLOT_FOR_DISH[int(c)] for c in codes[:k]])
     fits = (codes[k : k + m].unsqueeze(0) == wanted.unsqueeze(1)) & free.unsqueeze(0)
     if not bool(fits.any()):
         return None
     return (object_logp.unsqueeze(1) + goal_logp.unsqueeze(0)).masked_fill(~fits, float("-inf"))
+
+
+def _usable_slots(graph: DishGraph) -> torch.Tensor:
+    """Which goal nodes are slots of a rack that can be loaded now."""
+    return torch.tensor([_rack_usable(graph, rack) for rack in graph.goal_racks], dtype=torch.bool)
 
 
 def _rack_usable(graph: DishGraph, rack: str | None) -> bool:
