@@ -195,3 +195,27 @@ def test_realtime_stream_rates_are_validated_by_name() -> None:
         create_backend("physics", realtime=True, joint_state_hz=500)
     backend = create_backend("physics", realtime=True, scene_hz=15, joint_state_hz=50)
     assert backend.stream_rates == (15, 50)  # type: ignore[attr-defined]
+
+
+def test_the_fingers_open_as_wide_as_a_trajectory_asks() -> None:
+    backend = PhysicsBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="stack", blocks=1, seed=0), 1.0)
+    assert backend.world is not None
+    q = backend.world.arm_q.tolist()
+
+    def hold(opening: float | None) -> float:
+        points = [
+            JointTrajectoryPoint(
+                positions=q, gripper=GripperTarget.OPEN, opening=opening, time_from_start=t
+            )
+            for t in (0.0, 0.5)
+        ]
+        command = JointTrajectoryCommand(
+            command_id="c", decision_id="e:0", joint_names=list(ARM_JOINTS), points=points, stamp=1
+        )
+        result = backend.execute_trajectory(command, 1.0)
+        assert result.ok
+        return result.gripper_width
+
+    assert hold(0.03) == pytest.approx(0.03, abs=0.002)
+    assert hold(None) == pytest.approx(0.08, abs=0.002)

@@ -22,7 +22,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.panda import ARM_JOINTS
 from manigraph_skills.drivers import DRIVERS
-from manigraph_skills.drivers.base import Motion
+from manigraph_skills.drivers.base import Grasp, Motion
 from manigraph_skills.drivers.franka import FrankaDriver
 from manigraph_skills.drivers.franka_config import FrankaConfig
 from manigraph_skills.workspace import Workspace
@@ -149,6 +149,17 @@ def test_a_motion_runs_as_franky_waypoints_with_the_hand_between() -> None:
     assert first.waypoints[-1].minimum_time is not None  # type: ignore[attr-defined]
 
 
+def test_the_hand_opens_as_wide_as_each_grasp_asks() -> None:
+    franka = driver()
+    narrow = Grasp(opening=0.035)
+    franka.pick(Motion("e:0", "plate_0", BLOCK, Quaternion(), narrow))
+    franka.place(Motion("e:0", "plate_0", GOAL, Quaternion(), narrow))
+    gripper = FakeGripper.last
+    assert gripper is not None
+    # Opened to 3.5 cm before coming down, closed on the dish, let go of at 3.5 cm.
+    assert gripper.calls == ["move 0.035", "grasp 20.0", "move 0.035"]
+
+
 def test_a_trajectory_over_the_velocity_limit_is_refused_naming_the_joint() -> None:
     franka = driver(speed_factor=1.0)
     too_fast = READY.copy()
@@ -264,6 +275,22 @@ def test_a_rack_toggle_runs_through_franky_grasp_slide_release() -> None:
     grasped, slid = tcp(robot.motions[0]), tcp(robot.motions[1])
     assert np.allclose(slid - grasped, [0.16, 0.0, 0.0], atol=0.005)  # the rail's length
     assert abs(grasped[0] - (0.51 - 0.03)) < 0.005  # at the tab (grasp_points.rack_grip)
+
+
+def test_a_rack_part_of_the_way_out_slides_only_as_far_as_it_has_left_to_go() -> None:
+    from manigraph_skills.motion import PandaModel
+
+    franka = driver()
+    handle = Vector3(x=0.57, y=0.0, z=0.30)  # the top rack 10 cm out
+    franka.toggle_tray("e:0", "rack_top", handle, True, travel=0.10)  # push it in
+    robot = FakeRobot.last
+    assert robot is not None
+    model = PandaModel()
+    grasped, slid = (
+        model.tcp_pose(np.array(m.waypoints[-1].target.position)).translation  # type: ignore[attr-defined]
+        for m in robot.motions[:2]
+    )
+    assert np.allclose(slid - grasped, [0.10, 0.0, 0.0], atol=0.005)
 
 
 class SlowRobot(FakeRobot):

@@ -54,7 +54,7 @@ def test_a_neighbour_behind_the_hand_leaves_only_the_straight_rise(
     # A thin dish behind one end of the hand: every back-off drives the hand into it.
     behind = (Obstacle("neighbour", (0.53, -0.16, 0.025), (0.03, 0.01, 0.05)),)
     assert driver.collision is not None and driver.collision.touching(sideways, behind) == []
-    chosen = _clear_let_go(driver, sideways, behind)
+    chosen = _clear_let_go(driver, sideways, behind, None)
     assert _hand_after(driver, chosen)[:2] == pytest.approx(TCP[:2], abs=0.005)
 
 
@@ -63,5 +63,5 @@ def test_a_hand_boxed_in_is_refused_naming_the_neighbour(
 ) -> None:
     lid = (Obstacle("lid", (0.45, 0.0, 0.14), (0.3, 0.3, 0.02)),)
     with pytest.raises(SkillError) as refused:
-        _clear_let_go(driver, sideways, lid)
+        _clear_let_go(driver, sideways, lid, None)
     assert refused.value.reason == "collision" and "lid" in refused.value.detail

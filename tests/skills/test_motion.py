@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 
 from manigraph_shared.errors import ConfigError, SkillError
-from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, PandaModel, PlanConfig
+from manigraph_skills.motion import (
+    HOME_Q,
+    GraspPlanner,
+    IKSolver,
+    JointTrajectory,
+    PandaModel,
+    PlanConfig,
+)
 from manigraph_skills.motion.model import top_down
 from manigraph_skills.motion.plan import grasp_yaw
 
@@ -130,3 +137,20 @@ def test_every_corner_of_the_task_workspace_is_planned_from_the_rest_pose(
             if (gx, gy) != (x, y):
                 place = planner.place(pick.final, np.array([gx, gy, height]))
                 planner.release(place.final)
+
+
+def test_a_release_far_out_and_high_that_cannot_rise_straight_draws_back_as_it_rises() -> None:
+    model = PandaModel()
+    planner = GraspPlanner(model)
+    # A hand in a far corner of a pulled-out top rack's slots (found by scanning).
+    hand = np.array([0.70, -0.32, 0.33])
+    q = IKSolver(model).solve(top_down(hand, np.pi / 2), HOME_Q).q
+    straight = JointTrajectory()
+    straight.add(0.0, q, True)
+    with pytest.raises(SkillError, match="retreat"):
+        planner.line(straight, hand + np.array([0.0, 0.0, 0.06]), np.pi / 2, False, 0.2, "retreat")
+    released = planner.release(q)
+    end = model.tcp_pose(released.final).translation
+    assert end[2] == pytest.approx(hand[2] + 0.06, abs=1e-3)
+    assert hand[0] - 0.08 - 1e-3 <= end[0] < hand[0] - 0.01  # drawn back towards the robot
+    assert released.closed[-1] is False

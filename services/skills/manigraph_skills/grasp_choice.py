@@ -9,6 +9,14 @@
   and stacks and pyramid rows, which have room along x, are grasped as before.
 * **Dishes**: a plate standing on an edge is taken across its thickness (``plate_turn``) and
   set into its slot with its thickness across y, between the slot's ribs; a bowl as a block.
+* **How high to take a dish**: at its centre, unless the hand (its underside
+  ``HAND_ABOVE_TCP`` over the TCP, 20 cm long) would come down onto a taller dish beside it
+  (a plate on its rim, 6.4 cm, next to a bowl, 3.5 cm): then higher, as far as leaves
+  ``GRIP_DEPTH`` of the dish between the fingertips (``dish_grasp_height``).
+* **How wide to open**: around a dish the fingers open to its width across them plus
+  ``OPENING_MARGIN`` (a plate on its rim: 3.5 cm), not fully (8 cm): on the counter's rows
+  8 cm apart and in slots 5.5 cm apart, fully open fingers reach into the neighbouring dish.
+  Within ``FULLY_OPEN_WITHIN`` of fully open (a bowl), and for blocks and covers, fully.
 * **How high to carry**: a cover sticks out far beyond the hand, so it is carried with its
   underside above every object's top and every goal (a box's rim is under its lid goal); a
   held block is carried the same way (its underside 2 cm over every top), and the empty hand
@@ -38,6 +46,38 @@ MARGIN = 0.005
 CARRY_CLEARANCE = 0.02
 #: Hand yaw that turns the closing axis from x to y.
 TURN_TO_Y = -np.pi / 2
+#: The hand's underside above the TCP along its length (its collision mesh), metres, and
+#: how far from the TCP along the closing axis it reaches.
+HAND_ABOVE_TCP = 0.037
+HAND_HALF_LENGTH = 0.104
+#: Room kept between the hand's underside and a dish beside the one it takes, metres.
+HAND_CLEARANCE = 0.004
+#: Least height of a dish between the fingertips when it is taken above its centre, metres.
+GRIP_DEPTH = 0.015
+#: The open fingers' gap beyond a dish's width across them, metres (half on each side).
+OPENING_MARGIN = 0.02
+#: An opening this close to fully open is fully open, metres: a bowl (5 cm) let go of with
+#: the fingers 7 cm apart stayed on one of them in the sim (its fingers hold only by their
+#: drives short of the joint limit); the half centimetre a side it would spare is not worth it.
+FULLY_OPEN_WITHIN = 0.015
+DISHES = ("plate", "bowl")
+
+
+def dish_opening(item: SceneObject, closing: np.ndarray | None = None) -> float | None:
+    """How far apart to open the fingers around ``item``: its width along the closing axis
+    ``closing`` (a horizontal direction; None: whichever of its two horizontal axes is wider)
+    plus ``OPENING_MARGIN``, at most fully open; None (fully open) for a block or a cover."""
+    if item.category.value not in DISHES:
+        return None
+    rotation = rotation_of(item.orientation)
+    size = np.array(item.size.as_tuple())
+    if closing is None:
+        horizontal = np.argsort(np.abs(rotation[2]))[:2]  # the two axes nearest level
+        width = float(size[horizontal].max())
+    else:
+        width = float(size[int(np.argmax(np.abs(rotation.T @ closing)))])
+    opening = width + OPENING_MARGIN
+    return opening if opening <= 2 * FINGER_OPEN - FULLY_OPEN_WITHIN else 2 * FINGER_OPEN
 
 
 def room(scene: Scene, point: np.ndarray, axis: int, moving: str) -> float:
@@ -69,6 +109,30 @@ def closing_turn(scene: Scene, point: np.ndarray, moving: str) -> float:
     if room_x >= FINGER_REACH + MARGIN:
         return 0.0
     return TURN_TO_Y if room(scene, point, 1, moving) > room_x else 0.0
+
+
+def vertical_half(item: SceneObject) -> float:
+    """Half the height of ``item`` as it lies (its box turned by its orientation)."""
+    size = np.array(item.size.as_tuple())
+    return float(np.abs(rotation_of(item.orientation)[2]) @ size) / 2
+
+
+def dish_grasp_height(scene: Scene, item: SceneObject, at: np.ndarray, height: float) -> float:
+    """TCP above the centre of dish ``item`` (lying at ``at``) to take it with: ``height``,
+    or higher if the hand would come down onto a taller dish within its length, as far as
+    leaves ``GRIP_DEPTH`` of the dish between the fingertips."""
+    if item.category.value not in DISHES:
+        return height
+    tallest = 0.0
+    for other in scene.objects:
+        if other.id == item.id or not other.visible:
+            continue
+        reach = HAND_HALF_LENGTH + float(max(other.size.as_tuple())) / 2
+        if np.linalg.norm(np.array(other.position.as_tuple()[:2]) - at[:2]) < reach:
+            tallest = max(tallest, other.position.z + vertical_half(other))
+    needed = tallest + HAND_CLEARANCE - HAND_ABOVE_TCP - at[2]
+    highest = vertical_half(item) - GRIP_DEPTH + FINGER_BELOW_TCP
+    return max(height, min(float(needed), highest))
 
 
 def carry_height(scene: Scene, item: SceneObject, height: float) -> float:
@@ -106,21 +170,26 @@ def plate_turn(item: SceneObject) -> float | None:
 def choose_grasps(scene: Scene, item: SceneObject, goal: Vector3) -> tuple[Grasp, Grasp]:
     """The grasp to pick ``item`` with, and the one to set it down at ``goal`` with, each
     with the obstacles the arm must avoid on the way (``obstacles``)."""
-    height = grasp_height(item.category.value, np.array(item.size.as_tuple()))
-    carry = carry_height(scene, item, height)
     here, there = np.array(item.position.as_tuple()), np.array(goal.as_tuple())
+    height = grasp_height(item.category.value, np.array(item.size.as_tuple()))
+    height = dish_grasp_height(scene, item, here, height)
+    carry = carry_height(scene, item, height)
     turn = plate_turn(item)
     if turn is not None:
         # Into its slot across y whichever way it was taken: the slot's ribs hold it so.
+        thin = rotation_of(item.orientation)[:, 2]
+        opening = dish_opening(item, thin)
         return (
-            Grasp(height, turn, carry, scene_obstacles(scene, item, here), np.pi),
-            Grasp(height, TURN_TO_Y, carry, scene_obstacles(scene, item, there), np.pi),
+            Grasp(height, turn, carry, scene_obstacles(scene, item, here), np.pi, opening),
+            Grasp(height, TURN_TO_Y, carry, scene_obstacles(scene, item, there), np.pi, opening),
         )
+    opening = dish_opening(item)
     pick = Grasp(
         height,
         closing_turn(scene, _point(item.position, height), item.id),
         carry,
         scene_obstacles(scene, item, here),
+        opening=opening,
     )
     if item.category is ObjectCategory.BLOCK:
         # The planner carries at most ``PlanConfig.max_carry_z`` (0.30 m) high: a block lifted
@@ -132,5 +201,6 @@ def choose_grasps(scene: Scene, item: SceneObject, goal: Vector3) -> tuple[Grasp
         closing_turn(scene, _point(goal, height), item.id),
         carry,
         scene_obstacles(scene, item, there),
+        opening=opening,
     )
     return pick, place

@@ -33,10 +33,14 @@ class GripperTarget(StrEnum):
 
 class JointTrajectoryPoint(Struct):
     """Joint positions to reach at ``time_from_start``; the gripper is driven to ``gripper``
-    while the arm moves towards this point."""
+    while the arm moves towards this point, open as wide as ``opening`` (a dish between
+    neighbours is taken with the fingers open little wider than it)."""
 
     positions: list[float] = Field(max_length=MAX_JOINTS, description="radians, within +-2 pi")
     gripper: GripperTarget
+    opening: FingerWidth | None = Field(
+        None, description="distance between the open fingers, metres; None: fully open"
+    )
     time_from_start: float = Field(ge=0.0, le=3600.0, description="seconds")
 
     @model_validator(mode="after")

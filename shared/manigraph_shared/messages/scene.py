@@ -76,6 +76,9 @@ class SceneRack(Struct):
     id: Identifier
     position: Vector3 = Field(description="centre of the rack's handle, metres")
     open: bool = Field(description="pulled out: it can be loaded")
+    travel: float | None = Field(
+        None, ge=0.0, le=1.0, description="how far it is out, metres, where measured"
+    )
 
 
 class Scene(Message):

@@ -81,11 +81,14 @@ class Rack:
     #: Centre of the closed rack (x, y, z); open, it is ``RACK_TRAVEL`` nearer the robot.
     closed_centre: np.ndarray
     open: bool = False
+    #: How far it is out, metres, where a physics world measured it (a rack a placement
+    #: nudged part of the way in); None: all the way if open, else not at all.
+    travel: float | None = None
 
     @property
     def centre(self) -> np.ndarray:
-        shift = np.array([-RACK_TRAVEL if self.open else 0.0, 0.0, 0.0])
-        return self.closed_centre + shift
+        travel = self.travel if self.travel is not None else RACK_TRAVEL if self.open else 0.0
+        return self.closed_centre - np.array([travel, 0.0, 0.0])
 
     @property
     def handle(self) -> np.ndarray:

@@ -43,7 +43,7 @@ def dishwasher_scene(
         for slot in world.slots.values()
     ]
     racks = [
-        SceneRack(id=rack.id, position=vector(rack.handle), open=rack.open)
+        SceneRack(id=rack.id, position=vector(rack.handle), open=rack.open, travel=rack.travel)
         for rack in world.racks.values()
     ]
     return Scene(

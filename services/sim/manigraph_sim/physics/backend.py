@@ -304,6 +304,7 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
                 self.realtime,
                 halt=self.halted.is_set,
                 while_moving=self.while_moving,
+                openings=[p.opening for p in command.points],
             )
             if self.halted.is_set():
                 raise SkillError("stopped", "emergency stop during the trajectory")

@@ -142,7 +142,6 @@ class PhysicsWorld:
             self.entities[body.id] = self._add_body(body, BLOCK_COLOURS[index % len(BLOCK_COLOURS)])
         self.set_targets(HOME_Q, closed=False)
         self.robot.set_qpos(np.concatenate([HOME_Q, [FINGER_OPEN, FINGER_OPEN]]))
-        self.gripper_closed = False
         self.step(round(c.settle_time / c.timestep))
 
     def _add_body(self, body: Body, colour: list[float]) -> sapien.Entity:
@@ -223,13 +222,16 @@ class PhysicsWorld:
         raise ConfigError("panda_urdf", "no panda_hand_tcp link")
 
     # --- motion -----------------------------------------------------------------------------
-    def set_targets(self, arm_q: np.ndarray, closed: bool) -> None:
+    def set_targets(self, arm_q: np.ndarray, closed: bool, opening: float | None = None) -> None:
+        """Drive the arm towards ``arm_q`` and the fingers closed, or open ``opening`` apart
+        (None: fully)."""
         for joint, value in zip(self.arm, arm_q, strict=True):
             joint.set_drive_target(float(value))
-        finger = 0.0 if closed else FINGER_OPEN
+        finger = FINGER_OPEN if opening is None else min(opening / 2, FINGER_OPEN)
         for joint in self.fingers:
-            joint.set_drive_target(finger)
+            joint.set_drive_target(0.0 if closed else finger)
         self.gripper_closed = closed
+        self.opening = opening
 
     def step(self, count: int = 1) -> None:
         for _ in range(count):
@@ -246,24 +248,26 @@ class PhysicsWorld:
         realtime: bool,
         halt: Callable[[], bool] | None = None,
         while_moving: Callable[[], None] | None = None,
+        openings: list[float | None] | None = None,
     ) -> int:
         """Track the trajectory step by step (linear between points), then settle.
         ``halt`` (checked every step) stops the arm where it is: the emergency stop.
         With ``realtime`` each step waits for its moment of wall-clock time, and
         ``while_moving`` runs after each one (to publish the state a robot streams while it
-        moves). Returns the number of physics steps taken."""
+        moves). ``openings``: how far the fingers open at each point (None: fully).
+        Returns the number of physics steps taken."""
         dt = self.config.timestep
         total = int(np.ceil(times[-1] / dt)) + round(self.config.settle_time / dt)
         start_wall = time.perf_counter()
         for k in range(1, total + 1):
             if halt is not None and halt():
-                self.set_targets(self.arm_q.copy(), self.gripper_closed)
+                self.set_targets(self.arm_q.copy(), self.gripper_closed, self.opening)
                 self.step()
                 return k
             t = k * dt
             index = min(int(np.searchsorted(times, t)), len(times) - 1)
             target = np.array([np.interp(t, times, positions[:, j]) for j in range(len(self.arm))])
-            self.set_targets(target, closed[index])
+            self.set_targets(target, closed[index], openings[index] if openings else None)
             self.step()
             if realtime:
                 ahead = k * dt - (time.perf_counter() - start_wall)

@@ -34,6 +34,8 @@ class Grasp:
     #: The other hand yaw (added to ``turn``) the object may be held at, radians: a quarter
     #: turn for a square block or cover, a half turn for a plate taken across its thickness.
     other_turn: float = math.pi / 2
+    #: How far apart the fingers open around it, metres; None: fully (``grasp_choice``).
+    opening: float | None = None
 
 
 #: A block's grasp at its centre, the driver's default yaw and carry heights.
@@ -81,10 +83,18 @@ class RobotDriver(ABC):
     def place(self, motion: Motion) -> None:
         """Carry the held object to the motion's position and release it."""
 
-    def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3, is_open: bool) -> None:
+    def toggle_tray(
+        self,
+        decision_id: str,
+        rack_id: str,
+        handle: Vector3,
+        is_open: bool,
+        travel: float | None = None,
+    ) -> None:
         """Grasp rack ``rack_id``'s handle (at ``handle``) and push the rack in if
-        ``is_open``, else pull it out (dishwasher). A driver that cannot refuses with reason
-        ``unsupported``."""
+        ``is_open``, else pull it out (dishwasher); ``travel``: how far it is out now, where
+        the scene measured it (None: all the way if open, else not at all). A driver that
+        cannot refuses with reason ``unsupported``."""
         name = getattr(self, "name", type(self).__name__)
         raise SkillError("unsupported", f"the {name} driver cannot toggle a tray yet")
 

@@ -14,6 +14,7 @@ first, and turned there (``move_dish``).
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -23,7 +24,7 @@ from manigraph_shared.messages import Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATION_NAMES
 from manigraph_shared.panda import FINGER_BELOW_TCP
 from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp, Motion
-from manigraph_skills.grasp_choice import room
+from manigraph_skills.grasp_choice import dish_grasp_height, dish_opening, room
 from manigraph_skills.motion.collision import Contact, refusal
 from manigraph_skills.motion.plan import UP, GraspPlanner
 from manigraph_skills.motion.tilt import let_go_sideways, set_down_sideways
@@ -34,6 +35,7 @@ from manigraph_skills.turn_over import (
     quaternion_of,
     rotation_of,
     set_down_hands,
+    top_down_rotation,
     up_index,
 )
 
@@ -169,7 +171,8 @@ def _tilt_once(
         )
     wanted = list(dict.fromkeys([target, *(t.up_after for t in candidates)]))
     current = item.model_copy(update={"position": _vector(position)})
-    height = grasp_height_for(float(position[2]))
+    lying = current.model_copy(update={"orientation": quaternion_of(dish)})
+    height = dish_grasp_height(scene, lying, position, grasp_height_for(float(position[2])))
     grasp = Grasp(height, 0.0, 0.0, scene_obstacles(scene, current, position), np.pi)
     tcp = position + np.array([0.0, 0.0, height])
     # Closing along the axis with more room beside the dish first (``grasp_choice.room``).
@@ -177,7 +180,7 @@ def _tilt_once(
     yaws.sort(
         key=lambda yaw: -room(scene, tcp, 0 if abs(np.sin(yaw)) > abs(np.cos(yaw)) else 1, item.id)
     )
-    _pick_for_tilt(driver, decision_id, item.id, tcp, yaws, grasp)
+    grasp = _pick_for_tilt(driver, decision_id, lying, tcp, yaws, grasp)
     hand = driver.model.tcp_pose(driver.transport.joint_positions()).rotation
     held = hand.T @ dish
     # The dish's centre from the TCP, in the hand's frame (the grasp may be above it).
@@ -202,6 +205,7 @@ def _tilt_once(
                     except SkillError as exc:
                         failure = failure or exc
                         continue
+                    trajectory.opening = grasp.opening
                     found = driver._contact(trajectory, obstacles)
                     if found is None:
                         log.info(
@@ -224,7 +228,9 @@ def _tilt_once(
             driver._put_back(decision_id, item.id)
         raise
     side, centre, obstacles = chosen[0]
-    released = driver._run(decision_id, lambda q: _clear_let_go(driver, q, obstacles))
+    released = driver._run(
+        decision_id, lambda q: _clear_let_go(driver, q, obstacles, grasp.opening)
+    )
     seen = driver.transport.object_position(item.id, after=released.stamp)
     log.info("turned %s %s", item.id, ORIENTATION_NAMES[up_index(side @ held)])
     return (seen if seen is not None else centre), side @ held
@@ -241,10 +247,13 @@ def move_dish(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Carry the dish top-down, lying as it lies, to the first of ``cells`` it can be set down
     on: where it then lies and its rotation (turned about the vertical as the hand turned)."""
-    current = item.model_copy(update={"position": _vector(position)})
-    height = grasp_height_for(float(position[2]))
-    taking = Grasp(height, 0.0, 0.0, scene_obstacles(scene, current, position))
-    driver.pick(Motion(decision_id, item.id, _vector(position), item.orientation, taking))
+    current = item.model_copy(
+        update={"position": _vector(position), "orientation": quaternion_of(dish)}
+    )
+    height = dish_grasp_height(scene, current, position, grasp_height_for(float(position[2])))
+    opening = dish_opening(current)
+    taking = Grasp(height, 0.0, 0.0, scene_obstacles(scene, current, position), opening=opening)
+    driver.pick(Motion(decision_id, item.id, _vector(position), current.orientation, taking))
     taken = driver.planner.yaw_of(driver.transport.joint_positions())
     failure: SkillError | None = None
     for cell in cells:
@@ -258,7 +267,7 @@ def move_dish(
             return planner.place(q, at, taken + turn, carry_z)
 
         carry = driver._avoiding(
-            to_cell, Grasp(height, 0.0, 0.0, obstacles, np.pi), there, f"moving {item.id}"
+            to_cell, Grasp(height, 0.0, 0.0, obstacles, np.pi, opening), there, f"moving {item.id}"
         )
         try:
             driver._run(decision_id, carry)
@@ -268,7 +277,9 @@ def move_dish(
             failure = failure or exc
             continue
         placed = driver.planner.yaw_of(driver.transport.joint_positions())
-        released = driver._run(decision_id, driver._checked(driver.planner.release, obstacles))
+        released = driver._run(
+            decision_id, driver._checked(driver.planner.release, obstacles, opening)
+        )
         seen = driver.transport.object_position(item.id, after=released.stamp)
         log.info("moved %s to %s", item.id, np.round(there, 3))
         return (seen if seen is not None else there), _about_vertical(placed - taken) @ dish
@@ -285,30 +296,39 @@ def _about_vertical(angle: float) -> np.ndarray:
 def _pick_for_tilt(
     driver: PandaMotionDriver,
     decision_id: str,
-    object_id: str,
+    item: SceneObject,
     tcp: np.ndarray,
     yaws: list[float],
     grasp: Grasp,
-) -> None:
+) -> Grasp:
     """Take the dish with the first of ``yaws`` (each closes along an axis some tilt turns
     it about) whose pick can be planned: the axis with more room may pass a rack's floor or
-    a neighbour the other clears."""
+    a neighbour the other clears. The grasp it was taken with (the fingers opened to its
+    width across them)."""
     for index, yaw in enumerate(yaws):
+        closing = top_down_rotation(yaw)[:, 1]
+        taking = replace(grasp, opening=dish_opening(item, closing))
         try:
-            driver.pick_at(decision_id, object_id, tcp, yaw, grasp)
-            return
+            driver.pick_at(decision_id, item.id, tcp, yaw, taking)
+            return taking
         except SkillError as exc:
             if exc.reason not in PLANNING_FAILURES or index == len(yaws) - 1:
                 raise
-            log.info("taking %s for a tilt at yaw %.2f: %s", object_id, yaw, exc)
+            log.info("taking %s for a tilt at yaw %.2f: %s", item.id, yaw, exc)
+    raise AssertionError("no yaw to take the dish at")
 
 
 def _clear_let_go(
-    driver: PandaMotionDriver, q: np.ndarray, obstacles: tuple[Obstacle, ...]
+    driver: PandaMotionDriver,
+    q: np.ndarray,
+    obstacles: tuple[Obstacle, ...],
+    opening: float | None,
 ) -> JointTrajectory:
-    """The first way of letting go (``tilt.let_go_sideways``) that touches nothing."""
+    """The first way of letting go (``tilt.let_go_sideways``), the fingers opening
+    ``opening`` apart, that touches nothing."""
     contact = None
     for way in let_go_sideways(driver.planner, q):
+        way.opening = opening
         found = driver._contact(way, obstacles)
         if found is None:
             return way

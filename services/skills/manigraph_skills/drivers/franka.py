@@ -28,6 +28,7 @@ from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_shared.messages import (
     GripperTarget,
     JointTrajectoryCommand,
+    JointTrajectoryPoint,
     JointTrajectoryResult,
     Scene,
 )
@@ -178,8 +179,9 @@ class FrankaJointTransport:
                 np.round(report.tcp_high, 3).tolist(),
             )
             self._dry_q = np.array(command.points[-1].positions)
-            closed = command.points[-1].gripper is GripperTarget.CLOSED
-            self._dry_width = self.config.grasp_width if closed else OPEN_WIDTH
+            last = command.points[-1]
+            closed = last.gripper is GripperTarget.CLOSED
+            self._dry_width = self.config.grasp_width if closed else _opening(last)
             return self._result(command, self._dry_q, self._dry_width)
         start = self._read_joints()
         offset = np.abs(start - np.array(command.points[0].positions))
@@ -232,16 +234,20 @@ class FrankaJointTransport:
         return float(np.clip(self.gripper.width, 0.0, 0.2))
 
     def _run(self, command: JointTrajectoryCommand) -> None:
-        """Arm motions between gripper changes; each change waits for the hand."""
+        """Arm motions between gripper changes (closing, or opening to another width); each
+        change waits for the hand."""
         franky = _franky()
         points = command.points
-        gripper = points[0].gripper
+        first = points[0]
+        if first.gripper is GripperTarget.OPEN and abs(self._width() - _opening(first)) > 0.002:
+            self._grip(first)  # open as wide as this motion wants before it moves
+        gripper = (first.gripper, first.opening)
         run: list[int] = [0]
         for index in range(1, len(points)):
-            if points[index].gripper is not gripper:
+            if (points[index].gripper, points[index].opening) != gripper:
                 self._move(franky, command, run)
-                gripper = points[index].gripper
-                self._grip(gripper)
+                gripper = (points[index].gripper, points[index].opening)
+                self._grip(points[index])
                 run = [index - 1]
             run.append(index)
         self._move(franky, command, run)
@@ -266,18 +272,18 @@ class FrankaJointTransport:
         ]
         self.robot.move(franky.JointWaypointMotion(waypoints))  # type: ignore[union-attr]
 
-    def _grip(self, target: GripperTarget) -> None:
+    def _grip(self, point: JointTrajectoryPoint) -> None:
         if self.gripper is None:
             raise SkillError("no_gripper", "no gripper is mounted")
         c = self.config
-        if target is GripperTarget.CLOSED:
+        if point.gripper is GripperTarget.CLOSED:
             # Anything from 0 to twice the expected width counts: the driver judges the
             # grasp from the width the fingers closed to.
             self.gripper.grasp(
                 c.grasp_width, c.gripper_speed, c.grasp_force, c.grasp_width, c.grasp_width
             )
         else:
-            self.gripper.move(OPEN_WIDTH, c.gripper_speed)
+            self.gripper.move(_opening(point), c.gripper_speed)
 
     def _result(
         self,
@@ -340,3 +346,8 @@ class FrankaDriver(PandaMotionDriver):
                 robot.stop()
             except Exception as exc:  # the library's; stopping is best effort on shutdown
                 log.warning("stopping the robot: %s", exc)
+
+
+def _opening(point: JointTrajectoryPoint) -> float:
+    """How far apart the fingers open at ``point``, metres (fully, unless it says)."""
+    return OPEN_WIDTH if point.opening is None else min(point.opening, OPEN_WIDTH)

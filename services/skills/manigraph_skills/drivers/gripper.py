@@ -74,6 +74,13 @@ class GripperDriver(RobotDriver):
     def place(self, motion: Motion) -> None:
         self._send(GripperOp.PLACE, motion)
 
-    def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3, is_open: bool) -> None:
+    def toggle_tray(
+        self,
+        decision_id: str,
+        rack_id: str,
+        handle: Vector3,
+        is_open: bool,
+        travel: float | None = None,
+    ) -> None:
         """One ``toggle_tray`` command naming the rack, at its handle."""
         self._send(GripperOp.TOGGLE_TRAY, Motion(decision_id, rack_id, handle, Quaternion()))

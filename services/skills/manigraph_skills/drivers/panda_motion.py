@@ -194,7 +194,7 @@ class PandaMotionDriver(RobotDriver):
         taken = self.planner.yaw_of(np.array(result.positions)) if result.positions else yaw
         self._picked = (object_id, target, taken, grasp)
         if result.gripper_width < self.min_grasp_width:
-            self._open(decision_id, grasp.obstacles)
+            self._open(decision_id, grasp)
             raise SkillError(
                 "grasp_slipped",
                 f"fingers closed to {result.gripper_width * 1000:.1f} mm: {object_id} not held",
@@ -222,9 +222,11 @@ class PandaMotionDriver(RobotDriver):
                 self._put_back(decision_id, object_id)
             raise
         if carry.gripper_width < self.min_grasp_width:
-            self._open(decision_id, grasp.obstacles)
+            self._open(decision_id, grasp)
             raise SkillError("grasp_slipped", f"{object_id} was lost during the transfer")
-        released = self._run(decision_id, self._checked(self.planner.release, grasp.obstacles))
+        released = self._run(
+            decision_id, self._checked(self.planner.release, grasp.obstacles, grasp.opening)
+        )
         seen = self.transport.object_position(object_id, after=released.stamp)
         if seen is not None:
             miss = float(np.linalg.norm(seen - target))
@@ -244,9 +246,13 @@ class PandaMotionDriver(RobotDriver):
         try:
             self._run(
                 decision_id,
-                self._checked(lambda q: self.planner.place(q, hand, yaw), grasp.obstacles),
+                self._checked(
+                    lambda q: self.planner.place(q, hand, yaw), grasp.obstacles, grasp.opening
+                ),
             )
-            self._run(decision_id, self._checked(self.planner.release, grasp.obstacles))
+            self._run(
+                decision_id, self._checked(self.planner.release, grasp.obstacles, grasp.opening)
+            )
         except SkillError as exc:
             log.info("could not put %s back: %s", object_id, exc)
 
@@ -265,12 +271,22 @@ class PandaMotionDriver(RobotDriver):
             return item
         return turn_dish(self, decision_id, item, wanted, scene)
 
-    def toggle_tray(self, decision_id: str, rack_id: str, handle: Vector3, is_open: bool) -> None:
+    def toggle_tray(
+        self,
+        decision_id: str,
+        rack_id: str,
+        handle: Vector3,
+        is_open: bool,
+        travel: float | None = None,
+    ) -> None:
         """Down onto the rack's handle tab (``grasp_points.rack_grip``), close across it,
-        pull the rack out along -x (or push it in), release and rise."""
+        pull the rack out along -x (or push it in) as far as it has left to go, release and
+        rise."""
         start = np.array(handle.as_tuple())
         grip = start + rack_grip(rack_id)
-        shift = np.array([RACK_TRAVEL if is_open else -RACK_TRAVEL, 0.0, 0.0])
+        out = (RACK_TRAVEL if is_open else 0.0) if travel is None else travel
+        distance = out if is_open else RACK_TRAVEL - out
+        shift = np.array([distance if is_open else -distance, 0.0, 0.0])
         # Yaw 0: the fingers close along y, across the tab.
         held = self._run(
             decision_id,
@@ -278,7 +294,7 @@ class PandaMotionDriver(RobotDriver):
             home_around=(),
         )
         if held.gripper_width < self.min_grasp_width:
-            self._open(decision_id, ())
+            self._open(decision_id, Grasp())
             raise SkillError(
                 "handle_missed", f"fingers closed to {held.gripper_width * 1000:.1f} mm"
             )
@@ -286,7 +302,7 @@ class PandaMotionDriver(RobotDriver):
             decision_id, self._checked(lambda q: self.planner.release(q, HANDLE_BACK_OFF), ())
         )
         seen = self.transport.object_position(rack_id, after=released.stamp)
-        if seen is not None and abs(seen[0] - start[0]) < RACK_TRAVEL / 2:
+        if seen is not None and abs(seen[0] - start[0]) < distance / 2:
             raise SkillError("rack_stuck", f"{rack_id} is still where it was")
 
     def stop(self) -> None:
@@ -302,9 +318,9 @@ class PandaMotionDriver(RobotDriver):
         self.transport.abort(reason)
 
     # --- pieces -----------------------------------------------------------------------------
-    def _open(self, decision_id: str, obstacles: tuple[Obstacle, ...]) -> None:
+    def _open(self, decision_id: str, grasp: Grasp) -> None:
         """After a lost grasp: open and back off, so the next attempt starts clean."""
-        self._run(decision_id, self._checked(self.planner.release, obstacles))
+        self._run(decision_id, self._checked(self.planner.release, grasp.obstacles, grasp.opening))
 
     def _avoiding(
         self,
@@ -341,6 +357,7 @@ class PandaMotionDriver(RobotDriver):
                 except SkillError as exc:  # e.g. no IK solution this high or turned
                     failure = failure or exc
                     continue
+                trajectory.opening = grasp.opening
                 found = self._contact(trajectory, grasp.obstacles)
                 if found is None:
                     if contacts:
@@ -379,10 +396,17 @@ class PandaMotionDriver(RobotDriver):
         return heights
 
     def _checked(
-        self, make: Callable[[np.ndarray], JointTrajectory], obstacles: tuple[Obstacle, ...]
+        self,
+        make: Callable[[np.ndarray], JointTrajectory],
+        obstacles: tuple[Obstacle, ...],
+        opening: float | None = None,
     ) -> Callable[[np.ndarray], JointTrajectory]:
+        """``make``, the fingers open ``opening`` apart (None: fully), refused as ``collision``
+        if an arm link would touch something."""
+
         def plan(q: np.ndarray) -> JointTrajectory:
             trajectory = make(q)
+            trajectory.opening = opening
             found = self._contact(trajectory, obstacles)
             if found is not None:
                 raise SkillError("collision", str(found))
@@ -462,6 +486,7 @@ class PandaMotionDriver(RobotDriver):
                 JointTrajectoryPoint(
                     positions=q.tolist(),
                     gripper=GripperTarget.CLOSED if closed else GripperTarget.OPEN,
+                    opening=trajectory.opening,
                     time_from_start=t,
                 )
                 for t, q, closed in zip(

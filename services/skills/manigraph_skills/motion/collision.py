@@ -2,9 +2,10 @@
 and the scene's obstacles, with Pinocchio's geometry model and coal.
 
 The arm model is the URDF's collision geometry, reduced like ``PandaModel`` (fingers locked
-open, as they are while the arm moves between grasps): links 1-7, the hand and the finger
-boxes. Obstacles are boxes (``manigraph_skills.obstacles``) plus the table, a 3 m x 3 m slab
-below z = 0 around the base. Pairs checked:
+open, as they are while the arm moves between grasps, as wide as the trajectory opens them:
+``JointTrajectory.opening``): links 1-7, the hand and the finger boxes. Obstacles are boxes
+(``manigraph_skills.obstacles``) plus the table, a 3 m x 3 m slab below z = 0 around the
+base. Pairs checked:
 
 * every link from 1 to the fingers against every obstacle, except the hand and fingers
   against a *support* (what the moved object stands on, or is set down on);
@@ -79,29 +80,42 @@ class ArmCollisionModel:
             raise ValueError("resolution: must be > 0 metres")
         self.resolution = resolution
         urdf = str(model.urdf)
-        full = pin.buildModelFromUrdf(urdf)
+        self._full = pin.buildModelFromUrdf(urdf)
         meshes = str(model.urdf.parent)  # mesh paths in the URDF are relative to it
-        geometry = pin.buildGeomFromUrdf(full, urdf, pin.COLLISION, package_dirs=meshes)
-        q0 = pin.neutral(full)
-        for name in FINGER_JOINTS:
-            joint = full.getJointId(name)
-            q0[full.joints[joint].idx_q] = FINGER_OPEN
-        locked = [full.getJointId(name) for name in FINGER_JOINTS]
-        self.model, (self.arm,) = pin.buildReducedModel(full, [geometry], locked, q0)
-        self.data = self.model.createData()
+        self._geometry = pin.buildGeomFromUrdf(self._full, urdf, pin.COLLISION, package_dirs=meshes)
+        self._openings: dict[int, tuple[pin.Model, pin.Data, pin.GeometryModel]] = {}
+        self.model, self.data, self.arm = self._opened(None)
         self.links = [self.model.frames[g.parentFrame].name for g in self.arm.geometryObjects]
+
+    def _opened(self, opening: float | None) -> tuple[pin.Model, pin.Data, pin.GeometryModel]:
+        """The arm with its fingers locked ``opening`` apart (None: fully open), built once
+        per millimetre of opening."""
+        finger = FINGER_OPEN if opening is None else min(opening / 2, FINGER_OPEN)
+        key = round(finger * 2000)
+        if key not in self._openings:
+            full = self._full
+            q0 = pin.neutral(full)
+            for name in FINGER_JOINTS:
+                q0[full.joints[full.getJointId(name)].idx_q] = key / 2000
+            locked = [full.getJointId(name) for name in FINGER_JOINTS]
+            model, (arm,) = pin.buildReducedModel(full, [self._geometry], locked, q0)
+            self._openings[key] = (model, model.createData(), arm)
+        return self._openings[key]
 
     def first_contact(
         self, trajectory: JointTrajectory, obstacles: tuple[Obstacle, ...] = ()
     ) -> Contact | None:
         """The first contact along ``trajectory`` (points and the motion between them),
         except of pairs touching at its first point while they move apart (module doc)."""
-        geometry = self._with(obstacles)
+        model, model_data, arm = self._opened(trajectory.opening)
+        geometry = self._with(obstacles, arm)
         data = pin.GeometryData(geometry)
         times = trajectory.times
         positions = trajectory.positions
         start = times[0] if times else 0.0
-        escaping = self._touching(geometry, data, positions[0]) if positions else []
+        escaping = (
+            self._touching(model, model_data, geometry, data, positions[0]) if positions else []
+        )
         for pair in escaping:
             data.deactivateCollisionPair(pair)
         for index, q in enumerate(positions):
@@ -119,7 +133,7 @@ class ArmCollisionModel:
                     for s in np.arange(1, steps + 1) / steps
                 ]
             for t, sample in samples:
-                if pin.computeCollisions(self.model, self.data, geometry, data, sample, True):
+                if pin.computeCollisions(model, model_data, geometry, data, sample, True):
                     return self._contact(geometry, data, t)
                 if escaping:
                     still = [p for p in escaping if pin.computeCollision(geometry, data, p)]
@@ -130,16 +144,26 @@ class ArmCollisionModel:
                     escaping = still
         return None
 
-    def touching(self, q: np.ndarray, obstacles: tuple[Obstacle, ...] = ()) -> list[Contact]:
-        """Every contact of the arm standing at ``q`` (time 0)."""
-        geometry = self._with(obstacles)
+    def touching(
+        self, q: np.ndarray, obstacles: tuple[Obstacle, ...] = (), opening: float | None = None
+    ) -> list[Contact]:
+        """Every contact of the arm standing at ``q`` (time 0), its fingers ``opening``
+        apart (None: fully open)."""
+        model, model_data, arm = self._opened(opening)
+        geometry = self._with(obstacles, arm)
         data = pin.GeometryData(geometry)
-        return [self._pair_contact(geometry, p, 0.0) for p in self._touching(geometry, data, q)]
+        touching = self._touching(model, model_data, geometry, data, q)
+        return [self._pair_contact(geometry, p, 0.0) for p in touching]
 
+    @staticmethod
     def _touching(
-        self, geometry: pin.GeometryModel, data: pin.GeometryData, q: np.ndarray
+        model: pin.Model,
+        model_data: pin.Data,
+        geometry: pin.GeometryModel,
+        data: pin.GeometryData,
+        q: np.ndarray,
     ) -> list[int]:
-        pin.computeCollisions(self.model, self.data, geometry, data, q, False)
+        pin.computeCollisions(model, model_data, geometry, data, q, False)
         return [
             index
             for index in range(len(geometry.collisionPairs))
@@ -147,8 +171,8 @@ class ArmCollisionModel:
         ]
 
     # --- pieces -------------------------------------------------------------------------------
-    def _with(self, obstacles: tuple[Obstacle, ...]) -> pin.GeometryModel:
-        geometry = pin.GeometryModel(self.arm)
+    def _with(self, obstacles: tuple[Obstacle, ...], arm: pin.GeometryModel) -> pin.GeometryModel:
+        geometry = pin.GeometryModel(arm)
         table = pin.GeometryObject(
             TABLE_ID, 0, 0, pin.SE3(np.eye(3), np.array([0.5, 0.0, -0.05])), coal.Box(3, 3, 0.1)
         )

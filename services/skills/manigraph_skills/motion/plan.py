@@ -29,6 +29,8 @@ ANGLE_SPACING = 0.05
 MAX_JOINT_STEP = 0.3
 #: Joint-space samples of a move home (``GraspPlanner.home``).
 HOMING_SAMPLES = 30
+#: How far a retreat draws back towards the robot (-x) when it cannot rise straight, metres.
+RETREAT_BACK_OFFS = (0.0, 0.04, 0.08)
 
 
 @dataclass(frozen=True)
@@ -158,8 +160,17 @@ class GraspPlanner:
         # Up by ``retreat``, but not above the carry ceiling (out of reach far out), and
         # never less than ``approach``.
         top = max(hand[2] + c.approach, min(hand[2] + c.retreat, c.max_carry_z))
-        above = np.array([hand[0] - back, hand[1], top])
-        self.line(trajectory, above, self.yaw_of(q), False, c.slow_speed, "retreat")
+        # Far out and high (a slot of a pulled-out rack) the arm may have no straight rise
+        # without flipping: then it rises drawing back towards the robot.
+        for extra in RETREAT_BACK_OFFS:
+            above = np.array([hand[0] - back - extra, hand[1], top])
+            try:
+                self.line(trajectory, above, self.yaw_of(q), False, c.slow_speed, "retreat")
+            except SkillError:
+                if extra == RETREAT_BACK_OFFS[-1]:
+                    raise
+                continue  # a failed line adds nothing
+            break
         return trajectory
 
     def home(self, q: np.ndarray, rise: float = 0.08) -> JointTrajectory:

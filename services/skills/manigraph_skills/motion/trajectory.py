@@ -24,11 +24,13 @@ def min_jerk(tau: np.ndarray) -> np.ndarray:
 @dataclass
 class JointTrajectory:
     """Points ``positions[i]`` (radians, arm joints) to be reached at ``times[i]`` seconds from
-    the start, with the gripper commanded ``closed[i]`` while moving towards point ``i``."""
+    the start, with the gripper commanded ``closed[i]`` while moving towards point ``i``, and
+    open ``opening`` metres wide where it is not closed (None: fully)."""
 
     times: list[float] = field(default_factory=list)
     positions: list[np.ndarray] = field(default_factory=list)
     closed: list[bool] = field(default_factory=list)
+    opening: float | None = None
 
     @property
     def duration(self) -> float:
