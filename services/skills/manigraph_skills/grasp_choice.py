@@ -66,7 +66,8 @@ DISHES = ("plate", "bowl")
 def dish_opening(item: SceneObject, closing: np.ndarray | None = None) -> float | None:
     """How far apart to open the fingers around ``item``: its width along the closing axis
     ``closing`` (a horizontal direction; None: whichever of its two horizontal axes is wider)
-    plus ``OPENING_MARGIN``, at most fully open; None (fully open) for a block or a cover."""
+    plus ``OPENING_MARGIN``; fully open (8 cm) within ``FULLY_OPEN_WITHIN`` of it; None
+    (fully open, as before) for a block or a cover."""
     if item.category.value not in DISHES:
         return None
     rotation = rotation_of(item.orientation)
