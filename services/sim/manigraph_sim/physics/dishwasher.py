@@ -81,14 +81,14 @@ RIB_X: Final = (-0.07, 0.0)
 TAB_Z: Final = (0.0, 0.03)
 #: Joint damping of a rack's rail, N s / m; rack density, kg / m^3.
 RAIL_DAMPING: Final = 30.0
+RACK_DENSITY: Final = 500.0
+DISH_DENSITY: Final = 600.0
 #: A rack's detent, N / m: a spring holding it at the end of its rail it is nearer (out
 #: past half its travel, in otherwise), as a real rack clicks into place. It keeps a dish
 #: set down in a slot from shoving the rack part of the way in (without it, one placement
 #: moved a rack 6.5 cm, and the next dish went onto a rib); the hand pulling the handle
 #: works against at most DETENT * RACK_TRAVEL / 2 (12 N) before the rack clicks the other way.
 DETENT: Final = 150.0
-RACK_DENSITY: Final = 500.0
-DISH_DENSITY: Final = 600.0
 #: A dish counts as standing in a slot when its centre is this close to the slot's position
 #: (with the rack where it physically is) and it is not held: half a plate's slot pitch.
 SLOT_FIT: Final = 0.02
