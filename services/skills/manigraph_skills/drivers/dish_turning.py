@@ -266,9 +266,8 @@ def move_dish(
         ) -> JointTrajectory:
             return planner.place(q, at, taken + turn, carry_z)
 
-        carry = driver._avoiding(
-            to_cell, Grasp(height, 0.0, 0.0, obstacles, np.pi, opening), there, f"moving {item.id}"
-        )
+        setting_down = Grasp(height, 0.0, 0.0, obstacles, np.pi, opening)
+        carry = driver._avoiding(to_cell, setting_down, there, f"moving {item.id}")
         try:
             driver._run(decision_id, carry)
         except SkillError as exc:
@@ -277,9 +276,7 @@ def move_dish(
             failure = failure or exc
             continue
         placed = driver.planner.yaw_of(driver.transport.joint_positions())
-        released = driver._run(
-            decision_id, driver._checked(driver.planner.release, obstacles, opening)
-        )
+        released = driver._release(decision_id, setting_down)
         seen = driver.transport.object_position(item.id, after=released.stamp)
         log.info("moved %s to %s", item.id, np.round(there, 3))
         return (seen if seen is not None else there), _about_vertical(placed - taken) @ dish

@@ -194,7 +194,7 @@ class PandaMotionDriver(RobotDriver):
         taken = self.planner.yaw_of(np.array(result.positions)) if result.positions else yaw
         self._picked = (object_id, target, taken, grasp)
         if result.gripper_width < self.min_grasp_width:
-            self._open(decision_id, grasp)
+            self._release(decision_id, grasp)
             raise SkillError(
                 "grasp_slipped",
                 f"fingers closed to {result.gripper_width * 1000:.1f} mm: {object_id} not held",
@@ -222,11 +222,9 @@ class PandaMotionDriver(RobotDriver):
                 self._put_back(decision_id, object_id)
             raise
         if carry.gripper_width < self.min_grasp_width:
-            self._open(decision_id, grasp)
+            self._release(decision_id, grasp)
             raise SkillError("grasp_slipped", f"{object_id} was lost during the transfer")
-        released = self._run(
-            decision_id, self._checked(self.planner.release, grasp.obstacles, grasp.opening)
-        )
+        released = self._release(decision_id, grasp)
         seen = self.transport.object_position(object_id, after=released.stamp)
         if seen is not None:
             miss = float(np.linalg.norm(seen - target))
@@ -250,9 +248,7 @@ class PandaMotionDriver(RobotDriver):
                     lambda q: self.planner.place(q, hand, yaw), grasp.obstacles, grasp.opening
                 ),
             )
-            self._run(
-                decision_id, self._checked(self.planner.release, grasp.obstacles, grasp.opening)
-            )
+            self._release(decision_id, grasp)
         except SkillError as exc:
             log.info("could not put %s back: %s", object_id, exc)
 
@@ -294,7 +290,7 @@ class PandaMotionDriver(RobotDriver):
             home_around=(),
         )
         if held.gripper_width < self.min_grasp_width:
-            self._open(decision_id, Grasp())
+            self._release(decision_id, Grasp())
             raise SkillError(
                 "handle_missed", f"fingers closed to {held.gripper_width * 1000:.1f} mm"
             )
@@ -318,9 +314,12 @@ class PandaMotionDriver(RobotDriver):
         self.transport.abort(reason)
 
     # --- pieces -----------------------------------------------------------------------------
-    def _open(self, decision_id: str, grasp: Grasp) -> None:
-        """After a lost grasp: open and back off, so the next attempt starts clean."""
-        self._run(decision_id, self._checked(self.planner.release, grasp.obstacles, grasp.opening))
+    def _release(self, decision_id: str, grasp: Grasp) -> JointTrajectoryResult:
+        """Open as wide as ``grasp`` says where the hand is and retreat (after a placement,
+        or after a lost grasp, so the next attempt starts clean)."""
+        return self._run(
+            decision_id, self._checked(self.planner.release, grasp.obstacles, grasp.opening)
+        )
 
     def _avoiding(
         self,

@@ -84,8 +84,8 @@ class ArmCollisionModel:
         meshes = str(model.urdf.parent)  # mesh paths in the URDF are relative to it
         self._geometry = pin.buildGeomFromUrdf(self._full, urdf, pin.COLLISION, package_dirs=meshes)
         self._openings: dict[int, tuple[pin.Model, pin.Data, pin.GeometryModel]] = {}
-        self.model, self.data, self.arm = self._opened(None)
-        self.links = [self.model.frames[g.parentFrame].name for g in self.arm.geometryObjects]
+        reduced, _, arm = self._opened(None)  # every opening has these links, in this order
+        self.links = [reduced.frames[g.parentFrame].name for g in arm.geometryObjects]
 
     def _opened(self, opening: float | None) -> tuple[pin.Model, pin.Data, pin.GeometryModel]:
         """The arm with its fingers locked ``opening`` apart (None: fully open), built once
