@@ -74,6 +74,13 @@ class SceneGate:
         with self._lock:
             return self.running is None or self.running == episode_id
 
+    def may_be_next(self, episode_id: str) -> bool:
+        """Whether ``episode_id`` is running or may be the one to start next (the running one
+        has ended): a message of the next episode may overtake its start event, coming from
+        another process by another path."""
+        with self._lock:
+            return self.running is None or self.running == episode_id or self._ended
+
     def check(self, scene: Scene) -> str | None:
         """None if ``scene`` is acceptable (and remember it), else the reason to refuse it."""
         limits = self.limits

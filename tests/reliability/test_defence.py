@@ -119,6 +119,34 @@ def test_sixty_forged_actions_do_not_stall_a_real_run(running_stack: Stack) -> N
         assert "Action:not_running_episode" in refused, status.rejections
 
 
+def test_an_action_that_overtakes_its_episodes_start_is_executed(running_stack: Stack) -> None:
+    """The planner is one hop nearer to skills than the world's start event: the first action
+    of a new episode can arrive first. Skills refused it (``not_running_episode``) and the
+    planner decided again on the next scene, so a run over Zenoh took another path than the
+    same seed in process. Between episodes it now waits for the episode; a ghost's never
+    comes, and it is refused."""
+    start(running_stack, "sim", "skills")
+    with running_stack.client() as bus:
+        running_stack.wait_alive(bus, "sim", "skills", timeout=STARTUP)
+        scenes, skill = Inbox(bus, Scene), Inbox(bus, SkillStatus)
+        time.sleep(0.3)
+        first = reset(bus, "first")
+        earlier = scene_of(scenes, "first")
+        bus.publish(first.model_copy(update={"phase": EpisodePhase.END, "success": False}))
+        time.sleep(0.2)  # skills has seen the end of "first" and nothing of "next"
+        block, goal = top_block_and_free_goal(earlier)  # seed 0 again: the same layout
+        ahead = action(earlier, block, goal, "next:0", episode_id="next")
+        ahead = ahead.model_copy(update={"scene_sequence": earlier.sequence + 1})
+        bus.publish(ahead)
+        reset(bus, "next")
+        done = skill.wait(lambda s: s.decision_id == "next:0" and s.state.terminal)
+        assert done.state is SkillState.SUCCEEDED, done
+
+        bus.publish(action(earlier, block, goal, "ghost:0", episode_id="ghost"))
+        ghost = skill.wait(lambda s: s.decision_id == "ghost:0" and s.state.terminal)
+        assert (ghost.state, ghost.reason) == (SkillState.FAILED, "not_running_episode")
+
+
 def test_ids_at_the_64_character_limit_complete(running_stack: Stack) -> None:
     """Skills built command ids by appending a counter to the decision id: a valid 64-char id
     became an invalid 66-char one and the episode never ended. Now ids are derived to fit."""

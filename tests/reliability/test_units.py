@@ -71,7 +71,9 @@ def test_between_episodes_the_next_one_is_accepted_before_its_start_event() -> N
     gate.on_episode(event("e1", EpisodePhase.START))
     assert gate.check(scene("e1", 1)) is None
     assert gate.check(scene("e2", 2)) == "not_running_episode"  # e1 still runs
+    assert not gate.may_be_next("e2")
     gate.on_episode(event("e1", EpisodePhase.END))
+    assert gate.may_be_next("e2") and not gate.is_running("e2")  # an action may come first
     assert gate.check(scene("e2", 3)) is None  # overtook its start event
     gate.on_episode(event("e2", EpisodePhase.START))
     assert gate.check(scene("e2", 4)) is None

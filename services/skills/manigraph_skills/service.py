@@ -6,10 +6,13 @@ Nothing a sender does can block the threads that receive messages:
   sequence and stamp) on the Zenoh thread and go straight into the scene cache;
 * an ``Action`` is checked on the Zenoh thread and put in a bounded queue (``queue_capacity``);
   a worker thread executes the queue in order. **Overflow policy: drop the newest.** An action
-  arriving at a full queue, one for an episode that is not running, one whose scene is far
-  ahead of any scene seen, and any action while the emergency stop is engaged are refused at
-  once: counted (``ServiceStatus.rejections``) and answered with a failed ``SkillStatus``
-  naming the reason, so a real planner decides again instead of waiting;
+  arriving at a full queue, one for another episode than the one running, one whose scene is
+  far ahead of any scene seen, and any action while the emergency stop is engaged are refused
+  at once: counted (``ServiceStatus.rejections``) and answered with a failed ``SkillStatus``
+  naming the reason, so a real planner decides again instead of waiting. Between episodes an
+  action for a new episode may have overtaken that episode's start (the planner is one hop
+  nearer): it is queued, and refused only if its episode has not started by the time its
+  scene was waited for;
 * the worker waits at most ``scene_wait`` seconds for the scene an action was decided on;
 * ``EmergencyStop`` is acted on in the Zenoh thread that delivers it: the driver is stopped,
   the skill under way is reported failed with reason ``stopped`` from that thread at once
@@ -106,7 +109,7 @@ class SkillsService(Service):
         newest = self.scenes.newest_sequence(action.episode_id)
         if self.stopped.is_set():
             self._refuse(action, "stopped", f"emergency stop engaged: {self.stop_reason}")
-        elif not self.gate.is_running(action.episode_id):
+        elif not self.gate.may_be_next(action.episode_id):
             self._refuse(action, "not_running_episode", action.episode_id)
         elif newest is not None and action.scene_sequence > newest + MAX_SCENE_AHEAD:
             self._refuse(action, "unknown_scene", f"scene {action.scene_sequence} not seen")
@@ -182,6 +185,9 @@ class SkillsService(Service):
             self.in_flight.stop("emergency stop engaged")
             return
         scene = self.scenes.wait_for(action.episode_id, action.scene_sequence, self.scene_wait)
+        if not self.gate.is_running(action.episode_id):  # the episode it waited for never came
+            self._refuse(action, "not_running_episode", action.episode_id)
+            return
         final = self.skill.execute(action, scene, self.in_flight.report)
         self.log.info(
             "%s %s -> %s: %s%s",
