@@ -15,7 +15,7 @@ from manigraph_skills.motion import (
     PlanConfig,
 )
 from manigraph_skills.motion.model import top_down
-from manigraph_skills.motion.plan import grasp_yaw
+from manigraph_skills.motion.plan import RETREAT_CLEAR_RISE, grasp_yaw
 
 
 @pytest.fixture(scope="module")
@@ -154,3 +154,17 @@ def test_a_release_far_out_and_high_that_cannot_rise_straight_draws_back_as_it_r
     assert end[2] == pytest.approx(hand[2] + 0.06, abs=1e-3)
     assert hand[0] - 0.08 - 1e-3 <= end[0] < hand[0] - 0.01  # drawn back towards the robot
     assert released.closed[-1] is False
+
+
+def test_a_release_that_draws_back_first_rises_clear_of_what_it_let_go_of() -> None:
+    """Drawing back at once, the far open finger dragged a bowl along its rack and lifted it
+    away with the hand: the fingers now rise straight until their tips clear it."""
+    model = PandaModel()
+    planner = GraspPlanner(model)
+    hand = np.array([0.5, 0.1, 0.15])
+    q = IKSolver(model).solve(top_down(hand, np.pi / 2), HOME_Q).q
+    released = planner.release(q, back=0.05)
+    path = np.array([model.tcp_pose(p).translation for p in released.positions])
+    low = path[:, 2] < hand[2] + RETREAT_CLEAR_RISE - 1e-3
+    assert np.abs(path[low, 0] - hand[0]).max() < 1e-3  # straight up while the fingers are low
+    assert path[-1, 0] == pytest.approx(hand[0] - 0.05, abs=1e-3)  # then back

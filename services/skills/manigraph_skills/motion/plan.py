@@ -12,6 +12,7 @@ the previous sample, so the hand really moves along the line and no joint flips 
 from __future__ import annotations
 
 import contextlib
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,6 +32,11 @@ MAX_JOINT_STEP = 0.3
 HOMING_SAMPLES = 30
 #: How far a retreat draws back towards the robot (-x) when it cannot rise straight, metres.
 RETREAT_BACK_OFFS = (0.0, 0.04, 0.08)
+#: A retreat that draws back rises straight this far first, metres: the open fingers still
+#: reach down beside what they let go of (they hold its top 1.5 cm; their tips are 1 cm
+#: below the TCP), and drawing back at once, the far finger dragged a bowl along the rack
+#: and lifted it away with the hand.
+RETREAT_CLEAR_RISE = 0.03
 
 
 @dataclass(frozen=True)
@@ -161,16 +167,25 @@ class GraspPlanner:
         # never less than ``approach``.
         top = max(hand[2] + c.approach, min(hand[2] + c.retreat, c.max_carry_z))
         # Far out and high (a slot of a pulled-out rack) the arm may have no straight rise
-        # without flipping: then it rises drawing back towards the robot.
-        for extra in RETREAT_BACK_OFFS:
-            above = np.array([hand[0] - back - extra, hand[1], top])
+        # without flipping: then, clear of what it let go of, it rises drawing back towards
+        # the robot (where even that cannot rise straight, it draws back at once).
+        rise = min(RETREAT_CLEAR_RISE, top - hand[2])
+        ways = [(back + extra, rise if back + extra > 0 else 0.0) for extra in RETREAT_BACK_OFFS]
+        ways += [(back + extra, 0.0) for extra in RETREAT_BACK_OFFS if back + extra > 0]
+        for number, (away, first) in enumerate(ways, 1):
+            attempt = copy.deepcopy(trajectory)
             try:
-                self.line(trajectory, above, self.yaw_of(q), False, c.slow_speed, "retreat")
+                if first > 0:
+                    self.line(
+                        attempt, hand + first * UP, self.yaw_of(q), False, c.slow_speed, "retreat"
+                    )
+                above = np.array([hand[0] - away, hand[1], top])
+                self.line(attempt, above, self.yaw_of(q), False, c.slow_speed, "retreat")
             except SkillError:
-                if extra == RETREAT_BACK_OFFS[-1]:
+                if number == len(ways):
                     raise
-                continue  # a failed line adds nothing
-            break
+                continue
+            return attempt
         return trajectory
 
     def home(self, q: np.ndarray, rise: float = 0.08) -> JointTrajectory:
