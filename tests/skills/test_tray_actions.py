@@ -107,3 +107,21 @@ def test_an_open_rack_floor_supports_a_dish_set_into_its_slot_and_nothing_else()
     assert floor(slot)  # set down into the rack: the fingers may come close to its floor
     assert not floor(on_counter)  # taken off the counter below it: the floor is an obstacle
     assert not floor(slot + np.array([0.0, 0.0, 0.10]))  # far above the floor: not under it
+
+
+def test_a_pushed_in_racks_floor_is_an_obstacle_where_the_rack_stands() -> None:
+    """The wrist reaching into the pulled-out bottom rack's far slots met the pushed-in top
+    rack's front edge, which the arm check did not know of, and stopped 5 cm short."""
+    from manigraph_shared.grasp_points import RACK_FLOOR_X, RACK_HANDLE_X
+    from manigraph_skills.obstacles import rack_floors
+
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
+    scene = backend.scene(1.0)
+    assert scene is not None
+    floors = {o.id: o for o in rack_floors(scene)}
+    assert set(floors) == {"rack_top:floor", "rack_bottom:floor"}
+    for rack in scene.racks:
+        assert not rack.open
+        front = floors[f"{rack.id}:floor"].centre[0] - floors[f"{rack.id}:floor"].size[0] / 2
+        assert front == pytest.approx(rack.position.x - RACK_HANDLE_X + RACK_FLOOR_X[0])

@@ -65,23 +65,23 @@ def scene_obstacles(scene: Scene, moving: SceneObject, at: np.ndarray) -> tuple[
             )
         )
     found.extend(box_walls(scene))
-    found.extend(open_rack_floors(scene, moving, at))
+    found.extend(rack_floors(scene, moving, at))
     return tuple(found)
 
 
-def open_rack_floors(
+def rack_floors(
     scene: Scene, moving: SceneObject | None = None, at: np.ndarray | None = None
 ) -> list[Obstacle]:
-    """The floor of every pulled-out dishwasher rack: it reaches over the counter's far row,
-    where a hand lifting a dish would meet it. (A pushed-in rack stands inside the cabinet,
-    beyond the counter; the slots' ribs and the dishes in them are not floors.) A floor under
-    ``at``, where ``moving`` is set down (a slot of that rack: within the floor's footprint,
-    no higher above it than the dish's largest half extent, whichever way up it stands), is
-    a support, like a block under a goal: the fingers may come close to it."""
+    """The floor of every dishwasher rack, where it is: pulled out, it reaches over the
+    counter's far row, where a hand lifting a dish would meet it; pushed in, the top rack's
+    front edge is over the pulled-out bottom rack's far slots, where the wrist reaching into
+    them met it (and stopped 5 cm short: the bowl it held fell off the rack). The slots' ribs
+    and the dishes in them are not floors. A floor under ``at``, where ``moving`` is set down
+    (a slot of that rack: within the floor's footprint, no higher above it than the dish's
+    largest half extent, whichever way up it stands), is a support, like a block under a
+    goal: the fingers may come close to it."""
     found = []
     for rack in scene.racks:
-        if not rack.open:
-            continue
         centre = np.array(rack.position.as_tuple()) - np.array([RACK_HANDLE_X, 0.0, 0.0])
         bottom = RACK_FLOOR_TOP - RACK_FLOOR_THICKNESS
         low = centre + np.array([RACK_FLOOR_X[0], -RACK_FLOOR_HALF_Y, bottom])

@@ -66,6 +66,8 @@ log = logging.getLogger("manigraph.skills.motion")
 #: (``ELBOW_SWING``), each with the hand as chosen and turned a quarter (a block or a square
 #: cover is held the same either way).
 QUARTER = np.pi / 2
+#: Planning failures that going home first may cure (the hand is empty).
+HOMING_HELPS = ("no_ik_solution", "collision")
 #: Gains of the null-space elbow swing (``IKSolver.elbow_push``), gentle first: it acts at
 #: every IK sample along the motion, so it adds up over a long one (at 0.05 the elbow of a
 #: far, low grasp from the home pose swings ~0.3 m aside) but not over a short one (from
@@ -428,8 +430,9 @@ class PandaMotionDriver(RobotDriver):
     ) -> JointTrajectoryResult:
         """Plan from the arm's joints and execute; plan once more if the arm was elsewhere.
         With ``home_around`` (the hand is empty): if nothing can be planned from where the
-        arm is, it goes home first (``GraspPlanner.home``, checked against those
-        obstacles) and plans from there."""
+        arm is (no IK solution, or every plan touches something: a hand left over a pulled-out
+        rack comes down onto its floor on its way out), it goes home first
+        (``GraspPlanner.home``, checked against those obstacles) and plans from there."""
         if decision_id != self._decision:
             self._decision, self._decision_stops = decision_id, self._stops
         self._raise_if_stopped()
@@ -457,7 +460,7 @@ class PandaMotionDriver(RobotDriver):
             try:
                 return plan(q)
             except SkillError as exc:
-                if exc.reason != "no_ik_solution" or np.allclose(q, HOME_Q, atol=0.05):
+                if exc.reason not in HOMING_HELPS or np.allclose(q, HOME_Q, atol=0.05):
                     raise
                 homing = self.planner.home(q)
                 if self._contact(homing, obstacles) is not None:
