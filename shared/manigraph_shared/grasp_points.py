@@ -66,3 +66,32 @@ RACK_FLOOR_X = (-0.08, 0.075)
 RACK_FLOOR_HALF_Y = 0.34
 RACK_FLOOR_TOP = 0.005
 RACK_FLOOR_THICKNESS = 0.01
+#: A rack's handle tab's height relative to the rack's centre (bottom, top), metres.
+RACK_TAB_Z = (0.0, 0.03)
+
+
+def rack_handle_boxes(rack_id: str) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Rack ``rack_id``'s handle as boxes (low and high corners relative to the rack's
+    centre, metres): its tab, from behind the grip to just short of the floor's front (clear
+    of the cabinet's walls when pushed in), and for a tab beside the floor the bar joining
+    it to the floor's corner. Shared so the sim builds the handle where the skills keep the
+    arm off it (a hand coming down beside a pulled-out top rack met its tab and pushed the
+    rack back in)."""
+    grip_x, grip_y, _ = rack_grip(rack_id)
+    grip_x += RACK_HANDLE_X
+    half = RACK_TAB_THICKNESS / 2
+    front = RACK_FLOOR_X[0] - 0.005
+    low, high = RACK_TAB_Z
+    boxes = [
+        (np.array([grip_x - 0.03, grip_y - half, low]), np.array([front, grip_y + half, high]))
+    ]
+    if abs(grip_y) + half > RACK_FLOOR_HALF_Y:
+        side = float(np.sign(grip_y))
+        inner, outer = side * RACK_FLOOR_HALF_Y, grip_y + side * half
+        boxes.append(
+            (
+                np.array([front - 0.01, min(inner, outer), low]),
+                np.array([front, max(inner, outer), high]),
+            )
+        )
+    return boxes

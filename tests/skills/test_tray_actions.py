@@ -113,13 +113,13 @@ def test_a_pushed_in_racks_floor_is_an_obstacle_where_the_rack_stands() -> None:
     """The wrist reaching into the pulled-out bottom rack's far slots met the pushed-in top
     rack's front edge, which the arm check did not know of, and stopped 5 cm short."""
     from manigraph_shared.grasp_points import RACK_FLOOR_X, RACK_HANDLE_X
-    from manigraph_skills.obstacles import rack_floors
+    from manigraph_skills.obstacles import rack_obstacles
 
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
     scene = backend.scene(1.0)
     assert scene is not None
-    floors = {o.id: o for o in rack_floors(scene)}
+    floors = {o.id: o for o in rack_obstacles(scene) if o.id.endswith(":floor")}
     assert set(floors) == {"rack_top:floor", "rack_bottom:floor"}
     for rack in scene.racks:
         assert not rack.open

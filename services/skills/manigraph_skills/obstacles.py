@@ -21,6 +21,7 @@ from manigraph_shared.grasp_points import (
     RACK_FLOOR_TOP,
     RACK_FLOOR_X,
     RACK_HANDLE_X,
+    rack_handle_boxes,
 )
 from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneObject
 
@@ -65,14 +66,15 @@ def scene_obstacles(scene: Scene, moving: SceneObject, at: np.ndarray) -> tuple[
             )
         )
     found.extend(box_walls(scene))
-    found.extend(rack_floors(scene, moving, at))
+    found.extend(rack_obstacles(scene, moving, at))
     return tuple(found)
 
 
-def rack_floors(
+def rack_obstacles(
     scene: Scene, moving: SceneObject | None = None, at: np.ndarray | None = None
 ) -> list[Obstacle]:
-    """The floor of every dishwasher rack, where it is: pulled out, it reaches over the
+    """The floor and the handle (``grasp_points.rack_handle_boxes``) of every dishwasher
+    rack, where it is. The floor: pulled out, it reaches over the
     counter's far row, where a hand lifting a dish would meet it; pushed in, the top rack's
     front edge is over the pulled-out bottom rack's far slots, where the wrist reaching into
     them met it (and stopped 5 cm short: the bowl it held fell off the rack). The slots' ribs
@@ -96,6 +98,10 @@ def rack_floors(
         middle = tuple(((low + high) / 2).tolist())
         size = tuple((high - low).tolist())
         found.append(Obstacle(f"{rack.id}:floor", middle, size, support=support))
+        for number, (low, high) in enumerate(rack_handle_boxes(rack.id)):
+            part = "handle" if number == 0 else "handle_bar"
+            middle = tuple((centre + (low + high) / 2).tolist())
+            found.append(Obstacle(f"{rack.id}:{part}", middle, tuple((high - low).tolist())))
     return found
 
 

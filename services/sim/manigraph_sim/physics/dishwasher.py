@@ -35,14 +35,12 @@ from manigraph_shared.grasp_points import (
     RACK_FLOOR_THICKNESS,
     RACK_FLOOR_TOP,
     RACK_FLOOR_X,
-    RACK_GRIP_OFFSET,
-    RACK_TAB_THICKNESS,
+    rack_handle_boxes,
 )
 from manigraph_shared.messages import Quaternion
 from manigraph_shared.orientations import ORIENTATIONS, up_axis_orientation
 from manigraph_sim.dishwasher.model import (
     BOWL,
-    HANDLE_X,
     PLATE,
     RACK_TRAVEL,
     Dish,
@@ -77,8 +75,6 @@ RIB_GAP: Final = 0.023
 RIB_HEIGHT: Final = 0.015
 RIB_THICKNESS: Final = 0.003
 RIB_X: Final = (-0.07, 0.0)
-#: The handle tab's height above the rack's centre (bottom, top).
-TAB_Z: Final = (0.0, 0.03)
 #: Joint damping of a rack's rail, N s / m; rack density, kg / m^3.
 RAIL_DAMPING: Final = 30.0
 RACK_DENSITY: Final = 500.0
@@ -148,16 +144,8 @@ def rack_parts(rack_id: str, slot_ys: list[float]) -> list[Part]:
                     (RIB_X[1], centre + RIB_THICKNESS / 2, FLOOR_TOP + RIB_HEIGHT),
                 )
             )
-    grip_x, grip_y, _ = RACK_GRIP_OFFSET[rack_id]
-    grip_x += HANDLE_X
-    half = RACK_TAB_THICKNESS / 2
-    front = FLOOR_X[0] - 0.005  # clear of the cabinet's walls when pushed in
-    parts.append(_box((grip_x - 0.03, grip_y - half, TAB_Z[0]), (front, grip_y + half, TAB_Z[1])))
-    if abs(grip_y) + half > FLOOR_HALF_Y:  # a bar joins a tab beside the floor to its corner
-        side = float(np.sign(grip_y))
-        inner, outer = side * FLOOR_HALF_Y, grip_y + side * half
-        low, high = min(inner, outer), max(inner, outer)
-        parts.append(_box((front - 0.01, low, TAB_Z[0]), (front, high, TAB_Z[1])))
+    for low, high in rack_handle_boxes(rack_id):
+        parts.append(_box(tuple(low), tuple(high)))
     return parts
 
 
