@@ -125,3 +125,37 @@ def test_a_pushed_in_racks_floor_is_an_obstacle_where_the_rack_stands() -> None:
         assert not rack.open
         front = floors[f"{rack.id}:floor"].centre[0] - floors[f"{rack.id}:floor"].size[0] / 2
         assert front == pytest.approx(rack.position.x - RACK_HANDLE_X + RACK_FLOOR_X[0])
+
+
+def test_a_dish_of_the_far_row_is_taken_under_a_pulled_out_top_racks_floor() -> None:
+    """Carried at the ceiling (0.30 m), the open fingers reaching for a bowl of the counter's
+    far row met the pulled-out top rack's front edge on every re-plan; carried low they
+    pass under it."""
+    from arm_helpers import PerfectArm, trajectory_of
+
+    from manigraph_shared.messages import Vector3
+    from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+    from manigraph_skills.grasp_choice import choose_grasps
+    from manigraph_skills.motion import PandaModel
+    from manigraph_skills.motion.collision import ArmCollisionModel
+
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
+    skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
+    toggle = action(0, "rack_top", "rack_top", tray_action=TrayAction.TOGGLE_TOP)
+    assert skill.execute(toggle, backend.scene(1.0), lambda _: None).state.value == "succeeded"
+    scene = backend.scene(2.0)
+    assert scene is not None
+    bowl = scene.object("bowl_0")
+    far = Vector3(x=0.46, y=0.08, z=bowl.position.z)  # the physical counter's far row
+    bowl = bowl.model_copy(update={"position": far})
+    others = [o for o in scene.objects if o.id != "bowl_0"]
+    scene = scene.model_copy(update={"objects": [*others, bowl]})
+    slot = scene.goal("top_bowl_00").position
+    pick, _ = choose_grasps(scene, bowl, slot)
+    arm = PerfectArm()
+    PandaMotionDriver(arm).pick(Motion("e:1", bowl.id, bowl.position, bowl.orientation, pick))
+    (taken,) = arm.sent
+    assert (
+        ArmCollisionModel(PandaModel()).first_contact(trajectory_of(taken), pick.obstacles) is None
+    )

@@ -25,6 +25,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Protocol
 
 import numpy as np
@@ -66,6 +67,12 @@ log = logging.getLogger("manigraph.skills.motion")
 #: (``ELBOW_SWING``), each with the hand as chosen and turned a quarter (a block or a square
 #: cover is held the same either way).
 QUARTER = np.pi / 2
+#: The last carry height tried, metres: the hand (10 cm above the TCP) under a pulled-out
+#: top rack's floor and handle (0.30 m), the fingertips over a pulled-out bottom rack's floor
+#: (0.125 m) and the dishes on the counter. Carried at the ceiling (0.30 m), or at 0.20 m,
+#: the hand reaching for a dish of the counter's far row met the top rack's front edge or
+#: its handle on every re-plan.
+LOW_CARRY_Z = 0.15
 #: Planning failures that going home first may cure (the hand is empty).
 HOMING_HELPS = ("no_ik_solution", "collision")
 #: Gains of the null-space elbow swing (``IKSolver.elbow_push``), gentle first: it acts at
@@ -331,15 +338,18 @@ class PandaMotionDriver(RobotDriver):
         motion: str,
     ) -> Callable[[np.ndarray], JointTrajectory]:
         """``make(planner, q, turn, carry_z)`` as planned; if an arm link would touch
-        something, re-planned with the hand turned, the elbow swung aside and higher, until
-        one is clear. ``motion`` names it in the refusal ("taking it: panda_hand would
-        touch ...")."""
+        something, re-planned with the hand turned, the elbow swung aside and higher, and
+        last carried low (``LOW_CARRY_Z``), until one is clear. ``motion`` names it in the
+        refusal ("taking it: panda_hand would touch ...")."""
         bearing = float(np.arctan2(target[1], target[0]))
         aside = np.array([-np.sin(bearing), np.cos(bearing), 0.0])
+        pushes = [tuple(gain * side * aside) for gain in ELBOW_SWING for side in (1.0, -1.0)]
         planners = [self.planner] + [
-            GraspPlanner(self.model, self.planner.config, elbow_push=tuple(gain * side * aside))
-            for gain in ELBOW_SWING
-            for side in (1.0, -1.0)
+            GraspPlanner(self.model, self.planner.config, elbow_push=push) for push in pushes
+        ]
+        low = replace(self.planner.config, max_carry_z=LOW_CARRY_Z)
+        low_planners = [GraspPlanner(self.model, low)] + [
+            GraspPlanner(self.model, low, elbow_push=push) for push in pushes
         ]
 
         def plan(q: np.ndarray) -> JointTrajectory:
@@ -349,6 +359,12 @@ class PandaMotionDriver(RobotDriver):
                 for planner in planners
                 for turn in (0.0, grasp.other_turn)
             ]
+            if grasp.carry_z < LOW_CARRY_Z:
+                options += [
+                    (planner, turn, grasp.carry_z)
+                    for planner in low_planners
+                    for turn in (0.0, grasp.other_turn)
+                ]
             contacts: dict[tuple[str, str], Contact] = {}
             failure: SkillError | None = None
             for planner, turn, carry in options:
