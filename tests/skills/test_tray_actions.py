@@ -9,6 +9,7 @@ from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
     Action,
     EpisodeRequest,
+    Scene,
     SkillState,
     SkillStatus,
     TrayAction,
@@ -84,11 +85,8 @@ def test_a_driver_without_tray_support_refuses_as_unsupported() -> None:
     assert refused.value.reason == "unsupported"
 
 
-def test_an_open_rack_floor_supports_a_dish_set_into_its_slot_and_nothing_else() -> None:
-    import numpy as np
-
-    from manigraph_skills.obstacles import scene_obstacles
-
+def _top_rack_pulled_out() -> Scene:
+    """A two-dish geometric episode's scene once its top rack has been pulled out."""
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
     skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
@@ -96,6 +94,15 @@ def test_an_open_rack_floor_supports_a_dish_set_into_its_slot_and_nothing_else()
     assert skill.execute(toggle, backend.scene(1.0), lambda _: None).state.value == "succeeded"
     scene = backend.scene(2.0)
     assert scene is not None
+    return scene
+
+
+def test_an_open_rack_floor_supports_a_dish_set_into_its_slot_and_nothing_else() -> None:
+    import numpy as np
+
+    from manigraph_skills.obstacles import scene_obstacles
+
+    scene = _top_rack_pulled_out()
     bowl = scene.object("bowl_0")
 
     def floor(at: np.ndarray) -> bool:
@@ -133,19 +140,12 @@ def test_a_dish_of_the_far_row_is_taken_under_a_pulled_out_top_racks_floor() -> 
     pass under it."""
     from arm_helpers import PerfectArm, trajectory_of
 
-    from manigraph_shared.messages import Vector3
     from manigraph_skills.drivers.panda_motion import PandaMotionDriver
     from manigraph_skills.grasp_choice import choose_grasps
     from manigraph_skills.motion import PandaModel
     from manigraph_skills.motion.collision import ArmCollisionModel
 
-    backend = GeometricBackend()
-    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
-    skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
-    toggle = action(0, "rack_top", "rack_top", tray_action=TrayAction.TOGGLE_TOP)
-    assert skill.execute(toggle, backend.scene(1.0), lambda _: None).state.value == "succeeded"
-    scene = backend.scene(2.0)
-    assert scene is not None
+    scene = _top_rack_pulled_out()
     bowl = scene.object("bowl_0")
     far = Vector3(x=0.46, y=0.08, z=bowl.position.z)  # the physical counter's far row
     bowl = bowl.model_copy(update={"position": far})
