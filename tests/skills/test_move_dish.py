@@ -9,7 +9,13 @@ from arm_helpers import PerfectArm, trajectory_of
 
 from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATIONS
-from manigraph_skills.drivers.dish_turning import SPARE_Y, SPOT_FREE, free_cells, move_dish
+from manigraph_skills.drivers.dish_turning import (
+    SPARE_Y,
+    SPOT_FREE,
+    free_cells,
+    move_dish,
+    set_down_spots,
+)
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.turn_over import rotation_of, up_index
 
@@ -66,3 +72,14 @@ def test_the_dish_is_carried_top_down_and_set_down_on_the_first_cell() -> None:
     )
     c, s = np.cos(hand_turn), np.sin(hand_turn)
     assert turned == pytest.approx(np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) @ dish)
+
+
+def test_the_spare_spots_beside_the_counter_are_on_the_right_only() -> None:
+    """A dish turned over on the left spare spot (0.36, -0.42) lay under the pulled-out
+    bottom rack's handle and was refused on every re-plan while that rack was out."""
+    left = bowl("bowl_0", 0.38, -0.3)
+    spots = set_down_spots(
+        SCENE.model_copy(update={"objects": [left]}), left, np.array([0.38, -0.3, 0.0175])
+    )
+    beside = [spot for spot in spots if abs(spot[1]) >= SPARE_Y]
+    assert beside and all(spot[1] > 0 for spot in beside)
