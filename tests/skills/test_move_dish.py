@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from arm_helpers import PerfectArm, trajectory_of
 
-from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, Vector3
+from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, SceneRack, Vector3
 from manigraph_shared.orientations import ORIENTATIONS
 from manigraph_skills.drivers.dish_turning import (
     SPARE_Y,
@@ -74,12 +74,21 @@ def test_the_dish_is_carried_top_down_and_set_down_on_the_first_cell() -> None:
     assert turned == pytest.approx(np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) @ dish)
 
 
-def test_the_spare_spots_beside_the_counter_are_on_the_right_only() -> None:
+@pytest.mark.parametrize("bottom_out", [False, True])
+def test_the_left_spare_spots_are_offered_only_while_the_bottom_rack_is_pushed_in(
+    bottom_out: bool,
+) -> None:
     """A dish turned over on the left spare spot (0.36, -0.42) lay under the pulled-out
-    bottom rack's handle and was refused on every re-plan while that rack was out."""
+    bottom rack's handle and was refused on every re-plan while that rack was out; with the
+    rack in, a dish on the left is turned on its own side (the far side asked a transfer the
+    arm could not make without flipping)."""
     left = bowl("bowl_0", 0.38, -0.3)
-    spots = set_down_spots(
-        SCENE.model_copy(update={"objects": [left]}), left, np.array([0.38, -0.3, 0.0175])
-    )
+    rack = SceneRack(id="rack_bottom", position=Vector3(x=0.6, y=-0.44, z=0.1), open=bottom_out)
+    scene = SCENE.model_copy(update={"objects": [left], "racks": [rack]})
+    spots = set_down_spots(scene, left, np.array([0.38, -0.3, 0.0175]))
     beside = [spot for spot in spots if abs(spot[1]) >= SPARE_Y]
-    assert beside and all(spot[1] > 0 for spot in beside)
+    assert beside
+    if bottom_out:
+        assert all(spot[1] > 0 for spot in beside)
+    else:
+        assert beside[0][1] < 0

@@ -71,9 +71,12 @@ def set_down_spots(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np
     within reach, then spare spots beside the counter."""
     others = _counter_dishes(scene, item)
     # Beyond the counter's side columns (|y| <= 0.31 m) nothing ever lies: the spare spots,
-    # on the right only. On the left the pulled-out bottom rack's handle (y = -0.44 m) is
-    # over them, and a dish turned there could not be taken again while that rack was out.
-    spare = [np.array([x, SPARE_Y]) for x in SPARE_X]
+    # on the dish's side first. The left ones only while the bottom rack is pushed in: its
+    # handle, pulled out, is over them, and a dish turned there could not be taken again.
+    sides = [1.0, -1.0] if here[1] >= 0 else [-1.0, 1.0]
+    if any(rack.id == "rack_bottom" and rack.open for rack in scene.racks):
+        sides.remove(-1.0)
+    spare = [np.array([x, side * SPARE_Y]) for side in sides for x in SPARE_X]
     free = [s for s in spare if all(np.linalg.norm(s - o) >= SPOT_FREE for o in others)]
     return [here[:2].copy(), *_neighbour_cells(here, others)[: MAX_SPOTS - 2], *free[:2]]
 
