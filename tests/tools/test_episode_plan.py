@@ -14,6 +14,7 @@ def test_a_dishwasher_run_is_named_and_summarised_by_its_dishes_not_blocks() -> 
     assert summary["objects"] == 10 and summary["preference"] == "left-right"
     assert "blocks" not in summary and "stacks" not in summary
     assert EpisodeOptions(task="dishwasher").label() == "dishwasher"  # the sim's default count
+    assert plan.describe() == "dishwasher 10 dishes left-right"  # progress lines: no K
 
 
 def test_a_block_run_keeps_blocks_and_stacks() -> None:
@@ -21,3 +22,4 @@ def test_a_block_run_keeps_blocks_and_stacks() -> None:
     summary = summarize(options.plan(1), [])
     assert options.label() == "multistack-3"
     assert summary["blocks"] == 3 and summary["stacks"] == 3 and "objects" not in summary
+    assert options.plan(1).describe() == "multistack K=3"

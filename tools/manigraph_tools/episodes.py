@@ -146,6 +146,14 @@ class EpisodePlan:
     objects: int | None = None  # dishwasher
     preference: str | None = None  # dishwasher
 
+    def describe(self) -> str:
+        """What the episodes are, for progress lines: the dishwasher's dishes and
+        preference, else the task (or file) and K."""
+        if self.task == "dishwasher":
+            dishes = f" {self.objects} dishes" if self.objects else ""
+            return f"dishwasher{dishes} {self.preference or 'top-bottom'}"
+        return f"{self.task_file_name or self.task} K={self.blocks}"
+
     def request(self, index: int) -> EpisodeRequest:
         seed = self.seed + index
         return EpisodeRequest(
@@ -299,8 +307,7 @@ def run_episodes(bus: Bus, plan: EpisodePlan, progress: TextIO = sys.stderr) -> 
             results.append(result)
             mark = "success" if result.success else f"FAILED ({result.reason})"
             print(
-                f"episode {index + 1}/{plan.episodes} {plan.task_file_name or plan.task} "
-                f"K={plan.blocks} "
+                f"episode {index + 1}/{plan.episodes} {plan.describe()} "
                 f"seed {result.seed}: {mark}, {result.goals_filled}/{result.goals_total} goals, "
                 f"{result.steps} steps, {result.seconds:.2f} s"
                 + (f" ({result.sim_seconds:.2f} s simulated)" if result.sim_seconds else ""),
