@@ -14,13 +14,14 @@ from manigraph_planner.gnn.models.dish_net import DishHeads, DishPolicyNet
 from manigraph_planner.policies import load_policy
 from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy, decision_from_heads
 from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
+from manigraph_planner.recovery import ProgressMonitor
 from manigraph_planner.training.dishwasher import (
     DishTrainConfig,
     dish_loss,
     load_dish_demonstrations,
 )
 from manigraph_shared.errors import PolicyError
-from manigraph_shared.messages import EpisodeRequest
+from manigraph_shared.messages import EpisodeRequest, SkillState, SkillStatus
 from manigraph_sim.geometric.backend import GeometricBackend
 
 CHECKPOINTS = Path(__file__).parents[3] / "checkpoints"
@@ -171,22 +172,48 @@ def test_ranked_alternatives_start_with_the_decision_and_offer_every_loadable_di
     ranked = _ranked(s, liked=("top_",))
     kinds = [d.tray_action.value == "none" for d in ranked]
     toggles = kinds.index(False)
-    assert kinds[toggles : toggles + 2] == [False, False]  # both toggles, together
-    first_round = ranked[:toggles]
-    # Every dish can go into the open top rack's slots of its kind: each is offered once
-    # before the toggles, in its likeliest slot.
+    # Both toggles, together, last: every placement into the open rack comes first.
+    assert kinds[toggles:] == [False, False]
+    assert {d.object_id for d in ranked[toggles:]} == {"rack_top", "rack_bottom"}
+    placements = ranked[:toggles]
+    # Each dish once in its likeliest slot, then each again in its other free top-rack
+    # slots, round by round: every such pair once.
+    first_round = placements[: len(s.objects)]
     assert sorted(d.object_id for d in first_round) == sorted(o.id for o in s.objects)
-    assert {d.object_id for d in ranked[toggles : toggles + 2]} == {"rack_top", "rack_bottom"}
-    # Then each again in its other free top-rack slots, round by round: every such pair once.
-    later = ranked[toggles + 2 :]
     assert len({d.pair for d in ranked}) == len(ranked)
     slots = {
         o.id: [g.id for g in s.goals if g.category.value == o.category.value] for o in s.objects
     }
-    assert len(first_round) + len(later) == sum(len(v) // 2 for v in slots.values())
+    assert len(placements) == sum(len(v) // 2 for v in slots.values())
+    later = placements[len(s.objects) :]
     assert [d.object_id for d in later[: len(s.objects)]] == [d.object_id for d in first_round]
-    for d in first_round + later:
+    for d in placements:
         assert s.goal(d.goal_id).rack == "rack_top" and not s.goal(d.goal_id).filled
+
+
+def test_a_rack_is_not_left_while_a_dish_may_still_go_into_it() -> None:
+    """Bowls on top, plates at the bottom, the top rack out: two bowls that failed to reach
+    one slot have it passed over (recovery's escalation); with every bowl liking that slot
+    best, the next alternative is a bowl in its next slot, not pushing the rack in."""
+    s = _top_rack_out()
+    ranked = _ranked(s, liked=("top_bowl", "bottom_plate"))
+    best = ranked[0].goal_id
+    assert sum(d.goal_id == best for d in ranked) == 2  # both bowls like it best
+    monitor = ProgressMonitor()
+    for dish in [d for d in ranked if d.goal_id == best][:2]:
+        monitor.on_decision(s, dish.pair)
+        monitor.on_status(
+            SkillStatus(
+                decision_id="e:1",
+                skill="pick_and_place",
+                state=SkillState.FAILED,
+                reason="collision",
+                stamp=1.0,
+            )
+        )
+    verdict = monitor.verdict(s)
+    chosen = next(d for d in ranked if verdict.allows(d.pair))
+    assert chosen.tray_action.value == "none" and chosen.goal_id != best
 
 
 def test_a_dish_whose_likeliest_slot_is_in_a_rack_pushed_in_waits_for_it() -> None:

@@ -50,11 +50,17 @@ class DishwasherGNNPolicy(Policy):
 
     def ranked(self, scene: Scene) -> list[Decision]:
         """The decision; each other dish that can go somewhere now, most likely first, into
-        its most likely slot; the tray actions by the tray head; then the dishes into their
-        other slots, round by round (``_pairs_by_dish``). The planner takes one of these
-        only after the decision made no progress (e.g. a robot that cannot turn that dish as
-        asked, ``orientation_unreachable``), so one dish a robot cannot load does not hold
-        up the others."""
+        its most likely slot; then the dishes into their other slots, round by round
+        (``_pairs_by_dish``); last the tray actions by the tray head. The planner takes one
+        of these only after the decision made no progress (e.g. a robot that cannot turn
+        that dish as asked, ``orientation_unreachable``), so one dish a robot cannot load
+        does not hold up the others.
+
+        Every placement comes before a toggle: a rack left with dishes still to go into it is
+        not pulled out again (the demonstrations never do). With the toggles after the first
+        round, two bowls a physical arm could not take had the top rack pushed in, and the
+        other bowls went nowhere they were wanted: the recovery passes over a slot two dishes
+        failed to reach, and every dish's likeliest slot was that one."""
         graph = dish_scene_to_graph(scene)
         if graph.num_objects == 0:
             return []
@@ -66,9 +72,9 @@ class DishwasherGNNPolicy(Policy):
             for index in heads.tray.argsort(descending=True).tolist()
             if (tray := TRAY_ACTIONS[int(index)]) is not TrayAction.NONE and tray.rack_id
         ]
-        first_round, *later = _pairs_by_dish(graph, heads) or [[]]
+        placements = itertools.chain(*_pairs_by_dish(graph, heads))
         ranked: dict[tuple[str, str], Decision] = {}
-        for decision in [first, *first_round, *toggles, *itertools.chain(*later)]:
+        for decision in [first, *placements, *toggles]:
             if decision is not None:
                 ranked.setdefault(decision.pair, decision)
         return list(ranked.values())
