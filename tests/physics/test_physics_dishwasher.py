@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+import sapien
 
 from manigraph_lab.episode_loop import run_episode
 from manigraph_lab.in_process import InProcessJointTransport
@@ -15,17 +16,19 @@ from manigraph_planner.policies.base import load_policy
 from manigraph_shared.messages import (
     Action,
     EpisodeRequest,
+    Quaternion,
     Scene,
     SkillState,
     SkillStatus,
     TrayAction,
 )
-from manigraph_shared.orientations import UPSIDE_DOWN, up_axis_orientation
+from manigraph_shared.orientations import ORIENTATIONS, UPSIDE_DOWN, up_axis_orientation
 from manigraph_sim.dishwasher.model import RACK_TRAVEL
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_sim.physics.dishwasher import PHYSICAL_DISH_SIZE, physical_counter_x
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+from manigraph_skills.turn_over import quaternion_of, rotation_of
 
 #: Seed 8, 10 dishes: bowl_3 lies upside down and plate_3 stands on its rim (x >= 0.3 m), so
 #: both can be loaded by top-down grasps. (Found by listing layouts; no outcome is tuned.)
@@ -224,3 +227,33 @@ def test_a_rack_part_of_the_way_out_is_seen_where_it_is_and_clicks_to_the_nearer
         # Left alone, the rack's detent takes it to the end of the rail it is nearer.
         dish_loop.backend.world.step(500)  # type: ignore[union-attr]
         assert world.rack_travel("rack_top") == pytest.approx(settles_at, abs=0.01), top
+
+
+def test_a_plate_on_its_rim_in_its_slot_is_loaded_whichever_edge_is_down() -> None:
+    """The physical plate is square about its thin axis (a round plate's stand-in): stood in
+    its slot between the ribs on another edge ("side-x", as a plate that pivoted between the
+    fingers is), it is loaded upright all the same."""
+    backend = PhysicsBackend()
+    request = EpisodeRequest(
+        episode_id="r", task="dishwasher", objects=2, seed=SHORT_SEED, preference="top-bottom"
+    )
+    backend.reset(request, 1.0)
+    scene = backend.scene(1.0)
+    assert scene is not None
+    plate = next(o for o in scene.objects if o.category.value == "plate")
+    slot = next(g for g in scene.goals if g.id.startswith("bottom_plate"))
+    quarter = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    side_x = quaternion_of(quarter @ rotation_of(ORIENTATIONS[4]))  # thin axis along y
+    assert rotation_of(side_x)[:, 2] == pytest.approx([0.0, -1.0, 0.0], abs=1e-9)
+    pose = sapien.Pose(
+        np.array(slot.position.as_tuple()) + np.array([0.0, 0.0, 0.002]),
+        [side_x.w, side_x.x, side_x.y, side_x.z],
+    )
+    backend.world.entities[plate.id].set_pose(pose)
+    backend.world.step(60)  # let it settle between the ribs
+    _, (x, y, z, w) = backend.world.pose(plate.id)
+    assert up_axis_orientation(Quaternion(x=x, y=y, z=z, w=w)) == 4  # still on that edge
+    scene = backend.scene(2.0)
+    assert scene is not None and scene.object(plate.id).filled and scene.goal(slot.id).filled
+    assert up_axis_orientation(scene.object(plate.id).orientation) == 2  # upright, as asked
+    assert plate.id in backend.occupied_goals()

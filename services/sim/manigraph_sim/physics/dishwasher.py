@@ -93,10 +93,23 @@ DETENT: Final = 150.0
 SLOT_FIT: Final = 0.02
 #: A rack counts as pulled out once it has travelled more than this fraction of its rail.
 OPEN_FRACTION: Final = 0.5
+#: The orientations of a plate standing on its rim (its thin axis level): "rim-y" and its
+#: flip, "side-x" and its flip. The physical plate is square (as a round plate, which it
+#: stands for, is symmetric) about its thin axis, so these are one posture, whichever edge is
+#: down; the fingers pinch it across its faces and it may pivot about them on the way. In a
+#: slot that asks one of them, a plate in any of them stands as asked (a plate set down
+#: upright between the ribs and read as "side-x" did not count as loaded).
+PLATE_ON_RIM: Final = (2, 3, 4, 5)
 
 CABINET_COLOUR = [0.8, 0.8, 0.82, 1.0]
 RACK_COLOUR = [0.35, 0.4, 0.5, 1.0]
 DISH_COLOUR = {PLATE: [0.95, 0.95, 0.92, 1.0], BOWL: [0.55, 0.75, 0.9, 1.0]}
+
+
+def on_rim_as_asked(index: int, asked: int) -> int:
+    """A plate's orientation ``index`` in a slot that asks ``asked``: ``asked`` if both are
+    on the rim (``PLATE_ON_RIM``: one posture of a symmetric plate), else ``index``."""
+    return asked if index in PLATE_ON_RIM and asked in PLATE_ON_RIM else index
 
 
 def physical_counter_x(x: float) -> float:
@@ -174,6 +187,7 @@ class PhysicsDishwasher:
         self.world = world
         self.layout = layout
         self.racks = {rack.id: rack for rack in layout.racks}
+        self.slots = {slot.id: slot for slot in layout.slots}
         self.cabinet = self._build_cabinet()
         self.rails = {joint.name: joint for joint in self.cabinet.active_joints}
         for joint in self.rails.values():
@@ -269,6 +283,8 @@ class PhysicsDishwasher:
             slot = None
             if dish.id != held:
                 slot = self._slot_near(position, physical)
+            if slot is not None and dish.kind == PLATE:
+                index = on_rim_as_asked(index, self.slots[slot].orientation)
             dishes.append(
                 Dish(
                     dish.id,
