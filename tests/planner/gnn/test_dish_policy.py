@@ -216,6 +216,25 @@ def test_a_rack_is_not_left_while_a_dish_may_still_go_into_it() -> None:
     assert chosen.tray_action.value == "none" and chosen.goal_id != best
 
 
+def test_a_dish_standing_in_a_slot_is_never_an_alternative() -> None:
+    """Moving a loaded dish is no progress: while another dish kept failing, recovery moved
+    loaded plates from slot to slot until the step budget was spent."""
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
+    world = backend.dishwasher
+    assert world is not None
+    world.toggle("rack_top")
+    bowl = next(d for d in world.dishes.values() if d.kind == "bowl")
+    slot = next(s for s in world.slots.values() if s.kind == "bowl" and s.rack == "rack_top")
+    world.pick(bowl.id)
+    world.place(bowl.id, world.slot_position(slot), slot.orientation)
+    s = backend.scene(1.0)
+    assert s is not None and s.object(bowl.id).filled
+    ranked = _ranked(s, liked=("top_",))
+    assert bowl.id not in {d.object_id for d in ranked[1:]}
+    assert any(d.object_id != bowl.id and d.tray_action.value == "none" for d in ranked)
+
+
 def test_a_dish_whose_likeliest_slot_is_in_a_rack_pushed_in_waits_for_it() -> None:
     """Bowls on top, plates at the bottom: with the top rack out, a refused bowl's
     alternatives are the other bowls and the rack toggles, never a plate into the top rack

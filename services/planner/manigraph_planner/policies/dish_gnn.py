@@ -112,13 +112,17 @@ def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[list[Decision]]:
     its most likely such slot; then each in its second most likely slot, and so on; each in
     the orientation head's argmax. A dish whose most likely free slot of all is in a rack
     that cannot be loaded now waits for that rack: offered a slot elsewhere, a plate
-    refused on the counter would go into the bowls' rack, where nothing takes it out."""
+    refused on the counter would go into the bowls' rack, where nothing takes it out. A dish
+    that stands in a slot is not offered: moving it is no progress, and while another dish
+    kept failing, a plate moved from slot to slot spent the step budget (and bowls were to be
+    taken out of the pushed-in top rack)."""
     scores = _pair_scores(graph, heads)
     if scores is None:
         return []
     anywhere = _pair_scores(graph, heads, usable_only=False)
     assert anywhere is not None
     waiting = ~_usable_slots(graph)[anywhere.argmax(dim=1)]
+    waiting |= graph.x[: graph.num_objects, FILLED_COLUMN] != 0
     scores = scores.masked_fill(waiting.unsqueeze(1), float("-inf"))
     dishes = scores.max(dim=1).values.argsort(descending=True).tolist()
     slots = scores.argsort(dim=1, descending=True)
