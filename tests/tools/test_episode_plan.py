@@ -14,6 +14,7 @@ def test_a_dishwasher_run_is_named_and_summarised_by_its_dishes_not_blocks() -> 
     assert summary["objects"] == 10 and summary["preference"] == "left-right"
     assert "blocks" not in summary and "stacks" not in summary
     assert EpisodeOptions(task="dishwasher").label() == "dishwasher"  # the sim's default count
+    assert EpisodeOptions(task="dishwasher").plan(1).describe() == "dishwasher"
     assert plan.describe() == "dishwasher 10 dishes left-right"  # progress lines: no K
 
 

@@ -148,10 +148,11 @@ class EpisodePlan:
 
     def describe(self) -> str:
         """What the episodes are, for progress lines: the dishwasher's dishes and
-        preference, else the task (or file) and K."""
+        preference (each as asked: left out, the sim's default), else the task (or file)
+        and K."""
         if self.task == "dishwasher":
-            dishes = f" {self.objects} dishes" if self.objects else ""
-            return f"dishwasher{dishes} {self.preference or 'top-bottom'}"
+            asked = [f"{self.objects} dishes" if self.objects else "", self.preference or ""]
+            return " ".join(["dishwasher", *filter(None, asked)])
         return f"{self.task_file_name or self.task} K={self.blocks}"
 
     def request(self, index: int) -> EpisodeRequest:

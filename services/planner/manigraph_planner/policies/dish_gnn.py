@@ -122,8 +122,8 @@ def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[list[Decision]]:
     anywhere = _pair_scores(graph, heads, usable_only=False)
     assert anywhere is not None
     waiting = ~_usable_slots(graph)[anywhere.argmax(dim=1)]
-    waiting |= graph.x[: graph.num_objects, FILLED_COLUMN] != 0
-    scores = scores.masked_fill(waiting.unsqueeze(1), float("-inf"))
+    standing = graph.x[: graph.num_objects, FILLED_COLUMN] != 0
+    scores = scores.masked_fill((waiting | standing).unsqueeze(1), float("-inf"))
     dishes = scores.max(dim=1).values.argsort(descending=True).tolist()
     slots = scores.argsort(dim=1, descending=True)
     rounds = []

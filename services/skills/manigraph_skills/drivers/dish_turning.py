@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from manigraph_shared.dishwasher_rules import BOTTOM_RACK
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATION_NAMES
@@ -74,7 +75,7 @@ def set_down_spots(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np
     # on the dish's side first. The left ones only while the bottom rack is pushed in: its
     # handle, pulled out, is over them, and a dish turned there could not be taken again.
     sides = [1.0, -1.0] if here[1] >= 0 else [-1.0, 1.0]
-    if any(rack.id == "rack_bottom" and rack.open for rack in scene.racks):
+    if any(rack.id == BOTTOM_RACK and rack.open for rack in scene.racks):
         sides.remove(-1.0)
     spare = [np.array([x, side * SPARE_Y]) for side in sides for x in SPARE_X]
     free = [s for s in spare if all(np.linalg.norm(s - o) >= SPOT_FREE for o in others)]
