@@ -47,6 +47,20 @@ ORIENTATION_NAMES: Final = (
 #: What the dishwasher task asks of each dish type in its slot.
 UPRIGHT: Final = 2
 UPSIDE_DOWN: Final = 1
+#: The orientations of a plate standing on its rim (its thin axis level): "rim-y" and its
+#: flip, "side-x" and its flip. A plate is square (as a round plate, which it stands for, is
+#: symmetric) about its thin axis, so these are one posture, whichever edge is down; the
+#: fingers pinch it across its faces and it may pivot about them on the way.
+PLATE_ON_RIM: Final = (2, 3, 4, 5)
+
+
+def postures_like(category: str, index: int) -> tuple[int, ...]:
+    """The orientations in which a dish of ``category`` stands as in orientation ``index``:
+    a plate on its rim whichever edge is down (``PLATE_ON_RIM``), ``index`` first; else
+    ``index`` alone."""
+    if category == "plate" and index in PLATE_ON_RIM:
+        return (index, *(other for other in PLATE_ON_RIM if other != index))
+    return (index,)
 
 
 def orientation(index: int) -> Quaternion:

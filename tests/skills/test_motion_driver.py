@@ -15,6 +15,7 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_skills.drivers import DRIVERS, Motion, create_driver
+from manigraph_skills.drivers.base import Grasp
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.drivers.panda_sim import PandaSimDriver
 from manigraph_skills.drivers.registry import MotionOptions
@@ -123,6 +124,25 @@ def test_an_unreachable_object_sends_nothing() -> None:
             Motion("e:0", "block_0", Vector3(x=1.5, y=0, z=0.02), Quaternion())
         )
     assert caught.value.reason == "no_ik_solution" and arm.sent == []
+
+
+def test_a_slot_the_wrist_cannot_turn_to_is_reached_with_the_hand_turned_half_round() -> None:
+    """Taken at the counter's far left corner with the wrist turned far (yaw -pi), a dish
+    carried to a top-rack slot at yaw pi has no top-down solution there (joint 7 at its
+    limit, both ways round): the fingers are alike, so the hand sets it down turned half
+    round (yaw 0) instead of refusing it as ``no_ik_solution``."""
+    arm = ScriptedArm(widths=[0.04, 0.04, 0.08])  # held after the pick and the carry
+    driver = PandaMotionDriver(arm, check_collisions=False)
+    one_yaw = Grasp(other_turn=0.0)  # no other yaw of its own
+    driver.pick_at("e:0", "bowl_0", np.array([0.46, -0.3, 0.02]), -np.pi, one_yaw)
+    slot = Vector3(x=0.6, y=-0.25, z=0.34)
+    to_slot = Grasp(turn=np.pi / 2, other_turn=0.0)  # the hand at yaw pi/2 + pi/2
+    driver.place(Motion("e:0", "bowl_0", slot, Quaternion(), to_slot))
+    carried = np.array(arm.sent[-2].points[-1].positions)
+    assert driver.model.tcp_pose(carried).translation == pytest.approx(
+        [0.6, -0.25, 0.343], abs=0.001
+    )
+    assert np.cos(driver.planner.yaw_of(carried)) == pytest.approx(1.0, abs=1e-3)
 
 
 def test_the_driver_is_registered_and_validates_its_settings() -> None:

@@ -74,21 +74,28 @@ def test_the_dish_is_carried_top_down_and_set_down_on_the_first_cell() -> None:
     assert turned == pytest.approx(np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) @ dish)
 
 
-@pytest.mark.parametrize("bottom_out", [False, True])
-def test_the_left_spare_spots_are_offered_only_while_the_bottom_rack_is_pushed_in(
-    bottom_out: bool,
+@pytest.mark.parametrize("out", [None, "rack_top", "rack_bottom"])
+@pytest.mark.parametrize("dish_y", [-0.3, 0.3])
+def test_the_spare_spots_on_a_side_are_offered_only_while_the_rack_whose_handle_is_there_is_in(
+    out: str | None, dish_y: float
 ) -> None:
     """A dish turned over on the left spare spot (0.36, -0.42) lay under the pulled-out
-    bottom rack's handle and was refused on every re-plan while that rack was out; with the
-    rack in, a dish on the left is turned on its own side (the far side asked a transfer the
-    arm could not make without flipping)."""
-    left = bowl("bowl_0", 0.38, -0.3)
-    rack = SceneRack(id="rack_bottom", position=Vector3(x=0.6, y=-0.44, z=0.1), open=bottom_out)
-    scene = SCENE.model_copy(update={"objects": [left], "racks": [rack]})
-    spots = set_down_spots(scene, left, np.array([0.38, -0.3, 0.0175]))
+    bottom rack's handle and was refused on every re-plan while that rack was out; the top
+    rack's handle is on the right, over the right spots when it is out. With both racks in,
+    a dish is turned on its own side (the far side asked a transfer the arm could not make
+    without flipping)."""
+    dish = bowl("bowl_0", 0.38, dish_y)
+    racks = [
+        SceneRack(id=rack, position=Vector3(x=0.6, y=0.0, z=z), open=rack == out)
+        for rack, z in (("rack_top", 0.3), ("rack_bottom", 0.1))
+    ]
+    scene = SCENE.model_copy(update={"objects": [dish], "racks": racks})
+    spots = set_down_spots(scene, dish, np.array([0.38, dish_y, 0.0175]))
     beside = [spot for spot in spots if abs(spot[1]) >= SPARE_Y]
     assert beside
-    if bottom_out:
-        assert all(spot[1] > 0 for spot in beside)
+    if out == "rack_bottom":
+        assert all(spot[1] > 0 for spot in beside)  # its handle is on the left
+    elif out == "rack_top":
+        assert all(spot[1] < 0 for spot in beside)  # its handle is on the right
     else:
-        assert beside[0][1] < 0
+        assert np.sign(beside[0][1]) == np.sign(dish_y)

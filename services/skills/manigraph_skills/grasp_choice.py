@@ -59,6 +59,8 @@ OPENING_MARGIN = 0.02
 #: An opening this close to fully open is fully open, metres: a bowl (5 cm) let go of with
 #: the fingers 7 cm apart stayed on one of them in the sim (its fingers hold only by their
 #: drives short of the joint limit); the half centimetre a side it would spare is not worth it.
+#: (Taken with the fingers 7 cm apart and let go of fully open, it stayed on them too, every
+#: time: it left with the hand.)
 FULLY_OPEN_WITHIN = 0.015
 DISHES = ("plate", "bowl")
 

@@ -113,11 +113,12 @@ def tilts(dish: np.ndarray, size: np.ndarray) -> list[Tilt]:
     return found
 
 
-def next_tilts(dish: np.ndarray, size: np.ndarray, target: int) -> list[Tilt]:
-    """The tilts that bring the dish to up axis ``target``, or (if none does) those after
-    which one does; empty if the dish cannot be turned there (too wide across every axis
-    it would turn about)."""
-    direct = [t for t in tilts(dish, size) if t.up_after == target]
+def next_tilts(dish: np.ndarray, size: np.ndarray, targets: tuple[int, ...]) -> list[Tilt]:
+    """The tilts that bring the dish to an up axis in ``targets`` (the orientations it may
+    end in: ``orientations.postures_like``), or (if none does) those after which one does;
+    empty if the dish cannot be turned there (too wide across every axis it would turn
+    about)."""
+    direct = [t for t in tilts(dish, size) if t.up_after in targets]
     if direct:
         return direct
     steps = []
@@ -126,7 +127,7 @@ def next_tilts(dish: np.ndarray, size: np.ndarray, target: int) -> list[Tilt]:
         for hand in sideways_hands():
             after = hand @ held
             if up_index(after) == tilt.up_after and any(
-                t.up_after == target for t in tilts(after, size)
+                t.up_after in targets for t in tilts(after, size)
             ):
                 steps.append(tilt)
                 break

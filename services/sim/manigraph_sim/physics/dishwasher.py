@@ -8,7 +8,7 @@ bodies, all built from boxes (nothing downloaded).
   rack is a floor whose top is 5 mm above its centre, a pair of 1.5 cm ribs around every plate
   slot (plates stand between them), and a handle: a tab at one side of its front, sticking
   out towards the robot, grasped where ``manigraph_shared.grasp_points.RACK_GRIP_OFFSET``
-  says (the top rack's in the middle, the bottom rack's beside its left side).
+  says (the top rack's beside its right side, the bottom rack's beside its left).
 * **Dishes**: a plate is a thin box, 6.4 x 6.4 x 1.5 cm (the geometric world's is 8 cm across,
   as wide as the fingers open: the skills could not tilt it); a bowl is an open box (a base
   and four walls), 5 cm across so neighbouring bowl slots (5.5 cm apart) both take one,
@@ -38,7 +38,7 @@ from manigraph_shared.grasp_points import (
     rack_handle_boxes,
 )
 from manigraph_shared.messages import Quaternion
-from manigraph_shared.orientations import ORIENTATIONS, up_axis_orientation
+from manigraph_shared.orientations import ORIENTATIONS, postures_like, up_axis_orientation
 from manigraph_sim.dishwasher.model import (
     BOWL,
     PLATE,
@@ -93,14 +93,6 @@ DETENT: Final = 150.0
 SLOT_FIT: Final = 0.02
 #: A rack counts as pulled out once it has travelled more than this fraction of its rail.
 OPEN_FRACTION: Final = 0.5
-#: The orientations of a plate standing on its rim (its thin axis level): "rim-y" and its
-#: flip, "side-x" and its flip. The physical plate is square (as a round plate, which it
-#: stands for, is symmetric) about its thin axis, so these are one posture, whichever edge is
-#: down; the fingers pinch it across its faces and it may pivot about them on the way. In a
-#: slot that asks one of them, a plate in any of them stands as asked (a plate set down
-#: upright between the ribs and read as "side-x" did not count as loaded).
-PLATE_ON_RIM: Final = (2, 3, 4, 5)
-
 CABINET_COLOUR = [0.8, 0.8, 0.82, 1.0]
 RACK_COLOUR = [0.35, 0.4, 0.5, 1.0]
 DISH_COLOUR = {PLATE: [0.95, 0.95, 0.92, 1.0], BOWL: [0.55, 0.75, 0.9, 1.0]}
@@ -108,8 +100,10 @@ DISH_COLOUR = {PLATE: [0.95, 0.95, 0.92, 1.0], BOWL: [0.55, 0.75, 0.9, 1.0]}
 
 def on_rim_as_asked(index: int, asked: int) -> int:
     """A plate's orientation ``index`` in a slot that asks ``asked``: ``asked`` if both are
-    on the rim (``PLATE_ON_RIM``: one posture of a symmetric plate), else ``index``."""
-    return asked if index in PLATE_ON_RIM and asked in PLATE_ON_RIM else index
+    on the rim (``orientations.PLATE_ON_RIM``: one posture of a symmetric plate), else
+    ``index``. In a slot that asks one of them, a plate in any of them stands as asked (a
+    plate set down upright between the ribs and read as "side-x" did not count as loaded)."""
+    return asked if index in postures_like(PLATE, asked) else index
 
 
 def physical_counter_x(x: float) -> float:

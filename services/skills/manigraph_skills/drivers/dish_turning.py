@@ -19,8 +19,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from manigraph_shared.dishwasher_rules import BOTTOM_RACK
 from manigraph_shared.errors import SkillError
+from manigraph_shared.grasp_points import RACK_GRIP_OFFSET
 from manigraph_shared.messages import Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATION_NAMES
 from manigraph_shared.panda import FINGER_BELOW_TCP
@@ -72,11 +72,16 @@ def set_down_spots(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np
     within reach, then spare spots beside the counter."""
     others = _counter_dishes(scene, item)
     # Beyond the counter's side columns (|y| <= 0.31 m) nothing ever lies: the spare spots,
-    # on the dish's side first. The left ones only while the bottom rack is pushed in: its
-    # handle, pulled out, is over them, and a dish turned there could not be taken again.
+    # on the dish's side first. A side's only while the rack whose handle is on that side
+    # (``grasp_points.RACK_GRIP_OFFSET``: the top rack's right, the bottom rack's left) is
+    # pushed in: pulled out, its handle is over them, and a dish turned there could not be
+    # taken again. (The racks are never both out: one side is always free.)
     sides = [1.0, -1.0] if here[1] >= 0 else [-1.0, 1.0]
-    if any(rack.id == BOTTOM_RACK and rack.open for rack in scene.racks):
-        sides.remove(-1.0)
+    for rack in scene.racks:
+        if rack.open and rack.id in RACK_GRIP_OFFSET:
+            side = float(np.sign(RACK_GRIP_OFFSET[rack.id][1]))
+            if side in sides:
+                sides.remove(side)
     spare = [np.array([x, side * SPARE_Y]) for side in sides for x in SPARE_X]
     free = [s for s in spare if all(np.linalg.norm(s - o) >= SPOT_FREE for o in others)]
     return [here[:2].copy(), *_neighbour_cells(here, others)[: MAX_SPOTS - 2], *free[:2]]
@@ -122,18 +127,23 @@ def grasp_height_for(centre_z: float) -> float:
 
 
 def turn_dish(
-    driver: PandaMotionDriver, decision_id: str, item: SceneObject, target: int, scene: Scene
+    driver: PandaMotionDriver,
+    decision_id: str,
+    item: SceneObject,
+    targets: tuple[int, ...],
+    scene: Scene,
 ) -> SceneObject:
-    """Tilt ``item`` until its up axis is ``target``; the dish as it then lies (its position
-    observed when the transport can, its orientation as turned)."""
+    """Tilt ``item`` until its up axis is one of ``targets`` (the first is the one asked; a
+    plate on its rim may stand on any edge: ``orientations.postures_like``); the dish as it
+    then lies (its position observed when the transport can, its orientation as turned)."""
     position = np.array(item.position.as_tuple())
     dish = rotation_of(item.orientation)
     moved = False
     for _ in range(MAX_TILTS):
-        if up_index(dish) == target:
+        if up_index(dish) in targets:
             break
         try:
-            position, dish = _tilt_once(driver, decision_id, item, target, scene, position, dish)
+            position, dish = _tilt_once(driver, decision_id, item, targets, scene, position, dish)
         except SkillError as exc:
             if exc.reason not in PLANNING_FAILURES or moved:
                 raise
@@ -144,10 +154,10 @@ def turn_dish(
             log.info("moving %s to turn it over elsewhere: %s", item.id, exc)
             position, dish = move_dish(driver, decision_id, item, scene, position, dish, cells)
             moved = True
-            position, dish = _tilt_once(driver, decision_id, item, target, scene, position, dish)
-    if up_index(dish) != target:
+            position, dish = _tilt_once(driver, decision_id, item, targets, scene, position, dish)
+    if up_index(dish) not in targets:
         raise SkillError(
-            "orientation_unreachable", f"{item.id} did not turn {ORIENTATION_NAMES[target]}"
+            "orientation_unreachable", f"{item.id} did not turn {ORIENTATION_NAMES[targets[0]]}"
         )
     return item.model_copy(
         update={"position": _vector(position), "orientation": quaternion_of(dish)}
@@ -158,22 +168,24 @@ def _tilt_once(
     driver: PandaMotionDriver,
     decision_id: str,
     item: SceneObject,
-    target: int,
+    targets: tuple[int, ...],
     scene: Scene,
     position: np.ndarray,
     dish: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """One tilt of ``item`` (centre at ``position``, rotation ``dish``) towards up axis
-    ``target``: where it then lies and its rotation."""
+    """One tilt of ``item`` (centre at ``position``, rotation ``dish``) towards an up axis in
+    ``targets``: where it then lies and its rotation."""
     size = np.array(item.size.as_tuple())
-    candidates = next_tilts(dish, size, target)
+    candidates = next_tilts(dish, size, targets)
     if not candidates:
         raise SkillError(
             "orientation_unreachable",
             f"{item.id} lies {ORIENTATION_NAMES[up_index(dish)]}; the fingers span it "
-            f"across no axis that turns it {ORIENTATION_NAMES[target]}",
+            f"across no axis that turns it {ORIENTATION_NAMES[targets[0]]}",
         )
-    wanted = list(dict.fromkeys([target, *(t.up_after for t in candidates)]))
+    # Every up axis asked for first (a plate on any edge: the wrist may clear the counter
+    # with the hand rolled one way only), then those a second tilt turns on from.
+    wanted = list(dict.fromkeys([*targets, *(t.up_after for t in candidates)]))
     current = item.model_copy(update={"position": _vector(position)})
     lying = current.model_copy(update={"orientation": quaternion_of(dish)})
     height = dish_grasp_height(scene, lying, position, grasp_height_for(float(position[2])))

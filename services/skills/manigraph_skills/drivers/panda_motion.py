@@ -44,7 +44,7 @@ from manigraph_shared.messages import (
     SceneRack,
     Vector3,
 )
-from manigraph_shared.orientations import up_axis_orientation
+from manigraph_shared.orientations import postures_like, up_axis_orientation
 from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp, Motion, RobotDriver
 from manigraph_skills.drivers.dish_turning import turn_dish
 from manigraph_skills.drivers.registry import MotionOptions
@@ -80,6 +80,12 @@ HOMING_HELPS = ("no_ik_solution", "collision")
 #: far, low grasp from the home pose swings ~0.3 m aside) but not over a short one (from
 #: above a tower to a block beside it only 0.3 cleared the tower).
 ELBOW_SWING = (0.05, 0.3)
+#: The fingers are alike: a hand turned half round about the vertical holds what it holds
+#: the same way, and every object here (blocks, covers, plates, bowls) is square. Its wrist
+#: joint is then half a turn from where it was: a far corner of the counter that the wrist
+#: could not turn to (``no_ik_solution``, at its joint limit) is reached turned half round,
+#: and the forearm passes a neighbour on the other side.
+HALF_TURN = np.pi
 #: After letting go of a rack's handle the hand rises and backs off this far towards the
 #: robot, metres, clear of the handle and the rack.
 HANDLE_BACK_OFF = 0.1
@@ -269,10 +275,11 @@ class PandaMotionDriver(RobotDriver):
     def turn_over(
         self, decision_id: str, item: SceneObject, target: Quaternion, scene: Scene
     ) -> SceneObject:
-        """Tilt ``item`` on the counter until its up axis is ``target``'s (``dish_turning``):
-        the object as it then lies."""
-        wanted = up_axis_orientation(target)
-        if up_axis_orientation(item.orientation) == wanted:
+        """Tilt ``item`` on the counter until it stands as ``target`` asks (``dish_turning``):
+        its up axis ``target``'s, or for a plate on its rim any edge down
+        (``orientations.postures_like``); the object as it then lies."""
+        wanted = postures_like(item.category.value, up_axis_orientation(target))
+        if up_axis_orientation(item.orientation) in wanted:
             return item
         return turn_dish(self, decision_id, item, wanted, scene)
 
@@ -339,8 +346,9 @@ class PandaMotionDriver(RobotDriver):
     ) -> Callable[[np.ndarray], JointTrajectory]:
         """``make(planner, q, turn, carry_z)`` as planned; if an arm link would touch
         something, re-planned with the hand turned, the elbow swung aside and higher, and
-        last carried low (``LOW_CARRY_Z``), until one is clear. ``motion`` names it in the
-        refusal ("taking it: panda_hand would touch ...")."""
+        last carried low (``LOW_CARRY_Z``), until one is clear. Last of all, the same with the
+        hand turned half round (``HALF_TURN``). ``motion`` names it in the refusal ("taking
+        it: panda_hand would touch ...")."""
         bearing = float(np.arctan2(target[1], target[0]))
         aside = np.array([-np.sin(bearing), np.cos(bearing), 0.0])
         pushes = [tuple(gain * side * aside) for gain in ELBOW_SWING for side in (1.0, -1.0)]
@@ -352,19 +360,25 @@ class PandaMotionDriver(RobotDriver):
             GraspPlanner(self.model, low, elbow_push=push) for push in pushes
         ]
 
+        turns = (0.0, grasp.other_turn)
+        flipped = (HALF_TURN, grasp.other_turn + HALF_TURN)
+        half_turned = tuple(t for t in flipped if not _same_yaw(t, turns))
+
         def plan(q: np.ndarray) -> JointTrajectory:
-            options = [
-                (planner, turn, carry)
-                for carry in self._carry_heights(q, grasp.carry_z)
-                for planner in planners
-                for turn in (0.0, grasp.other_turn)
-            ]
-            if grasp.carry_z < LOW_CARRY_Z:
+            heights = self._carry_heights(q, grasp.carry_z)
+            options = []
+            # The hand as chosen (and at its other yaw) first; then turned half round.
+            for yaws in (turns, half_turned):
                 options += [
-                    (planner, turn, grasp.carry_z)
-                    for planner in low_planners
-                    for turn in (0.0, grasp.other_turn)
+                    (planner, turn, carry)
+                    for carry in heights
+                    for planner in planners
+                    for turn in yaws
                 ]
+                if grasp.carry_z < LOW_CARRY_Z:
+                    options += [
+                        (planner, turn, grasp.carry_z) for planner in low_planners for turn in yaws
+                    ]
             contacts: dict[tuple[str, str], Contact] = {}
             failure: SkillError | None = None
             for planner, turn, carry in options:
@@ -513,3 +527,9 @@ class PandaMotionDriver(RobotDriver):
             ],
             stamp=time.time(),
         )
+
+
+def _same_yaw(turn: float, turns: tuple[float, ...]) -> bool:
+    """Whether ``turn`` is one of ``turns`` as an angle (a plate's other yaw is already half a
+    turn)."""
+    return any(abs((turn - other + np.pi) % (2 * np.pi) - np.pi) < 1e-6 for other in turns)
