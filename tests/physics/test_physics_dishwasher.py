@@ -23,10 +23,9 @@ from manigraph_shared.messages import (
     TrayAction,
 )
 from manigraph_shared.orientations import ORIENTATIONS, UPSIDE_DOWN, up_axis_orientation
-from manigraph_sim.dishwasher.model import RACK_TRAVEL
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_sim.physics.dishwasher import PHYSICAL_DISH_SIZE, physical_counter_x
+from manigraph_sim.physics.dishwasher import PHYSICAL_DISH_SIZE, RAIL, physical_counter_x
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.turn_over import quaternion_of, rotation_of
 
@@ -113,9 +112,11 @@ def test_racks_slide_out_and_in_on_their_rails_with_the_dishes_in_them(
     world = dish_loop.backend.dishwasher
     assert world is not None
     assert dish_loop.toggle("rack_top").state is SkillState.SUCCEEDED
-    assert world.rack_travel("rack_top") == pytest.approx(RACK_TRAVEL, abs=0.005)
+    assert world.rack_travel("rack_top") == pytest.approx(RAIL, abs=0.005)
     assert world.rack_travel("rack_bottom") == pytest.approx(0.0, abs=0.002)
+    # Out all the way on its rail, which the scene reports (12 cm: docs/dishwasher.md).
     assert dish_loop.scene().rack("rack_top").open
+    assert dish_loop.scene().rack("rack_top").rail == pytest.approx(RAIL)
 
     loaded = dish_loop.act("bowl_3", "top_bowl_07", orientation_index=UPSIDE_DOWN)
     assert loaded.state is SkillState.SUCCEEDED, loaded
@@ -125,7 +126,7 @@ def test_racks_slide_out_and_in_on_their_rails_with_the_dishes_in_them(
     scene = dish_loop.scene()
     after = _position(scene, "bowl_3")
     # The bowl rode in with its rack, still upside down and in its slot.
-    assert after - before == pytest.approx([RACK_TRAVEL, 0.0, 0.0], abs=0.01)
+    assert after - before == pytest.approx([RAIL, 0.0, 0.0], abs=0.01)
     assert scene.object("bowl_3").filled and scene.goal("top_bowl_07").filled
     assert up_axis_orientation(scene.object("bowl_3").orientation) == UPSIDE_DOWN
     assert not scene.rack("rack_top").open
@@ -211,7 +212,7 @@ def test_a_rack_part_of_the_way_out_is_seen_where_it_is_and_clicks_to_the_nearer
     assert world is not None
     closed = dish_loop.scene()
     top = world.rails["rack_top"]
-    for travel, settles_at in ((0.10, RACK_TRAVEL), (0.05, 0.0)):
+    for travel, settles_at in ((0.08, RAIL), (0.04, 0.0)):
         qpos = world.cabinet.qpos.copy()
         qpos[list(world.rails).index("rack_top")] = -travel
         world.cabinet.set_qpos(qpos)
@@ -219,7 +220,7 @@ def test_a_rack_part_of_the_way_out_is_seen_where_it_is_and_clicks_to_the_nearer
         rack = seen.rack("rack_top")
         # Where it is, as a camera would see it: its handle and its slots moved that far.
         assert rack.travel == pytest.approx(travel, abs=1e-4)
-        assert rack.open == (travel > RACK_TRAVEL / 2)
+        assert rack.open == (travel > RAIL / 2)
         moved = rack.position.x - closed.rack("rack_top").position.x
         assert moved == pytest.approx(-travel, abs=1e-4)
         slot = seen.goal("top_bowl_07").position.x - closed.goal("top_bowl_07").position.x

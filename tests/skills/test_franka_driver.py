@@ -294,6 +294,25 @@ def test_a_rack_part_of_the_way_out_slides_only_as_far_as_it_has_left_to_go() ->
     assert np.allclose(slid - grasped, [0.10, 0.0, 0.0], atol=0.005)
 
 
+
+@pytest.mark.parametrize("rail", [None, 0.12])
+def test_a_rack_is_pulled_out_as_far_as_its_rail_goes(rail: float | None) -> None:
+    """The scene may say how far a rack's rail lets it out (``SceneRack.rail``: the physics
+    world's racks slide 12 cm); without it, the shared ``RACK_TRAVEL`` (16 cm)."""
+    from manigraph_skills.motion import PandaModel
+
+    franka = driver()
+    handle = Vector3(x=0.67, y=0.0, z=0.30)  # the top rack pushed in
+    franka.toggle_tray("e:0", "rack_top", handle, False, rail=rail)  # pull it out
+    robot = FakeRobot.last
+    assert robot is not None
+    model = PandaModel()
+    grasped, slid = (
+        model.tcp_pose(np.array(m.waypoints[-1].target.position)).translation  # type: ignore[attr-defined]
+        for m in robot.motions[:2]
+    )
+    assert np.allclose(slid - grasped, [-(rail or 0.16), 0.0, 0.0], atol=0.005)
+
 class SlowRobot(FakeRobot):
     """A motion that takes until ``stop`` halts it, as franky's blocking ``move`` does."""
 

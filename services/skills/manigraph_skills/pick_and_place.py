@@ -100,4 +100,6 @@ class PickAndPlace:
         if not self.workspace.contains(rack.position):
             raise SkillError("outside_workspace", f"{rack_id} handle at {rack.position.as_tuple()}")
         status(SkillState.RUNNING)
-        self.driver.toggle_tray(action.decision_id, rack_id, rack.position, rack.open, rack.travel)
+        self.driver.toggle_tray(
+            action.decision_id, rack_id, rack.position, rack.open, rack.travel, rack.rail
+        )

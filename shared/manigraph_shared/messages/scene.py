@@ -79,6 +79,13 @@ class SceneRack(Struct):
     travel: float | None = Field(
         None, ge=0.0, le=1.0, description="how far it is out, metres, where measured"
     )
+    rail: float | None = Field(
+        None,
+        gt=0.0,
+        le=1.0,
+        description="how far it slides out all the way, metres, where the world says so "
+        "(None: grasp_points.RACK_TRAVEL)",
+    )
 
 
 class Scene(Message):

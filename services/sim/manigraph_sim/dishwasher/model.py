@@ -84,6 +84,8 @@ class Rack:
     #: How far it is out, metres, where a physics world measured it (a rack a placement
     #: nudged part of the way in); None: all the way if open, else not at all.
     travel: float | None = None
+    #: How far its rail lets it out, metres, where a world's differs (None: ``RACK_TRAVEL``).
+    rail: float | None = None
 
     @property
     def centre(self) -> np.ndarray:

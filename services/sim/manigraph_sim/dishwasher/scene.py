@@ -43,7 +43,13 @@ def dishwasher_scene(
         for slot in world.slots.values()
     ]
     racks = [
-        SceneRack(id=rack.id, position=vector(rack.handle), open=rack.open, travel=rack.travel)
+        SceneRack(
+            id=rack.id,
+            position=vector(rack.handle),
+            open=rack.open,
+            travel=rack.travel,
+            rail=rack.rail,
+        )
         for rack in world.racks.values()
     ]
     return Scene(

@@ -3,8 +3,9 @@ bodies, all built from boxes (nothing downloaded).
 
 * **Cabinet**: the articulation's fixed root, two side walls and a back wall around where
   the racks stand pushed in (``tasks.dishwasher.RACK_CENTRES``, the geometric world's).
-* **Racks**: one link each on a prismatic joint along x (0: pushed in, ``-RACK_TRAVEL``:
-  pulled out towards the robot), with joint damping so a rack stays where it is left. A
+* **Racks**: one link each on a prismatic joint along x (0: pushed in, ``-RAIL``:
+  pulled out towards the robot, 4 cm short of the geometric world's ``RACK_TRAVEL``, and
+  reported so: ``SceneRack.rail``), with joint damping so a rack stays where it is left. A
   rack is a floor whose top is 5 mm above its centre, a pair of 1.5 cm ribs around every plate
   slot (plates stand between them), and a handle: a tab at one side of its front, sticking
   out towards the robot, grasped where ``manigraph_shared.grasp_points.RACK_GRIP_OFFSET``
@@ -42,7 +43,6 @@ from manigraph_shared.orientations import ORIENTATIONS, postures_like, up_axis_o
 from manigraph_sim.dishwasher.model import (
     BOWL,
     PLATE,
-    RACK_TRAVEL,
     Dish,
     DishwasherLayout,
 )
@@ -86,11 +86,19 @@ DISH_FRICTION: Final = 1.0
 #: past half its travel, in otherwise), as a real rack clicks into place. It keeps a dish
 #: set down in a slot from shoving the rack part of the way in (without it, one placement
 #: moved a rack 6.5 cm, and the next dish went onto a rib); the hand pulling the handle
-#: works against at most DETENT * RACK_TRAVEL / 2 (12 N) before the rack clicks the other way.
+#: works against at most DETENT * RAIL / 2 (9 N) before the rack clicks the other way.
 DETENT: Final = 150.0
 #: A dish counts as standing in a slot when its centre is this close to the slot's position
 #: (with the rack where it physically is) and it is not held: half a plate's slot pitch.
 SLOT_FIT: Final = 0.02
+#: How far a rack slides out, metres: 12 cm, not the geometric world's 16 (``RACK_TRAVEL``).
+#: Pulled out 16 cm, a rack's front (x = 0.52 m) stood 6 cm beyond the counter's far row
+#: (0.46 m), and a hand taking a dish there (20.8 cm long along its closing axis), or the
+#: fingers lifting it, met the rack's floor or the dishes in its near slots: 12 cm leaves
+#: 10 cm. The policy reads a rack's open flag and its handle where it physically is (4 cm
+#: further out than in training when open; in the geometric world, 12 cm instead of 16 cm
+#: left the done-when evaluation at 0.98 top-bottom, 10 cm broke it).
+RAIL: Final = 0.12
 #: A rack counts as pulled out once it has travelled more than this fraction of its rail.
 OPEN_FRACTION: Final = 0.5
 CABINET_COLOUR = [0.8, 0.8, 0.82, 1.0]
@@ -208,7 +216,7 @@ class PhysicsDishwasher:
             link.set_joint_name(rack.id)
             link.set_joint_properties(
                 "prismatic",
-                limits=[[-RACK_TRAVEL, 0.0]],
+                limits=[[-RAIL, 0.0]],
                 pose_in_parent=sapien.Pose(rack.closed_centre),
                 pose_in_child=sapien.Pose(),
                 damping=RAIL_DAMPING,
@@ -224,7 +232,7 @@ class PhysicsDishwasher:
                     link.add_box_visual(pose, half, material=RACK_COLOUR)
         cabinet = builder.build(fix_root_link=True)
         cabinet.set_root_pose(sapien.Pose())
-        cabinet.set_qpos(np.array([-RACK_TRAVEL if r.open else 0.0 for r in self.racks.values()]))
+        cabinet.set_qpos(np.array([-RAIL if r.open else 0.0 for r in self.racks.values()]))
         return cabinet
 
     def _add_dish(self, dish: Dish, material: physx.PhysxMaterial) -> sapien.Entity:
@@ -251,13 +259,13 @@ class PhysicsDishwasher:
     def _hold_racks(self) -> None:
         """Each rack's detent at the end of its rail it is nearer."""
         for rack_id, joint in self.rails.items():
-            target = -RACK_TRAVEL if self.is_open(rack_id) else 0.0
+            target = -RAIL if self.is_open(rack_id) else 0.0
             if self._held_at.get(rack_id) != target:
                 joint.set_drive_target(target)
                 self._held_at[rack_id] = target
 
     def is_open(self, rack_id: str) -> bool:
-        return self.rack_travel(rack_id) > OPEN_FRACTION * RACK_TRAVEL
+        return self.rack_travel(rack_id) > OPEN_FRACTION * RAIL
 
     def view(self, held: str | None) -> DishwasherWorld:
         """The simulated state as the geometric dishwasher world: each dish where it is, with
@@ -266,7 +274,7 @@ class PhysicsDishwasher:
         where it is (so its slots and handle are reported where they are, as a camera would
         see them)."""
         racks = [
-            replace(rack, open=self.is_open(rack.id), travel=self.rack_travel(rack.id))
+            replace(rack, open=self.is_open(rack.id), travel=self.rack_travel(rack.id), rail=RAIL)
             for rack in self.racks.values()
         ]
         physical = {rack.id: rack.centre for rack in racks}

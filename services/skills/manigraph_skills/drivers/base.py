@@ -90,11 +90,13 @@ class RobotDriver(ABC):
         handle: Vector3,
         is_open: bool,
         travel: float | None = None,
+        rail: float | None = None,
     ) -> None:
         """Grasp rack ``rack_id``'s handle (at ``handle``) and push the rack in if
         ``is_open``, else pull it out (dishwasher); ``travel``: how far it is out now, where
-        the scene measured it (None: all the way if open, else not at all). A driver that
-        cannot refuses with reason ``unsupported``."""
+        the scene measured it (None: all the way if open, else not at all); ``rail``: how far
+        it slides out all the way, where the scene says (None: ``grasp_points.RACK_TRAVEL``).
+        A driver that cannot refuses with reason ``unsupported``."""
         name = getattr(self, "name", type(self).__name__)
         raise SkillError("unsupported", f"the {name} driver cannot toggle a tray yet")
 

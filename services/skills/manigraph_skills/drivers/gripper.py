@@ -81,6 +81,7 @@ class GripperDriver(RobotDriver):
         handle: Vector3,
         is_open: bool,
         travel: float | None = None,
+        rail: float | None = None,
     ) -> None:
         """One ``toggle_tray`` command naming the rack, at its handle."""
         self._send(GripperOp.TOGGLE_TRAY, Motion(decision_id, rack_id, handle, Quaternion()))

@@ -290,14 +290,16 @@ class PandaMotionDriver(RobotDriver):
         handle: Vector3,
         is_open: bool,
         travel: float | None = None,
+        rail: float | None = None,
     ) -> None:
         """Down onto the rack's handle tab (``grasp_points.rack_grip``), close across it,
         pull the rack out along -x (or push it in) as far as it has left to go, release and
         rise."""
         start = np.array(handle.as_tuple())
         grip = start + rack_grip(rack_id)
-        out = (RACK_TRAVEL if is_open else 0.0) if travel is None else travel
-        distance = out if is_open else RACK_TRAVEL - out
+        rail = RACK_TRAVEL if rail is None else rail
+        out = (rail if is_open else 0.0) if travel is None else travel
+        distance = out if is_open else rail - out
         shift = np.array([distance if is_open else -distance, 0.0, 0.0])
         # Yaw 0: the fingers close along y, across the tab.
         held = self._run(
