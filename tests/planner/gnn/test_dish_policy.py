@@ -21,7 +21,7 @@ from manigraph_planner.training.dishwasher import (
     load_dish_demonstrations,
 )
 from manigraph_shared.errors import PolicyError
-from manigraph_shared.messages import EpisodeRequest, SkillState, SkillStatus
+from manigraph_shared.messages import EpisodeRequest, SkillState, SkillStatus, TrayAction
 from manigraph_sim.geometric.backend import GeometricBackend
 
 CHECKPOINTS = Path(__file__).parents[3] / "checkpoints"
@@ -172,9 +172,10 @@ def test_ranked_alternatives_start_with_the_decision_and_offer_every_loadable_di
     ranked = _ranked(s, liked=("top_",))
     kinds = [d.tray_action.value == "none" for d in ranked]
     toggles = kinds.index(False)
-    # Both toggles, together, last: every placement into the open rack comes first.
-    assert kinds[toggles:] == [False, False]
-    assert {d.object_id for d in ranked[toggles:]} == {"rack_top", "rack_bottom"}
+    # The toggle last: every placement into the open rack comes first (and the bottom rack
+    # is not pulled out under the open top one).
+    assert kinds[toggles:] == [False]
+    assert {d.object_id for d in ranked[toggles:]} == {"rack_top"}
     placements = ranked[:toggles]
     # Each dish once in its likeliest slot, then each again in its other free top-rack
     # slots, round by round: every such pair once.
@@ -237,17 +238,14 @@ def test_a_dish_standing_in_a_slot_is_never_an_alternative() -> None:
 
 def test_a_dish_whose_likeliest_slot_is_in_a_rack_pushed_in_waits_for_it() -> None:
     """Bowls on top, plates at the bottom: with the top rack out, a refused bowl's
-    alternatives are the other bowls and the rack toggles, never a plate into the top rack
-    (nothing would take it out again)."""
+    alternatives are the other bowls and pushing the top rack in, never a plate into the
+    top rack (nothing would take it out again)."""
     s = _top_rack_out()
     ranked = _ranked(s, liked=("top_bowl", "bottom_plate"))
     placements = [d for d in ranked if d.tray_action.value == "none"]
     assert {d.object_id for d in placements} == {o.id for o in s.objects if o.id.startswith("bowl")}
     assert all(d.goal_id.startswith("top_bowl") for d in placements)
-    assert {d.object_id for d in ranked if d.tray_action.value != "none"} == {
-        "rack_top",
-        "rack_bottom",
-    }
+    assert {d.object_id for d in ranked if d.tray_action.value != "none"} == {"rack_top"}
 
 
 @pytest.mark.skipif(
@@ -307,3 +305,23 @@ def test_dropping_dishes_keeps_the_demonstrated_decision(demos) -> None:  # type
                 if rack_in and before:
                     assert after  # a rack pulled out still has a dish of each kind to load
     assert shrunk > len(demos.samples)
+
+
+@pytest.mark.parametrize("favoured", [0, 1, 2])
+def test_a_rack_is_never_pulled_out_under_the_other_one_pulled_out(favoured: int) -> None:
+    """With the top rack out, pulling the bottom one out loads neither (the bottom rack only
+    while the top one is in): whatever the tray head favours, that toggle is never the
+    decision nor an alternative (a policy reading racks where a physical world has them once
+    did it, and loaded bowls into the bottom rack)."""
+    s = _top_rack_out(4)
+    graph = dish_scene_to_graph(s)
+    n = graph.x.shape[0]
+    tray = torch.zeros(3)
+    tray[favoured] = 5.0
+    heads = DishHeads(torch.zeros(n), torch.zeros(n, 6), tray)
+    decision = decision_from_heads(graph, heads)
+    assert decision is not None and decision.tray_action is not TrayAction.TOGGLE_BOTTOM
+    goal_ids = graph.goal_ids
+    policy = DishwasherGNNPolicy(SlotLikingNet(goal_ids, ("top_bowl",)))  # type: ignore[arg-type]
+    assert all(d.tray_action is not TrayAction.TOGGLE_BOTTOM for d in policy.ranked(s))
+    assert any(d.tray_action is TrayAction.TOGGLE_TOP for d in policy.ranked(s))

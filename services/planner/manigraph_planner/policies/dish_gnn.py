@@ -21,17 +21,17 @@ __all__ = ["DishwasherGNNPolicy", "decision_from_heads"]
 
 #: Slot category code (dish_features) that each dish code fills: plate 0 -> 2, bowl 1 -> 3.
 _SLOT_FOR_DISH = {0: 2, 1: 3}
-_NONE_INDEX = TRAY_ACTIONS.index(TrayAction.NONE)
 
 
 class DishwasherGNNPolicy(Policy):
     """Scene → dish graph → four heads → one decision.
 
     The tray head's argmax decides first: a toggle is the decision (``object_id`` and
-    ``goal_id`` name the rack). Otherwise PickAndPlace: the most likely pair of a dish and a
-    slot of its kind that holds no dish (a taken slot is an action the world refuses; the
-    block policy's decoder likewise keeps to category-compatible pairs), placed in the
-    orientation head's argmax at that dish's node.
+    ``goal_id`` name the rack), unless it would pull a rack out while the other one is out
+    (``_pointless_toggles``: the rules let neither be loaded then). Otherwise PickAndPlace:
+    the most likely pair of a dish and a slot of its kind that holds no dish (a taken slot
+    is an action the world refuses; the block policy's decoder likewise keeps to
+    category-compatible pairs), placed in the orientation head's argmax at that dish's node.
     """
 
     def __init__(self, net: DishPolicyNet, info: CheckpointInfo | None = None) -> None:
@@ -67,10 +67,13 @@ class DishwasherGNNPolicy(Policy):
         with torch.inference_mode():
             heads = self.net.heads_complete(graph.x)
         first = decision_from_heads(graph, heads)
+        pointless = _pointless_toggles(graph)
         toggles = [
             Decision(tray.rack_id, tray.rack_id, None, tray)
             for index in heads.tray.argsort(descending=True).tolist()
-            if (tray := TRAY_ACTIONS[int(index)]) is not TrayAction.NONE and tray.rack_id
+            if (tray := TRAY_ACTIONS[int(index)]) is not TrayAction.NONE
+            and tray.rack_id
+            and tray not in pointless
         ]
         placements = itertools.chain(*_pairs_by_dish(graph, heads))
         ranked: dict[tuple[str, str], Decision] = {}
@@ -89,6 +92,8 @@ def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
     more dishes than it was shown would otherwise stop before the first move)."""
     scores = _pair_scores(graph, heads)
     tray_logits = heads.tray if scores is not None else _without_none(heads.tray)
+    for pointless in _pointless_toggles(graph):
+        tray_logits = _without(tray_logits, pointless)
     tray = TRAY_ACTIONS[int(tray_logits.argmax())]
     if tray is not TrayAction.NONE:
         rack = tray.rack_id
@@ -104,7 +109,29 @@ def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
 
 def _without_none(tray: torch.Tensor) -> torch.Tensor:
     """The tray logits with "none" ruled out."""
-    return tray.masked_fill(torch.arange(len(TRAY_ACTIONS)) == _NONE_INDEX, float("-inf"))
+    return _without(tray, TrayAction.NONE)
+
+
+def _without(tray: torch.Tensor, action: TrayAction) -> torch.Tensor:
+    """The tray logits with ``action`` ruled out."""
+    index = TRAY_ACTIONS.index(action)
+    return tray.masked_fill(torch.arange(len(TRAY_ACTIONS)) == index, float("-inf"))
+
+
+def _pointless_toggles(graph: DishGraph) -> list[TrayAction]:
+    """Tray actions that pull a rack out while the other rack is out: the rules load the
+    bottom rack only while the top one is in, so neither could be loaded then, and the
+    demonstrations never do it. A policy reading a rack where a physical world has it (the
+    physics world's racks slide 12 cm, not the 16 it was shown) once pulled the bottom rack
+    out under the open top one and loaded bowls into it."""
+    is_open = graph.rack_open
+    pointless = []
+    for tray in (TrayAction.TOGGLE_TOP, TrayAction.TOGGLE_BOTTOM):
+        rack = TRAY_RACKS[tray]
+        others = [other for other in is_open if other != rack]
+        if rack in is_open and not is_open[rack] and any(is_open[o] for o in others):
+            pointless.append(tray)
+    return pointless
 
 
 def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[list[Decision]]:
