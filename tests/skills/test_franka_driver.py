@@ -294,7 +294,6 @@ def test_a_rack_part_of_the_way_out_slides_only_as_far_as_it_has_left_to_go() ->
     assert np.allclose(slid - grasped, [0.10, 0.0, 0.0], atol=0.005)
 
 
-
 @pytest.mark.parametrize("rail", [None, 0.12])
 def test_a_rack_is_pulled_out_as_far_as_its_rail_goes(rail: float | None) -> None:
     """The scene may say how far a rack's rail lets it out (``SceneRack.rail``: the physics
@@ -312,6 +311,7 @@ def test_a_rack_is_pulled_out_as_far_as_its_rail_goes(rail: float | None) -> Non
         for m in robot.motions[:2]
     )
     assert np.allclose(slid - grasped, [-(rail or 0.16), 0.0, 0.0], atol=0.005)
+
 
 class SlowRobot(FakeRobot):
     """A motion that takes until ``stop`` halts it, as franky's blocking ``move`` does."""
