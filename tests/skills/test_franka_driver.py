@@ -279,11 +279,18 @@ def test_a_rack_toggle_runs_through_franky_grasp_slide_release() -> None:
 
 
 def test_a_rack_part_of_the_way_out_slides_only_as_far_as_it_has_left_to_go() -> None:
-    from manigraph_skills.motion import PandaModel
 
     franka = driver()
     handle = Vector3(x=0.57, y=0.0, z=0.30)  # the top rack 10 cm out
     franka.toggle_tray("e:0", "rack_top", handle, True, travel=0.10)  # push it in
+    grasped, slid = _grasped_and_slid()
+    assert np.allclose(slid - grasped, [0.10, 0.0, 0.0], atol=0.005)
+
+
+def _grasped_and_slid() -> tuple[np.ndarray, np.ndarray]:
+    """Where the TCP ended the last toggle's first two motions: at the handle, and slid."""
+    from manigraph_skills.motion import PandaModel
+
     robot = FakeRobot.last
     assert robot is not None
     model = PandaModel()
@@ -291,25 +298,17 @@ def test_a_rack_part_of_the_way_out_slides_only_as_far_as_it_has_left_to_go() ->
         model.tcp_pose(np.array(m.waypoints[-1].target.position)).translation  # type: ignore[attr-defined]
         for m in robot.motions[:2]
     )
-    assert np.allclose(slid - grasped, [0.10, 0.0, 0.0], atol=0.005)
+    return grasped, slid
 
 
 @pytest.mark.parametrize("rail", [None, 0.12])
 def test_a_rack_is_pulled_out_as_far_as_its_rail_goes(rail: float | None) -> None:
     """The scene may say how far a rack's rail lets it out (``SceneRack.rail``: the physics
     world's racks slide 12 cm); without it, the shared ``RACK_TRAVEL`` (16 cm)."""
-    from manigraph_skills.motion import PandaModel
-
     franka = driver()
     handle = Vector3(x=0.67, y=0.0, z=0.30)  # the top rack pushed in
     franka.toggle_tray("e:0", "rack_top", handle, False, rail=rail)  # pull it out
-    robot = FakeRobot.last
-    assert robot is not None
-    model = PandaModel()
-    grasped, slid = (
-        model.tcp_pose(np.array(m.waypoints[-1].target.position)).translation  # type: ignore[attr-defined]
-        for m in robot.motions[:2]
-    )
+    grasped, slid = _grasped_and_slid()
     assert np.allclose(slid - grasped, [-(rail or 0.16), 0.0, 0.0], atol=0.005)
 
 
