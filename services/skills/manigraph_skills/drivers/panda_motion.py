@@ -56,6 +56,7 @@ from manigraph_skills.motion import (
     PlanConfig,
 )
 from manigraph_skills.motion.collision import ArmCollisionModel, Contact, refusal
+from manigraph_skills.motion.model import wrapped
 from manigraph_skills.motion.plan import UP, grasp_yaw
 from manigraph_skills.obstacles import Obstacle
 
@@ -534,4 +535,4 @@ class PandaMotionDriver(RobotDriver):
 def _same_yaw(turn: float, turns: tuple[float, ...]) -> bool:
     """Whether ``turn`` is one of ``turns`` as an angle (a plate's other yaw is already half a
     turn)."""
-    return any(abs((turn - other + np.pi) % (2 * np.pi) - np.pi) < 1e-6 for other in turns)
+    return any(abs(wrapped(turn - other)) < 1e-6 for other in turns)

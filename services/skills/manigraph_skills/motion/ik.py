@@ -30,7 +30,7 @@ import numpy as np
 import pinocchio as pin
 
 from manigraph_shared.errors import ConfigError, SkillError
-from manigraph_skills.motion.model import HOME_Q, PandaModel
+from manigraph_skills.motion.model import HOME_Q, PandaModel, wrapped
 
 
 @dataclass(frozen=True)
@@ -73,7 +73,7 @@ class IKSolver:
         turned = HOME_Q.copy()
         turned[0] = bearing
         turned[6] = HOME_Q[6] + bearing - (yaw - np.pi / 2)
-        turned[6] = (turned[6] + np.pi) % (2 * np.pi) - np.pi
+        turned[6] = wrapped(turned[6])
         second = self._descend(target, turned)
         return second if second.ok else result
 

@@ -71,6 +71,11 @@ class PandaModel:
         return np.asarray(jacobian[:3], dtype=float)
 
 
+def wrapped(angle: float) -> float:
+    """``angle`` in [-pi, pi), radians: the same turn, the short way round."""
+    return float((angle + np.pi) % (2 * np.pi) - np.pi)
+
+
 def top_down(position: np.ndarray, yaw: float = 0.0) -> pin.SE3:
     """A TCP pose at ``position`` with the fingers pointing straight down, rotated by ``yaw``
     about the vertical (yaw 0: fingers close along the base frame's y axis)."""

@@ -20,7 +20,7 @@ import pinocchio as pin
 
 from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_skills.motion.ik import IKSolver
-from manigraph_skills.motion.model import HOME_Q, PandaModel, top_down
+from manigraph_skills.motion.model import HOME_Q, PandaModel, top_down, wrapped
 from manigraph_skills.motion.trajectory import JointTrajectory
 
 UP = np.array([0.0, 0.0, 1.0])
@@ -88,7 +88,7 @@ def turn_ways(start_yaw: float, yaw: float) -> tuple[float, float]:
     Yaws are angles: a hand picked at yaw pi - 0.01 reads back as -pi + 0.01, and turning
     from there to pi/2 "directly" spins the wrist 270 degrees into its joint limit
     (``no_ik_solution`` across the table, where a quarter turn back was all it took)."""
-    short = (yaw - start_yaw + np.pi) % (2 * np.pi) - np.pi
+    short = wrapped(yaw - start_yaw)
     long = short - 2 * np.pi if short > 0 else short + 2 * np.pi
     return start_yaw + short, start_yaw + long
 

@@ -17,7 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from manigraph_shared.errors import SkillError
-from manigraph_skills.motion.plan import UP, GraspPlanner
+from manigraph_skills.motion.plan import UP, GraspPlanner, turn_ways
 from manigraph_skills.motion.trajectory import JointTrajectory
 
 #: TCP height at which the hand turns, metres: the dish (at most ~4.5 cm from the TCP) and
@@ -52,7 +52,7 @@ def set_down_sideways(
     trajectory.add(0.0, q, closed=True)
     # The same hand either way round: turn the shorter way from the hand's yaw now.
     now = planner.yaw_of(q)
-    yaw = now + (closing_yaw(hand) - now + np.pi) % (2 * np.pi) - np.pi
+    yaw = turn_ways(now, closing_yaw(hand))[0]
     planner._transit(trajectory, turn_at, yaw, closed=True, what="turn-over transfer")
     planner.pose_line(trajectory, pin.SE3(hand, turn_at), True, c.slow_speed, "turn over")
     planner.pose_line(trajectory, pin.SE3(hand, spot), True, c.slow_speed, "set down turned")
