@@ -13,6 +13,13 @@ refuses, with a named reason:
   episode (the sim numbers scenes one by one);
 * ``stamp_jump``: stamped more than ``max_stamp_jump`` seconds after the newest accepted one.
 
+A scene refused as ``not_running_episode`` may only have overtaken the events that make it
+acceptable (they come by another key, so by another path: the end of the running episode, its
+own start). The gate keeps the newest such scene of the last few episodes and hands it back
+from :meth:`SceneGate.on_episode` once those events arrive, for the caller to check again: a
+planner that saw the next episode's first scene before its start event decides on it then,
+instead of waiting for a scene that may never come.
+
 Until the first start event (a service started mid-episode) the gate follows the scenes'
 episode, since it has nothing better to go by. Replayed logs carry their own episode events
 and old stamps, which the gate accepts: it never compares a stamp with the clock except to
@@ -23,11 +30,15 @@ from __future__ import annotations
 
 import threading
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import EpisodeEvent, EpisodePhase, Scene
+
+#: Episodes whose overtaking scenes are kept (a forger's ids cannot grow it).
+OVERTAKING_KEPT = 2
 
 
 @dataclass(frozen=True)
@@ -58,16 +69,25 @@ class SceneGate:
         self._announced = False  # running comes from a start event, not from a scene
         self._ended = False
         self._newest: tuple[int, float] | None = None  # (sequence, stamp) accepted last
+        self._overtaking: OrderedDict[str, Scene] = OrderedDict()  # episode -> newest refused
         self._lock = threading.Lock()
 
-    def on_episode(self, event: EpisodeEvent) -> None:
+    def on_episode(self, event: EpisodeEvent) -> list[Scene]:
+        """Follow the world's episodes; returns the refused scenes that ``event`` may make
+        acceptable (they overtook it), oldest first, for the caller to :meth:`check` again."""
         with self._lock:
             if event.phase is EpisodePhase.START:
                 if event.episode_id != self.running:
                     self._newest = None
                 self.running, self._announced, self._ended = event.episode_id, True, False
-            elif event.episode_id == self.running:
+                scene = self._overtaking.pop(event.episode_id, None)
+                return [scene] if scene is not None else []
+            if event.episode_id == self.running:
                 self._ended = True
+                overtaking = list(self._overtaking.values())
+                self._overtaking.clear()
+                return overtaking
+            return []
 
     def is_running(self, episode_id: str) -> bool:
         """Whether ``episode_id`` may be acted on (True while no episode is known)."""
@@ -89,6 +109,7 @@ class SceneGate:
                 return "stamp_in_future"
             if scene.episode_id != self.running:
                 if self._announced and not self._ended:
+                    self._keep_overtaking(scene)
                     return "not_running_episode"
                 self.running, self._ended, self._newest = scene.episode_id, False, None
             if self._newest is not None:
@@ -102,3 +123,12 @@ class SceneGate:
             if scene.episode_ended:
                 self._ended = True
             return None
+
+    def _keep_overtaking(self, scene: Scene) -> None:
+        kept = self._overtaking.get(scene.episode_id)
+        if kept is not None and kept.sequence >= scene.sequence:
+            return
+        self._overtaking[scene.episode_id] = scene
+        self._overtaking.move_to_end(scene.episode_id)
+        while len(self._overtaking) > OVERTAKING_KEPT:
+            self._overtaking.popitem(last=False)

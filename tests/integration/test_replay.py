@@ -61,6 +61,18 @@ def test_a_changed_decision_in_the_log_is_caught(
     )
 
 
+def test_a_replay_that_goes_on_without_a_decision_says_so(
+    running_stack: Stack, recorded_run: Path
+) -> None:
+    running_stack.start("router")  # and no planner: no decision will come
+    result = running_stack.run(
+        "replay", str(recorded_run), "--expect-actions", "--wait-for", "--decision-timeout", "0.05"
+    )
+    assert result.returncode == 1
+    assert result.stderr.count("playing on without it") == 10
+    assert json.loads(result.stdout.splitlines()[-1])["decisions_received"] == 0
+
+
 def test_topic_filter_publishes_only_matching_keys(
     running_stack: Stack, recorded_run: Path
 ) -> None:

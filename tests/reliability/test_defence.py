@@ -147,6 +147,32 @@ def test_an_action_that_overtakes_its_episodes_start_is_executed(running_stack: 
         assert (ghost.state, ghost.reason) == (SkillState.FAILED, "not_running_episode")
 
 
+def test_a_scene_that_overtakes_its_episodes_start_is_decided_on(running_stack: Stack) -> None:
+    """Scenes and episode events travel by different keys: the next episode's first scene can
+    reach the planner before the end of the running episode and its own start. The planner
+    refused it (``not_running_episode``) and waited for a scene that never came; a replayed
+    log then went out of step and reported decisions that differed from the recorded ones.
+    Now the gate keeps it, and the planner decides on it once the events arrive."""
+    start(running_stack, "sim", "planner")
+    with running_stack.client() as bus:
+        running_stack.wait_alive(bus, "sim", "planner", timeout=STARTUP)
+        scenes, actions = Inbox(bus, Scene), Inbox(bus, Action)
+        time.sleep(0.3)
+        first = reset(bus, "first")
+        actions.wait(lambda a: a.decision_id == "first:0", timeout=STARTUP)
+        earlier = scene_of(scenes, "first")
+        ahead = earlier.model_copy(
+            update={"episode_id": "next", "sequence": 1, "stamp": time.time()}
+        )
+        bus.publish(ahead)
+        time.sleep(0.5)  # the planner has refused it: "first" is still running
+        now = time.time()
+        bus.publish(first.model_copy(update={"phase": EpisodePhase.END, "stamp": now}))
+        bus.publish(first.model_copy(update={"episode_id": "next", "stamp": now}))
+        decided = actions.wait(lambda a: a.episode_id == "next", timeout=10.0)
+        assert (decided.decision_id, decided.scene_sequence) == ("next:0", 1)
+
+
 def test_ids_at_the_64_character_limit_complete(running_stack: Stack) -> None:
     """Skills built command ids by appending a counter to the decision id: a valid 64-char id
     became an invalid 66-char one and the episode never ended. Now ids are derived to fit."""

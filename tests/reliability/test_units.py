@@ -80,6 +80,22 @@ def test_between_episodes_the_next_one_is_accepted_before_its_start_event() -> N
     assert gate.check(scene("e1", 5)) == "not_running_episode"
 
 
+def test_a_scene_refused_before_its_episode_events_is_handed_back_by_them() -> None:
+    gate = SceneGate()
+    gate.on_episode(event("e1", EpisodePhase.START))
+    assert gate.check(scene("e2", 2)) == "not_running_episode"  # overtook "e1" ending
+    assert gate.check(scene("e2", 1)) == "not_running_episode"  # older: the newer is kept
+    assert [s.sequence for s in gate.on_episode(event("e1", EpisodePhase.END))] == [2]
+    assert gate.on_episode(event("e1", EpisodePhase.END)) == []  # handed back once
+    gate.on_episode(event("e2", EpisodePhase.START))
+    assert gate.check(scene("e3", 5)) == "not_running_episode"  # overtook its own start
+    assert [s.episode_id for s in gate.on_episode(event("e3", EpisodePhase.START))] == ["e3"]
+    for index in range(100):  # a forger's episodes: only the last few are kept
+        gate.check(scene(f"forged{index}", 1))
+    handed = gate.on_episode(event("e3", EpisodePhase.END))
+    assert [s.episode_id for s in handed] == ["forged98", "forged99"]
+
+
 def test_without_episode_events_the_gate_follows_the_scenes() -> None:
     gate = SceneGate()  # a service started mid-episode has nothing better to go by
     assert gate.check(scene("e1", 10)) is None

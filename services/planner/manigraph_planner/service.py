@@ -75,8 +75,10 @@ class PlannerService(Service):
         )
 
     def _on_episode(self, event: EpisodeEvent) -> None:
-        self.gate.on_episode(event)
+        overtaking = self.gate.on_episode(event)
         self.decisions.on_episode(event)
+        for scene in overtaking:  # refused before this event reached us; acceptable now
+            self._on_scene(scene)
 
     def _on_scene(self, scene: Scene) -> None:
         reason = self.gate.check(scene)

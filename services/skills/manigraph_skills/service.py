@@ -88,7 +88,7 @@ class SkillsService(Service):
 
     def setup(self) -> None:
         sys.setswitchinterval(GIL_SWITCH_INTERVAL)
-        self.bus.subscribe(EpisodeEvent, self.gate.on_episode, on_error=self._rejected)
+        self.bus.subscribe(EpisodeEvent, self._on_episode, on_error=self._rejected)
         self.bus.subscribe(Scene, self._on_scene, on_error=self._rejected)
         self.bus.subscribe(EmergencyStop, self._on_estop, on_error=self._rejected)
         self.bus.subscribe(Action, self._on_action, on_error=self._rejected)
@@ -97,6 +97,10 @@ class SkillsService(Service):
         self.log.info("driver '%s'", self.driver.name)
 
     # --- Zenoh threads: check, cache, enqueue; never wait -----------------------------------
+    def _on_episode(self, event: EpisodeEvent) -> None:
+        for scene in self.gate.on_episode(event):  # overtook the event; acceptable now
+            self._on_scene(scene)
+
     def _on_scene(self, scene: Scene) -> None:
         reason = self.gate.check(scene)
         if reason is not None:

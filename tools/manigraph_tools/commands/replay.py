@@ -52,7 +52,12 @@ def _replay_run(args: argparse.Namespace) -> int:
 
         def await_live_decision(item: LoggedMessage) -> None:
             decision_id = Action.decode(item.data, item.topic).decision_id
-            check.wait_for(decision_id, args.decision_timeout)
+            if not check.wait_for(decision_id, args.decision_timeout):
+                print(
+                    f"no decision {decision_id} within {args.decision_timeout:g} s: playing on "
+                    "without it, so later decisions may be made on other scenes",
+                    file=sys.stderr,
+                )
 
         stop = threading.Event()
         print(f"replaying {len(replayer.messages)} messages from {args.file}", file=sys.stderr)

@@ -109,8 +109,10 @@ class DemoUiService(Service):
         self.log.info("demonstration page: %s (demonstrations go to %s)", self.url, self.output)
 
     def _on_episode(self, event: EpisodeEvent) -> None:
-        self.gate.on_episode(event)
+        overtaking = self.gate.on_episode(event)
         self.session.on_episode(event)
+        for scene in overtaking:  # refused before this event reached us; acceptable now
+            self._on_scene(scene)
 
     def _on_scene(self, scene: Scene) -> None:
         reason = self.gate.check(scene)

@@ -45,7 +45,7 @@ class BusJointTransport:
         self._gate = SceneGate()
         bus.subscribe(JointTrajectoryResult, self._on_result)
         bus.subscribe(JointState, self._on_state)
-        bus.subscribe(EpisodeEvent, self._gate.on_episode)
+        bus.subscribe(EpisodeEvent, self._on_episode)
         bus.subscribe(Scene, self._on_scene)
 
     def _on_result(self, result: JointTrajectoryResult) -> None:
@@ -63,6 +63,10 @@ class BusJointTransport:
             if state.stamp >= self._known_at:
                 self._positions, self._known_at = np.array(state.positions), state.stamp
                 self._lock.notify_all()
+
+    def _on_episode(self, event: EpisodeEvent) -> None:
+        for scene in self._gate.on_episode(event):  # overtook the event; acceptable now
+            self._on_scene(scene)
 
     def _on_scene(self, scene: Scene) -> None:
         if self._gate.check(scene) is not None:
