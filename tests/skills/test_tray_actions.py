@@ -6,6 +6,7 @@ import pytest
 
 from manigraph_lab.episode_loop import StepClock, gripper_driver
 from manigraph_shared.errors import SkillError
+from manigraph_shared.grasp_points import RACK_TRAVEL
 from manigraph_shared.messages import (
     Action,
     EpisodeRequest,
@@ -159,3 +160,59 @@ def test_a_dish_of_the_far_row_is_taken_under_a_pulled_out_top_racks_floor() -> 
     assert (
         ArmCollisionModel(PandaModel()).first_contact(trajectory_of(taken), pick.obstacles) is None
     )
+
+
+def test_a_plate_on_its_rim_on_the_far_row_is_taken_under_a_pulled_out_bottom_rack() -> None:
+    """A plate standing on its rim with its faces towards the racks is taken across its
+    thickness, the hand's 20.8 cm along x. Racks sliding 12 cm left the hand 4 mm short of
+    the pulled-out bottom rack's floor at the far row, and such a plate was refused on every
+    re-plan (three of ten validation episodes); the physics world's racks slide 11 cm."""
+    from arm_helpers import PerfectArm, trajectory_of
+
+    from manigraph_shared.orientations import ORIENTATIONS
+    from manigraph_sim.physics.dishwasher import COUNTER_ROWS, PHYSICAL_DISH_SIZE, RAIL
+    from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+    from manigraph_skills.grasp_choice import choose_grasps
+    from manigraph_skills.motion import PandaModel
+    from manigraph_skills.motion.collision import ArmCollisionModel
+
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
+    skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
+    toggle = action(0, "rack_bottom", "rack_bottom", tray_action=TrayAction.TOGGLE_BOTTOM)
+    assert skill.execute(toggle, backend.scene(1.0), lambda _: None).state.value == "succeeded"
+    scene = backend.scene(2.0)
+    assert scene is not None
+    # The bottom rack out as far as the physics world's rail lets it, its slots with it.
+    rack = scene.rack("rack_bottom")
+    back = RACK_TRAVEL - RAIL
+    rack = rack.model_copy(
+        update={"position": _moved(rack.position, back), "travel": RAIL, "rail": RAIL}
+    )
+    goals = [
+        g.model_copy(update={"position": _moved(g.position, back)}) if g.rack == rack.id else g
+        for g in scene.goals
+    ]
+    far_row = COUNTER_ROWS[-1][1] + 0.005  # the far row, at its farthest jitter
+    width, _, thickness = PHYSICAL_DISH_SIZE["plate"]
+    plate = scene.object("plate_0").model_copy(
+        update={
+            "position": Vector3(x=far_row, y=0.0, z=width / 2),
+            "orientation": ORIENTATIONS[4],  # on its rim, its thin axis along x
+            "size": Vector3(x=width, y=width, z=thickness),
+        }
+    )
+    others = [o for o in scene.objects if o.id != plate.id]
+    racks = [rack if r.id == rack.id else r for r in scene.racks]
+    scene = scene.model_copy(update={"objects": [*others, plate], "racks": racks, "goals": goals})
+    pick, _ = choose_grasps(scene, plate, scene.goal("bottom_plate_05").position)
+    arm = PerfectArm()
+    PandaMotionDriver(arm).pick(Motion("e:1", plate.id, plate.position, plate.orientation, pick))
+    (taken,) = arm.sent
+    assert (
+        ArmCollisionModel(PandaModel()).first_contact(trajectory_of(taken), pick.obstacles) is None
+    )
+
+
+def _moved(position: Vector3, dx: float) -> Vector3:
+    return position.model_copy(update={"x": position.x + dx})
