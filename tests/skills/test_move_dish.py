@@ -52,6 +52,18 @@ def test_free_cells_are_free_counter_cells_nearest_the_robot_first() -> None:
             assert np.linalg.norm(cell - np.array(other.position.as_tuple()[:2])) >= SPOT_FREE
 
 
+def test_a_dish_on_the_near_row_is_never_moved_off_the_counter_towards_the_base() -> None:
+    """Cells nearest the robot come first, and beside the counter (y = 0.3 m) a cell 5 cm
+    from the base's x still passed the reach radius: a bowl moved twice on its near row lay
+    at x = 0.05 m, outside the workspace, refused by every later pick (seed 2008)."""
+    near = bowl("bowl_0", 0.30, -0.30)
+    beside = [bowl("bowl_1", 0.38, -0.30), bowl("bowl_2", 0.30, -0.20)]
+    scene = Scene(episode_id="e", stamp=1.0, sequence=0, objects=[near, *beside], goals=[])
+    cells = free_cells(scene, near, np.array(near.position.as_tuple()))
+    assert cells, "the cells diagonally beside it on the counter are free"
+    assert all(cell[0] >= 0.29 for cell in cells)
+
+
 def test_the_dish_is_carried_top_down_and_set_down_on_the_first_cell() -> None:
     arm = PerfectArm()
     driver = PandaMotionDriver(arm)

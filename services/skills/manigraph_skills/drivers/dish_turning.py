@@ -53,12 +53,14 @@ MAX_TILTS = 3
 DROPS = (0.006, 0.02, 0.035)
 #: Other set-down spots: the physical counter grid's pitch (x, y), how far from every other
 #: dish's centre a spot must be, and how far from the robot's base (radius, metres; nearer,
-#: top-down grasps have no IK solution) and along x (beyond it the racks slide out over the
-#: counter).
+#: top-down grasps have no IK solution) and along x: the counter's rows, from the near one
+#: (nearer the base, a cell beside the counter passed the radius: a bowl moved twice lay at
+#: x = 0.05 m, outside the workspace, and nothing could take it again) to the far one
+#: (beyond it the racks slide out over the counter).
 SPOT_PITCH = np.array([0.08, 0.1])
 SPOT_FREE = 0.09
 SPOT_RADIUS = (0.29, 0.6)
-SPOT_MAX_X = 0.46
+SPOT_X = (0.29, 0.46)
 MAX_SPOTS = 4
 SPARE_Y = 0.42
 SPARE_X = (0.36, 0.44)
@@ -113,7 +115,7 @@ def _neighbour_cells(here: np.ndarray, others: list[np.ndarray]) -> list[np.ndar
     for offset in offsets[1:]:
         cell = here[:2] + offset
         radius = float(np.linalg.norm(cell))
-        if not SPOT_RADIUS[0] <= radius <= SPOT_RADIUS[1] or cell[0] > SPOT_MAX_X:
+        if not SPOT_RADIUS[0] <= radius <= SPOT_RADIUS[1] or not SPOT_X[0] <= cell[0] <= SPOT_X[1]:
             continue
         if all(np.linalg.norm(cell - other) >= SPOT_FREE for other in others):
             cells.append(cell)
