@@ -277,6 +277,29 @@ def test_a_dish_on_the_counter_waiting_for_its_rack_makes_the_decision_a_toggle(
     assert decision is not None and decision.goal_id.startswith("top_plate")
 
 
+def test_a_dish_waits_for_the_rack_its_kind_stands_in() -> None:
+    """A bowl stands in the top rack, another is still on the counter (a physical arm failed
+    to load it), and the bottom rack is out. Heads that rate the bottom rack's slots best
+    (as the trained ones did in this state, which no demonstration shows) still never send
+    the bowl into the bottom rack: it waits for the top one, and the plates go first."""
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
+    world = backend.dishwasher
+    assert world is not None
+    world.toggle("rack_top")
+    loaded, left = [d for d in world.dishes.values() if d.kind == "bowl"]
+    slot = next(s for s in world.slots.values() if s.kind == "bowl" and s.rack == "rack_top")
+    world.pick(loaded.id)
+    world.place(loaded.id, world.slot_position(slot), slot.orientation)
+    world.toggle("rack_top")
+    world.toggle("rack_bottom")
+    s = backend.scene(1.0)
+    assert s is not None and s.rack("rack_bottom").open and not s.object(left.id).filled
+    ranked = _ranked(s, liked=("bottom_",))
+    assert ranked[0].object_id.startswith("plate")
+    assert left.id not in {d.object_id for d in ranked}
+
+
 @pytest.mark.skipif(
     not (CHECKPOINTS / "dishwasher-top-bottom-sage.pt").is_file(), reason="not shipped yet"
 )

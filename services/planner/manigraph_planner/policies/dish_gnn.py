@@ -179,12 +179,43 @@ def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[list[Decision]]:
 
 
 def _waiting(graph: DishGraph, heads: DishHeads) -> torch.Tensor:
-    """Which dishes wait for a rack: their most likely free slot of all is in a rack that
-    cannot be loaded now."""
+    """Which dishes wait for a rack that cannot be loaded now: the rack most dishes of its
+    kind stand in, else the rack of its most likely free slot of all.
+
+    The dishes already loaded show where their kind goes: the heads, in a state no
+    demonstration shows (bowls still on the counter with the bottom rack out, after the
+    physical arm failed to load them while the top rack was out), rated the bottom rack's
+    bowl slots best, and every later step went to bowls carried under the top rack.
+    """
     anywhere = _pair_scores(graph, heads, usable_only=False)
     if anywhere is None:
         return torch.ones(graph.num_objects, dtype=torch.bool)
-    return ~_usable_slots(graph)[anywhere.argmax(dim=1)]
+    usable = {rack: _rack_usable(graph, rack) for rack in set(graph.goal_racks)}
+    homes = [graph.goal_racks[int(g)] for g in anywhere.argmax(dim=1)]
+    kinds = graph.goal_codes()[: graph.num_objects].tolist()
+    for kind, rack in _racks_kinds_stand_in(graph).items():
+        homes = [rack if k == kind else home for k, home in zip(kinds, homes, strict=True)]
+    return torch.tensor([not usable[home] for home in homes], dtype=torch.bool)
+
+
+def _racks_kinds_stand_in(graph: DishGraph) -> dict[int, str]:
+    """For each dish kind (code) some dishes of which stand in slots: the rack most of them
+    stand in (a dish stands in the filled slot nearest it)."""
+    k = graph.num_objects
+    position = slice(FILLED_COLUMN - 3, FILLED_COLUMN)
+    filled = [g for g in range(graph.num_goals) if graph.x[k + g, FILLED_COLUMN] != 0]
+    if not filled:
+        return {}
+    slots = graph.x[[k + g for g in filled], position]
+    counts: dict[int, dict[str, int]] = {}
+    kinds = graph.goal_codes()[:k].tolist()
+    for o in torch.nonzero(_standing(graph)).flatten().tolist():
+        nearest = int((slots - graph.x[o, position]).norm(dim=1).argmin())
+        rack = graph.goal_racks[filled[nearest]]
+        if rack is not None:
+            tally = counts.setdefault(kinds[o], {})
+            tally[rack] = tally.get(rack, 0) + 1
+    return {kind: max(tally, key=lambda r: tally[r]) for kind, tally in counts.items()}
 
 
 def _standing(graph: DishGraph) -> torch.Tensor:
