@@ -86,12 +86,15 @@ def test_a_driver_without_tray_support_refuses_as_unsupported() -> None:
     assert refused.value.reason == "unsupported"
 
 
-def _top_rack_pulled_out() -> Scene:
-    """A two-dish geometric episode's scene once its top rack has been pulled out."""
+def _rack_pulled_out(tray: TrayAction = TrayAction.TOGGLE_TOP) -> Scene:
+    """A two-dish geometric episode's scene once ``tray``'s rack (the top one) has been
+    pulled out."""
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
     skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
-    toggle = action(0, "rack_top", "rack_top", tray_action=TrayAction.TOGGLE_TOP)
+    rack = tray.rack_id
+    assert rack is not None
+    toggle = action(0, rack, rack, tray_action=tray)
     assert skill.execute(toggle, backend.scene(1.0), lambda _: None).state.value == "succeeded"
     scene = backend.scene(2.0)
     assert scene is not None
@@ -103,7 +106,7 @@ def test_an_open_rack_floor_supports_a_dish_set_into_its_slot_and_nothing_else()
 
     from manigraph_skills.obstacles import scene_obstacles
 
-    scene = _top_rack_pulled_out()
+    scene = _rack_pulled_out()
     bowl = scene.object("bowl_0")
 
     def floor(at: np.ndarray) -> bool:
@@ -146,7 +149,7 @@ def test_a_dish_of_the_far_row_is_taken_under_a_pulled_out_top_racks_floor() -> 
     from manigraph_skills.motion import PandaModel
     from manigraph_skills.motion.collision import ArmCollisionModel
 
-    scene = _top_rack_pulled_out()
+    scene = _rack_pulled_out()
     bowl = scene.object("bowl_0")
     far = Vector3(x=0.46, y=0.08, z=bowl.position.z)  # the physical counter's far row
     bowl = bowl.model_copy(update={"position": far})
@@ -176,13 +179,7 @@ def test_a_plate_on_its_rim_on_the_far_row_is_taken_under_a_pulled_out_bottom_ra
     from manigraph_skills.motion import PandaModel
     from manigraph_skills.motion.collision import ArmCollisionModel
 
-    backend = GeometricBackend()
-    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
-    skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
-    toggle = action(0, "rack_bottom", "rack_bottom", tray_action=TrayAction.TOGGLE_BOTTOM)
-    assert skill.execute(toggle, backend.scene(1.0), lambda _: None).state.value == "succeeded"
-    scene = backend.scene(2.0)
-    assert scene is not None
+    scene = _rack_pulled_out(TrayAction.TOGGLE_BOTTOM)
     # The bottom rack out as far as the physics world's rail lets it, its slots with it.
     rack = scene.rack("rack_bottom")
     back = RACK_TRAVEL - RAIL
