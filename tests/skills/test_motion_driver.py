@@ -68,6 +68,9 @@ class ScriptedArm:
     def resume(self) -> None:
         self.stopped = False
 
+    def abort(self, reason: str) -> None:
+        self.aborted = reason
+
 
 def test_a_pick_and_place_sends_pick_carry_and_release_motions() -> None:
     arm = ScriptedArm(widths=[0.04, 0.04, 0.08], rests=np.array(GOAL.as_tuple()))
@@ -115,6 +118,31 @@ def test_an_arm_that_is_elsewhere_gets_a_plan_from_where_it_is() -> None:
     arm.refuse_first = True
     PandaMotionDriver(arm).pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
     assert len(arm.sent) == 2
+
+
+def test_a_decision_whose_episode_ended_is_not_planned_again_in_the_next() -> None:
+    """The world ended the episode during the motion and reset at once: the rest of it is
+    answered ``start_mismatch``. Planned again from the new home pose, it ran in the next
+    episode's world (and that episode's first pull of the top rack came to nothing); now
+    nothing more is sent for it, and the next decision moves as usual."""
+    arm = ScriptedArm(widths=[0.04])
+    arm.refuse_first = True
+    driver = PandaMotionDriver(arm)
+    answer = arm.execute
+
+    def ended_meanwhile(command: JointTrajectoryCommand) -> JointTrajectoryResult:
+        driver.end_decision("e:9", "episode_ended")  # the end event, on another thread
+        return answer(command)
+
+    arm.execute = ended_meanwhile  # type: ignore[method-assign]
+    with pytest.raises(SkillError) as caught:
+        driver.pick(Motion("e:9", "block_0", BLOCK, Quaternion()))
+    assert caught.value.reason == "episode_ended"
+    assert len(arm.sent) == 1  # the refused motion only, not a second plan
+    assert arm.aborted == "episode_ended"  # a motion of it under way is failed at once
+    arm.execute = answer  # type: ignore[method-assign]
+    driver.pick(Motion("f:0", "block_0", BLOCK, Quaternion()))
+    assert [c.decision_id for c in arm.sent] == ["e:9", "f:0"]
 
 
 def test_an_unreachable_object_sends_nothing() -> None:

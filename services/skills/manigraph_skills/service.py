@@ -37,6 +37,7 @@ from manigraph_shared.messages import (
     Action,
     EmergencyStop,
     EpisodeEvent,
+    EpisodePhase,
     Scene,
     ServiceState,
     SkillState,
@@ -84,6 +85,7 @@ class SkillsService(Service):
         self.stop_reason = ""
         self._actions: queue.Queue[Action] = queue.Queue(queue_capacity)
         self.in_flight = ActionInFlight(bus.publish, SKILL)
+        self._running: Action | None = None  # the action the worker executes
         self._worker = threading.Thread(target=self._work, name="skills-worker", daemon=True)
 
     def setup(self) -> None:
@@ -98,6 +100,13 @@ class SkillsService(Service):
 
     # --- Zenoh threads: check, cache, enqueue; never wait -----------------------------------
     def _on_episode(self, event: EpisodeEvent) -> None:
+        running = self._running
+        if (
+            event.phase is EpisodePhase.END
+            and running is not None
+            and running.episode_id == event.episode_id
+        ):  # its world is about to be reset: nothing more of it may move the arm
+            self.driver.end_decision(running.decision_id, "episode_ended")
         for scene in self.gate.on_episode(event):  # overtook the event; acceptable now
             self._on_scene(scene)
 
@@ -176,11 +185,13 @@ class SkillsService(Service):
             except queue.Empty:
                 continue
             self.in_flight.begin(action.decision_id)
+            self._running = action
             try:
                 self._execute(action)
             except Exception:  # a bug in one action must not end the worker
                 self.log.exception("action %s failed unexpectedly", action.decision_id)
             finally:
+                self._running = None
                 self.in_flight.end()
 
     def _execute(self, action: Action) -> None:

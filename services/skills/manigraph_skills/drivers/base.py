@@ -124,5 +124,10 @@ class RobotDriver(ABC):
         """The robot went away (its process died): fail the motion under way now with
         ``reason`` instead of waiting for an answer that cannot come. Not sticky."""
 
+    def end_decision(self, decision_id: str, reason: str) -> None:
+        """The world ended ``decision_id``'s episode: send nothing more for it, not even a
+        re-plan, and fail its motion under way with ``reason``. (A driver that finishes a
+        decision in one call has nothing to do.)"""
+
     def close(self) -> None:
         """Release the driver's resources."""

@@ -15,7 +15,9 @@ Checks, each reported as a ``SkillError`` reason:
   the fingers span it across no axis that would tilt it there (``dish_turning``: the
   turn-over manoeuvre tilts it on the counter first, then the top-down grasp places it);
 * ``handle_missed``: the fingers closed on nothing at a rack's handle; ``rack_stuck``: after a
-  toggle the scene still shows the rack where it was.
+  toggle the scene still shows the rack where it was;
+* ``episode_ended``: the world ended the decision's episode while it ran
+  (:meth:`PandaMotionDriver.end_decision`); nothing more is sent for it.
 """
 
 from __future__ import annotations
@@ -175,6 +177,8 @@ class PandaMotionDriver(RobotDriver):
         #: motions are being planned began: a decision stopped (and resumed) while it was
         #: planning never moves the arm afterwards.
         self._stops = 0
+        #: (decision, reason) whose episode the world ended (``end_decision``).
+        self._ended: tuple[str, str] | None = None
         self._decision: str | None = None
         self._decision_stops = 0
         #: The object last picked: its id, the hand's position and yaw, the grasp.
@@ -331,6 +335,15 @@ class PandaMotionDriver(RobotDriver):
 
     def abort(self, reason: str) -> None:
         self.transport.abort(reason)
+
+    def end_decision(self, decision_id: str, reason: str) -> None:
+        """Safe from any thread. A world that ends an episode during its last motion (the
+        goals filled as a rack passed half its rail) and resets at once answers the rest
+        ``start_mismatch``; re-planned from the new episode's home pose, that motion ran in
+        the next episode's world, and its first pull of the top rack came to nothing."""
+        self._ended = (decision_id, reason)
+        if self._decision == decision_id:
+            self.transport.abort(reason)
 
     # --- pieces -----------------------------------------------------------------------------
     def _release(self, decision_id: str, grasp: Grasp) -> JointTrajectoryResult:
@@ -511,6 +524,9 @@ class PandaMotionDriver(RobotDriver):
             raise SkillError("stopped", "emergency stop engaged")
         if self._stops != self._decision_stops:
             raise SkillError("stopped", "an emergency stop came during this decision")
+        ended = self._ended
+        if ended is not None and ended[0] == self._decision:
+            raise SkillError(ended[1], f"the episode of {self._decision} has ended")
 
     def _command(self, decision_id: str, trajectory: JointTrajectory) -> JointTrajectoryCommand:
         return JointTrajectoryCommand(
