@@ -94,6 +94,12 @@ class SceneGate:
         with self._lock:
             return self.running is None or self.running == episode_id
 
+    def has_ended(self, episode_id: str) -> bool:
+        """Whether ``episode_id`` is the episode the world announced last and it has ended
+        (no start event of another since)."""
+        with self._lock:
+            return self.running == episode_id and self._ended
+
     def may_be_next(self, episode_id: str) -> bool:
         """Whether ``episode_id`` is running or may be the one to start next (the running one
         has ended): a message of the next episode may overtake its start event, coming from

@@ -135,6 +135,11 @@ def test_an_action_that_overtakes_its_episodes_start_is_executed(running_stack: 
         bus.publish(first.model_copy(update={"phase": EpisodePhase.END, "success": False}))
         time.sleep(0.2)  # skills has seen the end of "first" and nothing of "next"
         block, goal = top_block_and_free_goal(earlier)  # seed 0 again: the same layout
+        # A decision of the ended episode (made on a scene just before its end) moves nothing:
+        # begun after the end, it once ran in the next episode's world.
+        bus.publish(action(earlier, block, goal, "first:1"))
+        late = skill.wait(lambda s: s.decision_id == "first:1" and s.state.terminal)
+        assert (late.state, late.reason) == (SkillState.FAILED, "episode_ended")
         ahead = action(earlier, block, goal, "next:0", episode_id="next")
         ahead = ahead.model_copy(update={"scene_sequence": earlier.sequence + 1})
         bus.publish(ahead)

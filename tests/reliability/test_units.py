@@ -78,6 +78,9 @@ def test_between_episodes_the_next_one_is_accepted_before_its_start_event() -> N
     gate.on_episode(event("e2", EpisodePhase.START))
     assert gate.check(scene("e2", 4)) is None
     assert gate.check(scene("e1", 5)) == "not_running_episode"
+    assert not gate.has_ended("e2") and not gate.has_ended("e1")  # e1's end is past
+    gate.on_episode(event("e2", EpisodePhase.END))
+    assert gate.has_ended("e2")  # an action of it that comes now is refused
 
 
 def test_a_scene_refused_before_its_episode_events_is_handed_back_by_them() -> None:

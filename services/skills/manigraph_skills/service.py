@@ -101,11 +101,9 @@ class SkillsService(Service):
     # --- Zenoh threads: check, cache, enqueue; never wait -----------------------------------
     def _on_episode(self, event: EpisodeEvent) -> None:
         running = self._running
-        if (
+        if running is not None and (running.episode_id == event.episode_id) == (
             event.phase is EpisodePhase.END
-            and running is not None
-            and running.episode_id == event.episode_id
-        ):  # its world is about to be reset: nothing more of it may move the arm
+        ):  # its episode ended, or another began: nothing more of it may move the arm
             self.driver.end_decision(running.decision_id, "episode_ended")
         for scene in self.gate.on_episode(event):  # overtook the event; acceptable now
             self._on_scene(scene)
@@ -202,6 +200,9 @@ class SkillsService(Service):
         scene = self.scenes.wait_for(action.episode_id, action.scene_sequence, self.scene_wait)
         if not self.gate.is_running(action.episode_id):  # the episode it waited for never came
             self._refuse(action, "not_running_episode", action.episode_id)
+            return
+        if self.gate.has_ended(action.episode_id):  # decided on a scene just before the end
+            self._refuse(action, "episode_ended", f"{action.episode_id} has ended")
             return
         final = self.skill.execute(action, scene, self.in_flight.report)
         self.log.info(
