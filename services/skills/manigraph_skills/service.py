@@ -101,10 +101,11 @@ class SkillsService(Service):
     # --- Zenoh threads: check, cache, enqueue; never wait -----------------------------------
     def _on_episode(self, event: EpisodeEvent) -> None:
         running = self._running
-        if running is not None and (running.episode_id == event.episode_id) == (
-            event.phase is EpisodePhase.END
-        ):  # its episode ended, or another began: nothing more of it may move the arm
-            self.driver.end_decision(running.decision_id, "episode_ended")
+        if running is not None:
+            ours = running.episode_id == event.episode_id
+            ended = event.phase is EpisodePhase.END
+            if ours == ended:  # its episode ended, or another began: it may move nothing more
+                self.driver.end_decision(running.decision_id, "episode_ended")
         for scene in self.gate.on_episode(event):  # overtook the event; acceptable now
             self._on_scene(scene)
 

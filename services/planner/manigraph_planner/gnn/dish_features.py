@@ -30,7 +30,14 @@ from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import TRAY_RACKS, Scene, TrayAction
 from manigraph_shared.orientations import NUM_ORIENTATIONS, nearest_orientation
 
-__all__ = ["DISH_FEATURE_SPEC", "FILLED_COLUMN", "TRAY_ACTIONS", "DishGraph", "dish_scene_to_graph"]
+__all__ = [
+    "DISH_FEATURE_SPEC",
+    "FILLED_COLUMN",
+    "POSITION_COLUMNS",
+    "TRAY_ACTIONS",
+    "DishGraph",
+    "dish_scene_to_graph",
+]
 
 _CATEGORIES = ("plate", "bowl", "plate-slot", "bowl-slot", "rack-top", "rack-bottom")
 DISH_FEATURE_SPEC = FeatureSpec(
@@ -55,6 +62,8 @@ _POSITION = len(_CATEGORIES)
 _ORIENTATION = _POSITION + 5
 #: Where the "filled" flag is.
 FILLED_COLUMN = _POSITION + 3
+#: Where a node's position (x, y, z) is.
+POSITION_COLUMNS = slice(_POSITION, _POSITION + 3)
 
 
 @dataclass

@@ -9,6 +9,7 @@ import torch
 from manigraph_planner.gnn.checkpoint import CheckpointInfo
 from manigraph_planner.gnn.dish_features import (
     FILLED_COLUMN,
+    POSITION_COLUMNS,
     TRAY_ACTIONS,
     DishGraph,
     dish_scene_to_graph,
@@ -32,9 +33,9 @@ class DishwasherGNNPolicy(Policy):
     the most likely pair of a dish and a slot of its kind that holds no dish (a taken slot
     is an action the world refuses; the block policy's decoder likewise keeps to
     category-compatible pairs), placed in the orientation head's argmax at that dish's node.
-    A dish whose most likely free slot of all is in a rack that cannot be loaded now waits
-    for it (``_waiting``), and while one on the counter waits no loaded dish is moved: with
-    nothing else to place, the decision is the tray head's more likely toggle.
+    A dish whose rack cannot be loaded now waits for it (``_waiting``), and while one on the
+    counter waits no loaded dish is moved: with nothing else to place, the decision is the
+    tray head's more likely toggle.
     """
 
     def __init__(self, net: DishPolicyNet, info: CheckpointInfo | None = None) -> None:
@@ -191,10 +192,10 @@ def _waiting(graph: DishGraph, heads: DishHeads) -> torch.Tensor:
     if anywhere is None:
         return torch.ones(graph.num_objects, dtype=torch.bool)
     usable = {rack: _rack_usable(graph, rack) for rack in set(graph.goal_racks)}
-    homes = [graph.goal_racks[int(g)] for g in anywhere.argmax(dim=1)]
+    likeliest = [graph.goal_racks[int(g)] for g in anywhere.argmax(dim=1)]
     kinds = graph.goal_codes()[: graph.num_objects].tolist()
-    for kind, rack in _racks_kinds_stand_in(graph).items():
-        homes = [rack if k == kind else home for k, home in zip(kinds, homes, strict=True)]
+    stand_in = _racks_kinds_stand_in(graph)
+    homes = [stand_in.get(k, rack) for k, rack in zip(kinds, likeliest, strict=True)]
     return torch.tensor([not usable[home] for home in homes], dtype=torch.bool)
 
 
@@ -202,15 +203,14 @@ def _racks_kinds_stand_in(graph: DishGraph) -> dict[int, str]:
     """For each dish kind (code) some dishes of which stand in slots: the rack most of them
     stand in (a dish stands in the filled slot nearest it)."""
     k = graph.num_objects
-    position = slice(FILLED_COLUMN - 3, FILLED_COLUMN)
     filled = [g for g in range(graph.num_goals) if graph.x[k + g, FILLED_COLUMN] != 0]
     if not filled:
         return {}
-    slots = graph.x[[k + g for g in filled], position]
+    slots = graph.x[[k + g for g in filled], POSITION_COLUMNS]
     counts: dict[int, dict[str, int]] = {}
     kinds = graph.goal_codes()[:k].tolist()
     for o in torch.nonzero(_standing(graph)).flatten().tolist():
-        nearest = int((slots - graph.x[o, position]).norm(dim=1).argmin())
+        nearest = int((slots - graph.x[o, POSITION_COLUMNS]).norm(dim=1).argmin())
         rack = graph.goal_racks[filled[nearest]]
         if rack is not None:
             tally = counts.setdefault(kinds[o], {})
