@@ -205,6 +205,41 @@ def test_a_bowl_on_its_side_is_turned_over_into_its_slot(loop: Loop) -> None:
     assert scene.object("bowl_1").filled and scene.goal("top_bowl_00").filled
 
 
+def test_a_bowl_left_in_the_rack_in_no_slot_is_taken_to_the_counter_and_turned_there(
+    loop: Loop,
+) -> None:
+    """A placement that missed leaves a bowl lying in the pulled-out rack between the slots,
+    on its side. The rack's floor and slots leave no room to tilt it there (every re-plan
+    was refused, and the episode spent its budget toggling racks), so it is carried to a
+    free counter cell, turned over there and loaded."""
+    loop.backend.reset(
+        EpisodeRequest(episode_id="t", task="dishwasher", objects=10, seed=TURN_SEED), time.time()
+    )
+    dishes = DishLoop(loop)
+    assert dishes.toggle("rack_top").state is SkillState.SUCCEEDED
+    slot = dishes.scene().goal("top_bowl_01")
+    entity = loop.backend.world.entities["bowl_1"]
+    lying = _sapien_pose_quaternion(ORIENTATIONS[4])  # on its side
+    half = PHYSICAL_DISH_SIZE["bowl"][0] / 2
+    entity.set_pose(
+        sapien.Pose([slot.position.x, slot.position.y + 0.035, slot.position.z + half], lying)
+    )
+    loop.backend.world.step(300)
+    scene = dishes.scene()
+    bowl = scene.object("bowl_1")
+    assert bowl.position.z > 0.1 and not bowl.filled  # in the rack, in no slot
+    assert up_axis_orientation(bowl.orientation) != UPSIDE_DOWN
+    loaded = dishes.act("bowl_1", "top_bowl_03", orientation_index=UPSIDE_DOWN)
+    assert loaded.state is SkillState.SUCCEEDED, loaded
+    scene = dishes.scene()
+    assert up_axis_orientation(scene.object("bowl_1").orientation) == UPSIDE_DOWN
+    assert scene.object("bowl_1").filled and scene.goal("top_bowl_03").filled
+
+
+def _sapien_pose_quaternion(q: Quaternion) -> list[float]:
+    return [q.w, q.x, q.y, q.z]
+
+
 def test_a_rack_part_of_the_way_out_is_seen_where_it_is_and_clicks_to_the_nearer_end(
     dish_loop: DishLoop,
 ) -> None:

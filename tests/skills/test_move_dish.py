@@ -111,3 +111,24 @@ def test_the_spare_spots_on_a_side_are_offered_only_while_the_rack_whose_handle_
         assert all(spot[1] < 0 for spot in beside)  # its handle is on the right
     else:
         assert np.sign(beside[0][1]) == np.sign(dish_y)
+
+
+def test_a_dish_lying_in_a_rack_is_offered_free_counter_cells_nearest_the_robot() -> None:
+    """A bowl a placement left in a rack, in no slot: its neighbouring cells are in the rack,
+    so the cells offered are the counter's free ones, the near row first, nearest it along y."""
+    in_rack = SceneObject(
+        id="bowl_4",
+        category=ObjectCategory.BOWL,
+        position=Vector3(x=0.62, y=0.1, z=0.33),
+        orientation=ORIENTATIONS[4],
+        size=SIZE,
+    )
+    crowded = [*NEIGHBOURS, bowl("bowl_5", 0.30, 0.1)]
+    scene = Scene(episode_id="e", stamp=1.0, sequence=0, objects=[in_rack, *crowded], goals=[])
+    cells = free_cells(scene, in_rack, np.array(in_rack.position.as_tuple()))
+    assert cells
+    assert all(0.29 <= cell[0] <= 0.46 and abs(cell[1]) <= 0.3 for cell in cells)
+    assert cells[0] == pytest.approx([0.30, 0.0])  # (0.30, 0.1) is taken
+    for cell in cells:
+        for other in crowded:
+            assert np.linalg.norm(cell - np.array(other.position.as_tuple()[:2])) >= SPOT_FREE

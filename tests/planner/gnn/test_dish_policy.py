@@ -300,6 +300,50 @@ def test_a_dish_waits_for_the_rack_its_kind_stands_in() -> None:
     assert left.id not in {d.object_id for d in ranked}
 
 
+@pytest.mark.parametrize("bottom_out", [False, True])
+def test_a_toggle_for_a_waiting_dish_brings_its_rack_nearer(bottom_out: bool) -> None:
+    """Every plate stands in the bottom rack and a bowl stands in the top one; the other bowl
+    is still to load (a physical placement left it in no slot). Whatever the tray head
+    favours, the decision is the toggle towards the top rack: the bottom one pushed in if it
+    is out, else the top one pulled out. (With a tray head favouring the bottom rack, the
+    decision pulled it out and pushed it in until the step budget was spent.)"""
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
+    world = backend.dishwasher
+    assert world is not None
+    world.toggle("rack_top")
+    loaded, left = [d for d in world.dishes.values() if d.kind == "bowl"]
+    _load(world, loaded.id, "rack_top")
+    world.toggle("rack_top")
+    world.toggle("rack_bottom")
+    for plate in [d for d in world.dishes.values() if d.kind == "plate"]:
+        _load(world, plate.id, "rack_bottom")
+    if not bottom_out:
+        world.toggle("rack_bottom")
+    s = backend.scene(1.0)
+    assert s is not None and not s.object(left.id).filled
+    graph = dish_scene_to_graph(s)
+    n = graph.x.shape[0]
+    for favoured in range(3):
+        tray = torch.zeros(3)
+        tray[favoured] = 5.0
+        decision = decision_from_heads(graph, DishHeads(torch.zeros(n), torch.zeros(n, 6), tray))
+        assert decision is not None
+        wanted = TrayAction.TOGGLE_BOTTOM if bottom_out else TrayAction.TOGGLE_TOP
+        assert decision.tray_action is wanted, favoured
+
+
+def _load(world, dish_id: str, rack: str) -> None:  # type: ignore[no-untyped-def]
+    kind = world.dishes[dish_id].kind
+    slot = next(
+        s
+        for s in world.slots.values()
+        if s.kind == kind and s.rack == rack and world.occupant(s.id) is None
+    )
+    world.pick(dish_id)
+    world.place(dish_id, world.slot_position(slot), slot.orientation)
+
+
 @pytest.mark.skipif(
     not (CHECKPOINTS / "dishwasher-top-bottom-sage.pt").is_file(), reason="not shipped yet"
 )

@@ -35,7 +35,7 @@ class DishwasherGNNPolicy(Policy):
     category-compatible pairs), placed in the orientation head's argmax at that dish's node.
     A dish whose rack cannot be loaded now waits for it (``_waiting``), and while one on the
     counter waits no loaded dish is moved: with nothing else to place, the decision is the
-    tray head's more likely toggle.
+    tray head's more likely toggle that brings a waiting dish's rack nearer to loadable.
     """
 
     def __init__(self, net: DishPolicyNet, info: CheckpointInfo | None = None) -> None:
@@ -97,13 +97,18 @@ def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
     placement of a dish away from the rack it waits for: a plate forgotten in the bottom
     rack's turn went into the pulled-out top rack for good (0.95 at 12 dishes in the
     geometric world; 1.0 with the rule), and a bowl a physical arm failed to load before the
-    top rack was pushed in went into the bottom rack."""
+    top rack was pushed in went into the bottom rack. Once some dish stands in a slot (before,
+    the tray head alone says which rack comes first, as demonstrated), the toggle serves a
+    waiting dish (``_toggle_towards`` its rack; the likeliest waiting dish's if the tray
+    head's serves none): with a bowl left lying in the top rack and both racks in, the tray
+    head pulled the bottom rack out and in until the step budget was spent."""
+    waiting, homes = _waiting(graph, heads)
+    standing = _standing(graph)
+    kept = waiting & ~standing  # dishes on the counter (or in no slot) that wait
     scores = _pair_scores(graph, heads)
     if scores is not None:
-        waiting = _waiting(graph, heads)
-        standing = _standing(graph)
-        if bool((waiting & ~standing).any()):  # a dish on the counter waits: toggle for it
-            waiting |= standing
+        if bool(kept.any()):  # a dish on the counter waits: toggle for it
+            waiting = waiting | standing
         scores = scores.masked_fill(waiting.unsqueeze(1), float("-inf"))
         if not bool(torch.isfinite(scores).any()):
             scores = None
@@ -111,6 +116,11 @@ def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
     for pointless in _pointless_toggles(graph):
         tray_logits = _without(tray_logits, pointless)
     tray = TRAY_ACTIONS[int(tray_logits.argmax())]
+    if scores is None and bool(kept.any()) and bool(standing.any()):
+        serving = {_toggle_towards(graph, homes[o]) for o in torch.nonzero(kept).flatten().tolist()}
+        if tray not in serving:
+            likeliest = int(heads.node[: graph.num_objects].masked_fill(~kept, -torch.inf).argmax())
+            tray = _toggle_towards(graph, homes[likeliest]) or tray
     if tray is not TrayAction.NONE:
         rack = tray.rack_id
         assert rack is not None
@@ -162,7 +172,7 @@ def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[list[Decision]]:
     scores = _pair_scores(graph, heads)
     if scores is None:
         return []
-    waiting = _waiting(graph, heads) | _standing(graph)
+    waiting = _waiting(graph, heads)[0] | _standing(graph)
     scores = scores.masked_fill(waiting.unsqueeze(1), float("-inf"))
     dishes = scores.max(dim=1).values.argsort(descending=True).tolist()
     slots = scores.argsort(dim=1, descending=True)
@@ -179,9 +189,9 @@ def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[list[Decision]]:
     return rounds
 
 
-def _waiting(graph: DishGraph, heads: DishHeads) -> torch.Tensor:
-    """Which dishes wait for a rack that cannot be loaded now: the rack most dishes of its
-    kind stand in, else the rack of its most likely free slot of all.
+def _waiting(graph: DishGraph, heads: DishHeads) -> tuple[torch.Tensor, list[str | None]]:
+    """Which dishes wait for a rack that cannot be loaded now, and each dish's home: the
+    rack most dishes of its kind stand in, else the rack of its most likely free slot of all.
 
     The dishes already loaded show where their kind goes: the heads, in a state no
     demonstration shows (bowls still on the counter with the bottom rack out, after the
@@ -190,13 +200,26 @@ def _waiting(graph: DishGraph, heads: DishHeads) -> torch.Tensor:
     """
     anywhere = _pair_scores(graph, heads, usable_only=False)
     if anywhere is None:
-        return torch.ones(graph.num_objects, dtype=torch.bool)
+        return torch.ones(graph.num_objects, dtype=torch.bool), [None] * graph.num_objects
     usable = {rack: _rack_usable(graph, rack) for rack in set(graph.goal_racks)}
     likeliest = [graph.goal_racks[int(g)] for g in anywhere.argmax(dim=1)]
     kinds = graph.goal_codes()[: graph.num_objects].tolist()
     stand_in = _racks_kinds_stand_in(graph)
     homes = [stand_in.get(k, rack) for k, rack in zip(kinds, likeliest, strict=True)]
-    return torch.tensor([not usable[home] for home in homes], dtype=torch.bool)
+    return torch.tensor([not usable[home] for home in homes], dtype=torch.bool), homes
+
+
+def _toggle_towards(graph: DishGraph, rack: str | None) -> TrayAction | None:
+    """The toggle that brings ``rack`` nearer to being loadable: the other rack pushed in if
+    it is out (the bottom rack is loaded only while the top one is in; neither while the
+    other is out), else ``rack`` pulled out. None for no rack, or one loadable now."""
+    for tray, other in TRAY_RACKS.items():
+        if rack is not None and other != rack and graph.rack_open.get(other, False):
+            return tray
+    for tray, own in TRAY_RACKS.items():
+        if own == rack and not graph.rack_open.get(own, False):
+            return tray
+    return None
 
 
 def _racks_kinds_stand_in(graph: DishGraph) -> dict[int, str]:

@@ -8,7 +8,9 @@ first, else a free neighbouring cell of the counter's 10 cm grid); let go and ba
 skill then takes the dish top-down, which finishes the turn about the vertical. A dish that
 cannot be taken or set down turned where it lies (neighbours, a pulled-out rack's floor
 over the far row) is first carried top-down to a free neighbouring cell, nearest the robot
-first, and turned there (``move_dish``).
+first, and turned there (``move_dish``). So is a dish that lies in a rack but in no slot
+(a placement that missed): the rack's floor and slots leave no room to turn it there, so it
+goes back to a free cell of the counter first.
 """
 
 from __future__ import annotations
@@ -64,6 +66,11 @@ SPOT_X = (0.29, 0.46)
 MAX_SPOTS = 4
 SPARE_Y = 0.42
 SPARE_X = (0.36, 0.44)
+#: The counter's columns (its rows: from ``SPOT_X[0]`` to ``SPOT_X[1]`` by the pitch), and
+#: the height below which a dish lies on the counter, not in a rack (the bottom rack's
+#: floor is 12 cm above it).
+COUNTER_COLUMNS = np.round(np.arange(-0.3, 0.301, 0.1), 3)
+COUNTER_Z = 0.1
 #: Lowest TCP for a top-down grasp: the fingertips (``FINGER_BELOW_TCP`` under it) stay this
 #: far above the counter.
 FINGERTIP_CLEARANCE = 0.002
@@ -91,10 +98,27 @@ def set_down_spots(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np
 
 def free_cells(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np.ndarray]:
     """The free neighbouring cells ``set_down_spots`` offers, those on the counter (not out
-    by the spare spots), nearest the robot first: farther from a pulled-out rack's front."""
-    cells = _neighbour_cells(here, _counter_dishes(scene, item))[: MAX_SPOTS - 2]
-    on_counter = [cell for cell in cells if abs(cell[1]) < SPARE_Y - 0.01]
-    return sorted(on_counter, key=lambda cell: float(cell[0]))
+    by the spare spots), nearest the robot first: farther from a pulled-out rack's front.
+    For a dish lying in a rack (not on the counter), the free counter cells nearest the
+    robot, then nearest it along y."""
+    others = _counter_dishes(scene, item)
+    if not on_counter(here):
+        cells = [
+            cell
+            for x in np.arange(SPOT_X[0] + 0.01, SPOT_X[1] + 0.001, SPOT_PITCH[0])
+            for y in COUNTER_COLUMNS
+            if _free_in_reach(cell := np.array([float(x), float(y)]), others)
+        ]
+        cells.sort(key=lambda cell: (float(cell[0]), abs(float(cell[1] - here[1]))))
+        return cells[: MAX_SPOTS - 2]
+    cells = _neighbour_cells(here, others)[: MAX_SPOTS - 2]
+    on_rows = [cell for cell in cells if abs(cell[1]) < SPARE_Y - 0.01]
+    return sorted(on_rows, key=lambda cell: float(cell[0]))
+
+
+def on_counter(position: np.ndarray) -> bool:
+    """A dish at ``position`` lies on the counter (not in a rack)."""
+    return float(position[2]) < COUNTER_Z
 
 
 def _counter_dishes(scene: Scene, item: SceneObject) -> list[np.ndarray]:
@@ -102,7 +126,7 @@ def _counter_dishes(scene: Scene, item: SceneObject) -> list[np.ndarray]:
     return [
         np.array(o.position.as_tuple()[:2])
         for o in scene.objects
-        if o.id != item.id and o.visible and o.position.z < 0.1  # on the counter
+        if o.id != item.id and o.visible and on_counter(np.array(o.position.as_tuple()))
     ]
 
 
@@ -111,15 +135,16 @@ def _neighbour_cells(here: np.ndarray, others: list[np.ndarray]) -> list[np.ndar
     first."""
     offsets = [np.array([dx, dy]) * SPOT_PITCH for dx in (-1, 0, 1) for dy in (-1, 0, 1)]
     offsets.sort(key=lambda o: float(np.linalg.norm(o)))
-    cells = []
-    for offset in offsets[1:]:
-        cell = here[:2] + offset
-        radius = float(np.linalg.norm(cell))
-        if not SPOT_RADIUS[0] <= radius <= SPOT_RADIUS[1] or not SPOT_X[0] <= cell[0] <= SPOT_X[1]:
-            continue
-        if all(np.linalg.norm(cell - other) >= SPOT_FREE for other in others):
-            cells.append(cell)
-    return cells
+    cells = [here[:2] + offset for offset in offsets[1:]]
+    return [cell for cell in cells if _free_in_reach(cell, others)]
+
+
+def _free_in_reach(cell: np.ndarray, others: list[np.ndarray]) -> bool:
+    """No dish near ``cell``, which is on the counter's rows and within reach."""
+    radius = float(np.linalg.norm(cell))
+    if not SPOT_RADIUS[0] <= radius <= SPOT_RADIUS[1] or not SPOT_X[0] <= cell[0] <= SPOT_X[1]:
+        return False
+    return all(np.linalg.norm(cell - other) >= SPOT_FREE for other in others)
 
 
 def grasp_height_for(centre_z: float) -> float:
@@ -141,6 +166,14 @@ def turn_dish(
     position = np.array(item.position.as_tuple())
     dish = rotation_of(item.orientation)
     moved = False
+    if up_index(dish) not in targets and not on_counter(position):
+        # In a rack but in no slot: no room to turn it there; to the counter first.
+        cells = free_cells(scene, item, position)
+        if not cells:
+            raise SkillError("collision", f"{item.id} lies in a rack and no counter cell is free")
+        log.info("moving %s out of the rack to turn it over on the counter", item.id)
+        position, dish = move_dish(driver, decision_id, item, scene, position, dish, cells)
+        moved = True
     for _ in range(MAX_TILTS):
         if up_index(dish) in targets:
             break
@@ -211,8 +244,7 @@ def _tilt_once(
         for spot in set_down_spots(scene, current, position):
             obstacles = scene_obstacles(scene, current, np.array([*spot, 0.0]))
             for side in set_down_hands(hand, dish, wanted):
-                up = up_index(side @ held)
-                half = float(size[[2, 2, 1, 1, 0, 0][up]]) / 2
+                half = _half_height(item, side @ held)
                 for drop in DROPS:
                     driver._raise_if_stopped()
                     centre = np.array([*spot, half + drop])
@@ -268,14 +300,17 @@ def move_dish(
     current = item.model_copy(
         update={"position": _vector(position), "orientation": quaternion_of(dish)}
     )
-    height = dish_grasp_height(scene, current, position, grasp_height_for(float(position[2])))
+    # Its centre above what it lies on: the counter, or a rack's floor (then it comes to
+    # rest on the counter as it lies, this high).
+    resting = float(position[2]) if on_counter(position) else _half_height(item, dish)
+    height = dish_grasp_height(scene, current, position, grasp_height_for(resting))
     opening = dish_opening(current)
     taking = Grasp(height, 0.0, 0.0, scene_obstacles(scene, current, position), opening=opening)
     driver.pick(Motion(decision_id, item.id, _vector(position), current.orientation, taking))
     taken = driver.planner.yaw_of(driver.transport.joint_positions())
     failure: SkillError | None = None
     for cell in cells:
-        there = np.array([*cell, position[2]])
+        there = np.array([*cell, resting])
         obstacles = scene_obstacles(scene, current, there)
         hand = there + height * UP
 
@@ -301,6 +336,13 @@ def move_dish(
     driver._put_back(decision_id, item.id)
     assert failure is not None
     raise failure
+
+
+def _half_height(item: SceneObject, dish: np.ndarray) -> float:
+    """Half the height of ``item`` lying with rotation ``dish``: its centre above the
+    counter."""
+    size = np.array(item.size.as_tuple())
+    return float(size[[2, 2, 1, 1, 0, 0][up_index(dish)]]) / 2
 
 
 def _about_vertical(angle: float) -> np.ndarray:
