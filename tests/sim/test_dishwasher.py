@@ -11,6 +11,7 @@ from manigraph_shared.errors import SkillError, TaskError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN
 from manigraph_sim.dishwasher.model import BOTTOM, TOP, Preference
+from manigraph_sim.dishwasher.scene import dishwasher_scene
 from manigraph_sim.dishwasher.world import DishwasherWorld
 from manigraph_sim.tasks import get_task
 from manigraph_sim.tasks.base import TaskParams
@@ -78,6 +79,23 @@ def test_dishes_travel_with_their_rack_and_success_needs_orientation_and_racks_i
     w.toggle(TOP)
     assert w.dishes["plate_0"].position[0] > out[0] + 0.1
     assert w.done()
+
+
+def test_a_dish_standing_the_wrong_way_round_is_not_filled_but_its_slot_is() -> None:
+    """A physical turn-over once left a bowl upright in its slot, reported as standing
+    there: the policy, which moves no standing dish, toggled racks until the step budget
+    was spent. It is a dish still to load; its slot holds it, so it goes into another."""
+    w = world()
+    w.toggle(TOP)
+    w.pick("bowl_0")
+    w.place("bowl_0", slot_position(w, "top_bowl_00"), UPRIGHT)
+    scene = dishwasher_scene(w, "e", 1.0, 0, ended=False)
+    assert not scene.object("bowl_0").filled and scene.goal("top_bowl_00").filled
+    w.pick("bowl_0")
+    w.place("bowl_0", slot_position(w, "top_bowl_01"), UPSIDE_DOWN)
+    scene = dishwasher_scene(w, "e", 1.0, 0, ended=False)
+    assert scene.object("bowl_0").filled and scene.goal("top_bowl_01").filled
+    assert not scene.goal("top_bowl_00").filled
 
 
 def test_a_right_side_plate_breaks_the_left_right_preference() -> None:

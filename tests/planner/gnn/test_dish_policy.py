@@ -22,6 +22,7 @@ from manigraph_planner.training.dishwasher import (
 )
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import EpisodeRequest, SkillState, SkillStatus, TrayAction
+from manigraph_shared.orientations import UPSIDE_DOWN
 from manigraph_sim.geometric.backend import GeometricBackend
 
 CHECKPOINTS = Path(__file__).parents[3] / "checkpoints"
@@ -331,6 +332,29 @@ def test_a_toggle_for_a_waiting_dish_brings_its_rack_nearer(bottom_out: bool) ->
         assert decision is not None
         wanted = TrayAction.TOGGLE_BOTTOM if bottom_out else TrayAction.TOGGLE_TOP
         assert decision.tray_action is wanted, favoured
+
+
+def test_a_dish_is_placed_as_its_slot_asks_when_the_orientation_head_says_otherwise() -> None:
+    """A bowl a physical turn-over left upright in a slot (no demonstration shows one) had the
+    orientation head say "rim-y" for it, and would have gone into the next slot the wrong way
+    round again: the decision keeps to the slot's orientation. A plate on another edge of its
+    rim stands as its slot asks, so the head's choice is kept."""
+    s = _top_rack_out()
+    graph = dish_scene_to_graph(s)
+    n = graph.x.shape[0]
+    orientation = torch.zeros(n, 6)
+    orientation[:, 2] = 5.0  # "rim-y" for every dish
+    for liked, kind, expected in (("top_bowl", "bowl", UPSIDE_DOWN), ("top_plate", "plate", 2)):
+        net = SlotLikingNet(graph.goal_ids, (liked,))
+        node = net.heads_complete(graph.x).node
+        if kind == "plate":
+            orientation[:, 2], orientation[:, 3] = 0.0, 5.0  # "rim-y-flipped": another edge
+            expected = 3
+        decision = decision_from_heads(
+            graph, DishHeads(node, orientation, torch.tensor([0.0, 0.0, 5.0]))
+        )
+        assert decision is not None and decision.object_id.startswith(kind)
+        assert decision.orientation_index == expected
 
 
 def _load(world, dish_id: str, rack: str) -> None:  # type: ignore[no-untyped-def]

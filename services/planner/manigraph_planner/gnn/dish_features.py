@@ -33,6 +33,7 @@ from manigraph_shared.orientations import NUM_ORIENTATIONS, nearest_orientation
 __all__ = [
     "DISH_FEATURE_SPEC",
     "FILLED_COLUMN",
+    "ORIENTATION_COLUMNS",
     "POSITION_COLUMNS",
     "TRAY_ACTIONS",
     "DishGraph",
@@ -64,6 +65,8 @@ _ORIENTATION = _POSITION + 5
 FILLED_COLUMN = _POSITION + 3
 #: Where a node's position (x, y, z) is.
 POSITION_COLUMNS = slice(_POSITION, _POSITION + 3)
+#: Where a node's orientation (one-hot: a dish's now, the one a slot requires) is.
+ORIENTATION_COLUMNS = slice(_ORIENTATION, _ORIENTATION + NUM_ORIENTATIONS)
 
 
 @dataclass

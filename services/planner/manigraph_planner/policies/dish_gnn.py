@@ -9,6 +9,7 @@ import torch
 from manigraph_planner.gnn.checkpoint import CheckpointInfo
 from manigraph_planner.gnn.dish_features import (
     FILLED_COLUMN,
+    ORIENTATION_COLUMNS,
     POSITION_COLUMNS,
     TRAY_ACTIONS,
     DishGraph,
@@ -17,11 +18,14 @@ from manigraph_planner.gnn.dish_features import (
 from manigraph_planner.gnn.models.dish_net import DishHeads, DishPolicyNet
 from manigraph_planner.policies.base import Decision, Policy
 from manigraph_shared.messages import TRAY_RACKS, Scene, TrayAction
+from manigraph_shared.orientations import postures_like
 
 __all__ = ["DishwasherGNNPolicy", "decision_from_heads"]
 
 #: Slot category code (dish_features) that each dish code fills: plate 0 -> 2, bowl 1 -> 3.
 _SLOT_FOR_DISH = {0: 2, 1: 3}
+#: The dish kind of each dish code.
+_DISH_KIND = {0: "plate", 1: "bowl"}
 
 
 class DishwasherGNNPolicy(Policy):
@@ -129,8 +133,21 @@ def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
     m = graph.num_goals
     flat = int(scores.flatten().argmax())
     o, g = flat // m, flat % m
-    orientation = int(heads.orientation[o].argmax())
-    return Decision(graph.object_ids[o], graph.goal_ids[g], orientation)
+    return Decision(graph.object_ids[o], graph.goal_ids[g], _orientation(graph, heads, o, g))
+
+
+def _orientation(graph: DishGraph, heads: DishHeads, o: int, g: int) -> int:
+    """Dish ``o`` placed into slot ``g``: the orientation head's argmax, unless the slot
+    requires another (a plate on its rim: any edge down), then the slot's. Where the
+    demonstrations go, the two agree; a bowl left upright in a slot by a physical turn-over,
+    a state no demonstration shows, was to go into the next slot upright again."""
+    head = int(heads.orientation[o].argmax())
+    asked = graph.x[graph.num_objects + g, ORIENTATION_COLUMNS]
+    if not bool(asked.any()):
+        return head
+    required = int(asked.argmax())
+    kind = _DISH_KIND[int(graph.goal_codes()[o])]
+    return head if head in postures_like(kind, required) else required
 
 
 def _without_none(tray: torch.Tensor) -> torch.Tensor:
@@ -179,7 +196,7 @@ def _pairs_by_dish(graph: DishGraph, heads: DishHeads) -> list[list[Decision]]:
     rounds = []
     for rank in range(graph.num_goals):
         pairs = [
-            Decision(graph.object_ids[o], graph.goal_ids[g], int(heads.orientation[o].argmax()))
+            Decision(graph.object_ids[o], graph.goal_ids[g], _orientation(graph, heads, o, g))
             for o in dishes
             if torch.isfinite(scores[o, g := int(slots[o, rank])])
         ]

@@ -18,8 +18,10 @@ from manigraph_sim.observation import vector
 def dishwasher_scene(
     world: DishwasherWorld, episode_id: str, stamp: float, sequence: int, ended: bool
 ) -> Scene:
-    """Every dish (``filled``: it stands in a slot of its kind), every slot (its rack, the
-    orientation a dish must have in it) and both racks with their open flag."""
+    """Every dish (``filled``: it stands in a slot of its kind as the slot asks; one that
+    stands the wrong way round is still to load, in another slot), every slot (its rack,
+    the orientation a dish must have in it; ``filled``: a dish is in it) and both racks with
+    their open flag."""
     objects = [
         SceneObject(
             id=dish.id,
@@ -27,7 +29,7 @@ def dishwasher_scene(
             position=vector(dish.position),
             orientation=orientation(dish.orientation),
             size=vector(dish.size),
-            filled=dish.slot is not None,
+            filled=dish.slot is not None and dish.orientation == world.slots[dish.slot].orientation,
         )
         for dish in world.dishes.values()
     ]
