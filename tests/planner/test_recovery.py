@@ -92,6 +92,24 @@ def test_a_decision_that_changed_nothing_gives_way_to_the_next_pair_then_escalat
     ]
 
 
+def test_a_policy_may_have_an_object_passed_over_after_one_pair() -> None:
+    """The dishwasher policy's dishes: what fails is taking or turning the dish, whichever
+    slot it was for, so its other slots are not tried before the other dishes."""
+
+    class OneFailure(Preferences):
+        object_escalation = 1
+
+    policy = OneFailure(("a", "g0"), ("a", "g1"), ("b", "g0"), ("b", "g1"))
+    actions = play(DecisionMaker(policy), [UNCHANGED] * 3, ["object_covered"] * 3)
+    assert [(a.object_id, a.goal_id, a.recovery) for a in actions] == [
+        ("a", "g0", None),
+        ("b", "g0", "no_progress"),  # not a's other slot (with two, as above, it is)
+        ("a", "g0", "exhausted"),  # nor b's: each failed once, no goal filled since
+    ]
+    with pytest.raises(ValueError, match="object_escalation"):
+        ProgressMonitor(object_escalation=0)
+
+
 def test_every_alternative_failed_the_first_choice_again_marked_exhausted() -> None:
     policy = Preferences(("a", "g0"), ("b", "g0"))
     actions = play(DecisionMaker(policy), [UNCHANGED] * 3, ["object_covered"] * 3)

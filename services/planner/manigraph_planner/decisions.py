@@ -81,7 +81,7 @@ class DecisionMaker:
         self.policy = policy
         self.clock = clock
         self.decision_timeout = decision_timeout
-        self.progress = progress or ProgressMonitor()
+        self.progress = progress or ProgressMonitor(object_escalation=policy.object_escalation)
         self.episode_id: str | None = None
         self.step = 0
         self.pending: str | None = None

@@ -17,7 +17,9 @@ A failure the world may not repeat (``grasp_slipped``, ``placement_missed``: the
 fingers or placement) is retried ``retries`` times before it counts as no progress. Pairs that
 made no progress are passed over until the world changes (the first rule) or a goal is filled
 (the second). Escalation: once two pairs with the same object (or the same goal) made no
-progress, every pair with that object (goal) is passed over. Wherever progress is made, nothing
+progress, every pair with that object (goal) is passed over (for objects, after
+``object_escalation`` pairs: a policy may say one, where a failure belongs to the object
+whichever goal it was for). Wherever progress is made, nothing
 is passed over, so the policy's decisions are exactly its own.
 """
 
@@ -80,15 +82,22 @@ class ProgressMonitor:
         tolerance: metres an object may move and still count as "where it was".
         retries: attempts of a decision that failed for a :data:`RETRYABLE` reason before
             the same decision counts as no progress.
+        object_escalation: pairs with one object that made no progress before every pair
+            with it is passed over.
     """
 
-    def __init__(self, tolerance: float = 0.005, retries: int = 2) -> None:
+    def __init__(
+        self, tolerance: float = 0.005, retries: int = 2, object_escalation: int = 2
+    ) -> None:
         if tolerance < 0:
             raise ValueError(f"tolerance: must be >= 0, got {tolerance}")
         if retries < 0:
             raise ValueError(f"retries: must be >= 0, got {retries}")
+        if object_escalation < 1:
+            raise ValueError(f"object_escalation: must be >= 1, got {object_escalation}")
         self.tolerance = tolerance
         self.retries = retries
+        self.object_escalation = object_escalation
         self.reset()
 
     def reset(self) -> None:
@@ -130,7 +139,7 @@ class ProgressMonitor:
         passed = stalled | repeats
         return Verdict(
             pairs=frozenset(passed),
-            objects=_escalated(passed, 0),
+            objects=_escalated(passed, 0, self.object_escalation),
             goals=_escalated(passed, 1),
             stalled=stalled,
         )
@@ -164,9 +173,10 @@ def _filled_goals(scene: Scene) -> frozenset[str]:
     return frozenset(g.id for g in scene.goals if g.filled)
 
 
-def _escalated(pairs: Iterable[Pair], side: int) -> frozenset[str]:
-    """Objects (side 0) or goals (side 1) that appear in two or more passed-over pairs."""
+def _escalated(pairs: Iterable[Pair], side: int, after: int = 2) -> frozenset[str]:
+    """Objects (side 0) or goals (side 1) that appear in ``after`` or more passed-over
+    pairs."""
     seen: dict[str, int] = {}
     for pair in pairs:
         seen[pair[side]] = seen.get(pair[side], 0) + 1
-    return frozenset(name for name, count in seen.items() if count >= 2)
+    return frozenset(name for name, count in seen.items() if count >= after)

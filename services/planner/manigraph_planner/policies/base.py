@@ -54,6 +54,9 @@ class Decision:
 
 class Policy(ABC):
     name: str
+    #: Passed-over pairs with one object before the planner's recovery passes over every
+    #: pair with it (``recovery.ProgressMonitor``).
+    object_escalation: int = 2
 
     @abstractmethod
     def decide(self, scene: Scene) -> Decision | None:

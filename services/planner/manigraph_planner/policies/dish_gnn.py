@@ -42,6 +42,12 @@ class DishwasherGNNPolicy(Policy):
     tray head's more likely toggle that brings a waiting dish's rack nearer to loadable.
     """
 
+    #: A dish whose skill made no progress is passed over, whichever slot it was for, until a
+    #: goal is filled: its slots are alike, and what fails is taking or turning the dish (on a
+    #: crowded counter, while the plates are still there). Trying it in two slots first
+    #: spent the step budget on the bowls before the plates had left the counter.
+    object_escalation = 1
+
     def __init__(self, net: DishPolicyNet, info: CheckpointInfo | None = None) -> None:
         torch.set_num_threads(1)
         self.net = net.eval()
