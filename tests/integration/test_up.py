@@ -114,6 +114,24 @@ def test_a_port_another_stack_holds_is_refused_before_anything_starts() -> None:
     assert "stack is up" not in result.stderr
 
 
+def test_bad_options_are_named_before_a_busy_port() -> None:
+    """Options the run cannot take are named whatever holds the port: a test of them once
+    failed only because another stack was up on the default one."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as other_stack:
+        other_stack.bind(("127.0.0.1", 0))
+        other_stack.listen()
+        port = other_stack.getsockname()[1]
+        argv = ["up", "--policy", "human", "--episodes", "1", "--port", str(port)]
+        result = subprocess.run(
+            [sys.executable, "-m", "manigraph_shared.cli", *argv],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+    assert result.returncode == 2
+    assert "episodes: --policy human" in result.stderr and "in use" not in result.stderr
+
+
 @pytest.mark.parametrize("json_only", [False, True])
 def test_a_run_ends_with_one_json_line_and_says_it_in_words_unless_asked_not_to(
     json_only: bool,

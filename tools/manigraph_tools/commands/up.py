@@ -151,6 +151,23 @@ def _up_run(args: argparse.Namespace) -> int:
     # some CI runners) would otherwise never see Ctrl-C, and SIGTERM should stop it the same way.
     signal.signal(signal.SIGINT, _interrupt)
     signal.signal(signal.SIGTERM, _interrupt)
+    backends = _sim_backends()
+    sim_options = (
+        backends.argv(args.sim, backends.given_options(args)) if backends is not None else []
+    )
+    if args.scene_source == "camera":
+        if args.sim != "physics":
+            raise ConfigError("scene-source", "camera needs --sim physics (it renders)")
+        sim_options += ["--camera", "--no-scenes"]
+    plan = plan_from_args(args, args.episodes) if args.episodes is not None else None
+    human = args.policy == HUMAN
+    if human and plan is not None:
+        raise ConfigError(
+            "episodes", f"--policy {HUMAN}: a person starts each episode on the page; leave it out"
+        )
+    if human and args.explain_decisions:
+        raise ConfigError("explain-decisions", f"needs a GNN planner, not --policy {HUMAN}")
+    # The options first: a run refused for them names them, whatever else is on the port.
     _refuse_busy_port(args.port)
     tls_dir = Path(tempfile.mkdtemp(prefix="manigraph-certs-")) if args.secure else None
     endpoint = f"{'tls' if tls_dir else 'tcp'}/127.0.0.1:{args.port}"
@@ -168,22 +185,6 @@ def _up_run(args: argparse.Namespace) -> int:
         identity = {"MANIGRAPH_TLS_IDENTITY": name} if tls_dir else {}
         return ProcessSpec(name, argv, {**bus_env, **identity})
 
-    backends = _sim_backends()
-    sim_options = (
-        backends.argv(args.sim, backends.given_options(args)) if backends is not None else []
-    )
-    if args.scene_source == "camera":
-        if args.sim != "physics":
-            raise ConfigError("scene-source", "camera needs --sim physics (it renders)")
-        sim_options += ["--camera", "--no-scenes"]
-    plan = plan_from_args(args, args.episodes) if args.episodes is not None else None
-    human = args.policy == HUMAN
-    if human and plan is not None:
-        raise ConfigError(
-            "episodes", f"--policy {HUMAN}: a person starts each episode on the page; leave it out"
-        )
-    if human and args.explain_decisions:
-        raise ConfigError("explain-decisions", f"needs a GNN planner, not --policy {HUMAN}")
     specs = [spec("router", ["router", "--listen", endpoint])]
     if args.record:
         specs.append(spec("recorder", ["record", "--output", str(args.record)]))
