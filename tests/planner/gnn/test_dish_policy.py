@@ -283,17 +283,7 @@ def test_a_dish_waits_for_the_rack_its_kind_stands_in() -> None:
     to load it), and the bottom rack is out. Heads that rate the bottom rack's slots best
     (as the trained ones did in this state, which no demonstration shows) still never send
     the bowl into the bottom rack: it waits for the top one, and the plates go first."""
-    backend = GeometricBackend()
-    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
-    world = backend.dishwasher
-    assert world is not None
-    world.toggle("rack_top")
-    loaded, left = [d for d in world.dishes.values() if d.kind == "bowl"]
-    slot = next(s for s in world.slots.values() if s.kind == "bowl" and s.rack == "rack_top")
-    world.pick(loaded.id)
-    world.place(loaded.id, world.slot_position(slot), slot.orientation)
-    world.toggle("rack_top")
-    world.toggle("rack_bottom")
+    backend, left = _one_bowl_loaded_the_bottom_rack_out()
     s = backend.scene(1.0)
     assert s is not None and s.rack("rack_bottom").open and not s.object(left.id).filled
     ranked = _ranked(s, liked=("bottom_",))
@@ -308,15 +298,9 @@ def test_a_toggle_for_a_waiting_dish_brings_its_rack_nearer(bottom_out: bool) ->
     favours, the decision is the toggle towards the top rack: the bottom one pushed in if it
     is out, else the top one pulled out. (With a tray head favouring the bottom rack, the
     decision pulled it out and pushed it in until the step budget was spent.)"""
-    backend = GeometricBackend()
-    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
+    backend, left = _one_bowl_loaded_the_bottom_rack_out()
     world = backend.dishwasher
     assert world is not None
-    world.toggle("rack_top")
-    loaded, left = [d for d in world.dishes.values() if d.kind == "bowl"]
-    _load(world, loaded.id, "rack_top")
-    world.toggle("rack_top")
-    world.toggle("rack_bottom")
     for plate in [d for d in world.dishes.values() if d.kind == "plate"]:
         _load(world, plate.id, "rack_bottom")
     if not bottom_out:
@@ -355,6 +339,21 @@ def test_a_dish_is_placed_as_its_slot_asks_when_the_orientation_head_says_otherw
         )
         assert decision is not None and decision.object_id.startswith(kind)
         assert decision.orientation_index == expected
+
+
+def _one_bowl_loaded_the_bottom_rack_out():  # type: ignore[no-untyped-def]
+    """A 4-dish geometric world: one bowl stands in the top rack (pushed in again), the
+    bottom rack is out; the world and the other bowl."""
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
+    world = backend.dishwasher
+    assert world is not None
+    world.toggle("rack_top")
+    loaded, left = [d for d in world.dishes.values() if d.kind == "bowl"]
+    _load(world, loaded.id, "rack_top")
+    world.toggle("rack_top")
+    world.toggle("rack_bottom")
+    return backend, left
 
 
 def _load(world, dish_id: str, rack: str) -> None:  # type: ignore[no-untyped-def]
