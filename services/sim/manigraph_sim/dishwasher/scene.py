@@ -29,7 +29,7 @@ def dishwasher_scene(
             position=vector(dish.position),
             orientation=orientation(dish.orientation),
             size=vector(dish.size),
-            filled=dish.slot is not None and dish.orientation == world.slots[dish.slot].orientation,
+            filled=world.stands_as_asked(dish),
         )
         for dish in world.dishes.values()
     ]

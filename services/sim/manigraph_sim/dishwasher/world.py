@@ -56,12 +56,16 @@ class DishwasherWorld:
                 return dish.id
         return None
 
+    def stands_as_asked(self, dish: Dish) -> bool:
+        """In a slot, in the slot's orientation."""
+        return dish.slot is not None and dish.orientation == self.slots[dish.slot].orientation
+
     def loaded_as_preferred(self, dish: Dish) -> bool:
         """In a slot the preference allows, in the slot's orientation."""
-        if dish.slot is None:
+        if not self.stands_as_asked(dish):
             return False
-        slot = self.slots[dish.slot]
-        return allowed(self.preference, dish.kind, slot) and dish.orientation == slot.orientation
+        assert dish.slot is not None
+        return allowed(self.preference, dish.kind, self.slots[dish.slot])
 
     def loaded(self) -> int:
         return sum(self.loaded_as_preferred(dish) for dish in self.dishes.values())
