@@ -30,6 +30,7 @@ ALIVE_PREFIX = "manigraph/alive"
 #: Zenoh's own default query timeout; queries here use less so an answer is never late.
 DEFAULT_QUERY_TIMEOUT = 5.0
 _ATTEMPT_MS = 2000
+_RETRY_MS = 100
 
 
 def open_session(config: BusConfig, overrides: Mapping[str, object] | None = None) -> zenoh.Session:
@@ -48,6 +49,9 @@ def open_session(config: BusConfig, overrides: Mapping[str, object] | None = Non
         if config.mode != "router":
             zconfig.insert_json5("connect/timeout_ms", str(_ATTEMPT_MS))
             zconfig.insert_json5("connect/exit_on_failure", "true")
+            # Retry a refused connection soon (Zenoh waits 1 s by default): services started
+            # beside their router then connect within ~0.1 s of it listening.
+            zconfig.insert_json5("connect/retry", _json({"period_init_ms": _RETRY_MS}))
         try:
             return zenoh.open(zconfig)
         except zenoh.ZError as exc:

@@ -124,6 +124,10 @@ class BusConfig:
             settings["connect/endpoints"] = list(self.connect)
         if self.listen:
             settings["listen/endpoints"] = list(self.listen)
+        if self.mode == "router" and not self.connect and not self.multicast_scouting:
+            # Zenoh waits scouting/delay (500 ms) at open for other routers and peers to
+            # connect; a router that neither scouts nor connects has nobody to wait for.
+            settings["scouting/delay"] = 0
         if self.tls_dir is not None and self.tls_identity is not None:
             ca, cert, key = (str(p.resolve()) for p in tls_files(self.tls_dir, self.tls_identity))
             tls = "transport/link/tls"

@@ -70,3 +70,13 @@ def test_bad_values_name_the_field(argv: tuple[str, ...], env: dict[str, str], f
     with pytest.raises(ConfigError) as caught:
         parse(*argv, env=env)
     assert caught.value.field == field
+
+
+def test_a_lone_router_opens_without_waiting_for_other_routers() -> None:
+    """Zenoh's scouting delay (500 ms at open) is for routers that connect or scout."""
+    lone = BusConfig(mode="router", connect=(), listen=(DEFAULT_ROUTER,))
+    assert lone.zenoh_json()["scouting/delay"] == 0
+    linked = BusConfig(mode="router", connect=("tcp/10.0.0.2:7447",), listen=(DEFAULT_ROUTER,))
+    assert "scouting/delay" not in linked.zenoh_json()
+    scouting = BusConfig(mode="router", connect=(), multicast_scouting=True)
+    assert "scouting/delay" not in scouting.zenoh_json()

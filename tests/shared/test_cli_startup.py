@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 HEAVY = ("torch", "torch_geometric", "sapien", "pinocchio", "mani_skill", "cv2")
 
 LOAD_EVERY_COMMAND = f"""
 import sys
+from pathlib import Path
 from importlib.metadata import entry_points
 for entry in entry_points(group="manigraph.commands"):
     entry.load()
@@ -27,6 +29,7 @@ def test_loading_every_subcommand_imports_no_heavy_library() -> None:
 
 SERVE_THE_EXPERT = """
 import sys
+from pathlib import Path
 from manigraph_planner.decisions import DecisionHistory
 from manigraph_planner.explain import ExplainHandler
 from manigraph_planner.policies import load_policy
@@ -45,3 +48,30 @@ def test_the_planner_serving_the_expert_imports_no_torch() -> None:
     flags, problem = done.stdout.strip().splitlines()
     assert flags == "False False"  # not explainable, and torch never imported
     assert "'expert' is not a GNN policy" in problem
+
+
+SERVE_A_CHECKPOINT = """
+import sys
+from pathlib import Path
+from manigraph_planner.decisions import DecisionHistory
+from manigraph_planner.explain import ExplainHandler
+from manigraph_planner.policies import load_policy
+
+policy = load_policy(sys.argv[1])
+handler = ExplainHandler(policy, DecisionHistory())
+print(handler.available, "torch_geometric" in sys.modules)
+handler.prepare()  # the explainer's message-passing copy: PyG from here on
+print("torch_geometric" in sys.modules)
+"""
+
+
+def test_the_planner_serving_a_checkpoint_imports_no_pyg_until_it_explains() -> None:
+    """PyG (and the torch._dynamo it imports) cost ~2 s of the planner's start-up."""
+    checkpoint = Path(__file__).resolve().parents[2] / "checkpoints" / "sage.pt"
+    done = subprocess.run(
+        [sys.executable, "-c", SERVE_A_CHECKPOINT, str(checkpoint)],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert done.stdout.split() == ["True", "False", "True"], done.stdout

@@ -214,16 +214,33 @@ class Supervisor:
             raise ManigraphError(failure)
 
     def stop(self, grace: float = 10.0) -> None:
+        """SIGTERM every service at once (they stop in parallel, ~0.2 s each), then the ones
+        of ``STOPPED_LAST`` in that order, so the recorder logs the others' last statuses and
+        the router carries them; what has not exited after ``grace`` seconds is killed."""
         self._stopping.set()
         with self._lock:
-            for child in reversed(self.children):
-                process = child.process
-                if process.poll() is None:
-                    process.send_signal(signal.SIGTERM)
-                    try:
-                        process.wait(timeout=grace)
-                    except subprocess.TimeoutExpired:
-                        process.kill()
-                        process.wait()
+            last = [c for name in STOPPED_LAST for c in self.children if c.spec.name == name]
+            first = [c for c in reversed(self.children) if c not in last]
+            _terminate([c.process for c in first], grace)
+            for child in last:
+                _terminate([child.process], grace)
         for pump in self._pumps:
             pump.join(timeout=2)
+
+
+#: Stopped after every other process, one by one in this order.
+STOPPED_LAST = ("recorder", "router")
+
+
+def _terminate(processes: list[subprocess.Popen[str]], grace: float) -> None:
+    """SIGTERM ``processes`` together; kill those still running ``grace`` seconds later."""
+    running = [p for p in processes if p.poll() is None]
+    for process in running:
+        process.send_signal(signal.SIGTERM)
+    deadline = time.monotonic() + grace
+    for process in running:
+        try:
+            process.wait(timeout=max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()

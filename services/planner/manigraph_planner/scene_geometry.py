@@ -1,49 +1,95 @@
-"""Geometric relations read off a Scene: what rests on what, what is under a cover."""
+"""Geometric relations read off a Scene: what rests on what, what is under a cover.
+
+:class:`SceneGeometry` computes every relation of one scene at once with numpy (K objects,
+L goals: one K x K and one L x K comparison), so the expert's decision at K = 40 costs tens
+of microseconds instead of the milliseconds of pairwise Python loops. The comparisons are the
+same floating-point expressions, in the same order, as the per-pair definitions they replaced,
+which tests/planner/test_scene_geometry.py keeps as the reference they must agree with.
+"""
 
 from __future__ import annotations
 
-from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
+import numpy as np
+
+from manigraph_shared.messages import Scene, SceneGoal, SceneObject
 
 MARGIN = 0.002
 
 
-def _overlaps(position: Vector3, half_x: float, half_y: float, other: SceneObject) -> bool:
-    return (
-        abs(other.position.x - position.x) < half_x + other.size.x / 2 - MARGIN
-        and abs(other.position.y - position.y) < half_y + other.size.y / 2 - MARGIN
+class SceneGeometry:
+    """Which objects rest over which objects and which goals, for one scene."""
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+        objects = scene.objects
+        self._index = {o.id: i for i, o in enumerate(objects)}
+        boxes = np.array(
+            [
+                (o.position.x, o.position.y, o.position.z, o.size.x, o.size.y, o.size.z)
+                for o in objects
+            ],
+            dtype=np.float64,
+        ).reshape(len(objects), 6)
+        x, y, z, sx, sy, sz = boxes.T
+        self._visible = np.array([o.visible for o in objects], dtype=bool)
+        self._bottom = z - sz / 2
+        top = z + sz / 2
+        # resting[i, j]: object j rests over object i (overlapping footprint, above i's top).
+        rests = (self._bottom[None, :] >= (top - MARGIN)[:, None]) & _overlap(
+            x, y, sx / 2, sy / 2, x, y, sx, sy
+        )
+        np.fill_diagonal(rests, False)
+        self._rests = rests
+        goals = scene.goals
+        self._goal_index = {g.id: i for i, g in enumerate(goals)}
+        gx, gy, gz = (
+            np.array([(g.position.x, g.position.y, g.position.z) for g in goals], dtype=np.float64)
+            .reshape(len(goals), 3)
+            .T
+        )
+        # above[l, j]: visible object j is higher than goal l, over its position.
+        self._above = (
+            self._visible[None, :]
+            & (self._bottom[None, :] > gz[:, None])
+            & _overlap(gx, gy, 0.0, 0.0, x, y, sx, sy)
+        )
+        # Per-entity answers as Python lists: a policy asks once per object and goal.
+        self._covered: list[bool] = rests.any(axis=1).tolist()
+        self._blocked: list[bool] = self._above.any(axis=1).tolist()
+
+    def is_covered(self, item: SceneObject) -> bool:
+        """Another object rests on top of ``item`` (overlapping footprint, above its top)."""
+        return self._covered[self._index[item.id]]
+
+    def is_blocked(self, goal: SceneGoal) -> bool:
+        """A visible object lies over ``goal`` (it cannot be filled before that is moved)."""
+        return self._blocked[self._goal_index[goal.id]]
+
+    def objects_over(self, item: SceneObject) -> list[SceneObject]:
+        """Visible objects resting over ``item`` (what must be lifted before it is picked)."""
+        row = self._rests[self._index[item.id]] & self._visible
+        return [self.scene.objects[j] for j in np.flatnonzero(row)]
+
+    def objects_above_goal(self, goal: SceneGoal) -> list[SceneObject]:
+        """Visible objects higher than ``goal`` over its position (in the way of filling it)."""
+        row = self._above[self._goal_index[goal.id]]
+        return [self.scene.objects[j] for j in np.flatnonzero(row)]
+
+
+def _overlap(
+    ax: np.ndarray,
+    ay: np.ndarray,
+    half_x: np.ndarray | float,
+    half_y: np.ndarray | float,
+    bx: np.ndarray,
+    by: np.ndarray,
+    bsx: np.ndarray,
+    bsy: np.ndarray,
+) -> np.ndarray:
+    """overlap[i, j]: footprint j (centre b, full size bs) overlaps the one of half-size
+    ``half`` around a[i], by more than ``MARGIN`` along x and y."""
+    half_x = np.broadcast_to(half_x, ax.shape)
+    half_y = np.broadcast_to(half_y, ay.shape)
+    return (np.abs(bx[None, :] - ax[:, None]) < half_x[:, None] + bsx[None, :] / 2 - MARGIN) & (
+        np.abs(by[None, :] - ay[:, None]) < half_y[:, None] + bsy[None, :] / 2 - MARGIN
     )
-
-
-def is_covered(scene: Scene, item: SceneObject) -> bool:
-    """Another object rests on top of ``item`` (overlapping footprint, above its top)."""
-    top = item.position.z + item.size.z / 2
-    return any(
-        other.id != item.id
-        and other.position.z - other.size.z / 2 >= top - MARGIN
-        and _overlaps(item.position, item.size.x / 2, item.size.y / 2, other)
-        for other in scene.objects
-    )
-
-
-def objects_above_goal(scene: Scene, goal: SceneGoal) -> list[SceneObject]:
-    """Objects higher than ``goal`` over its position, i.e. in the way of filling it."""
-    return [
-        other
-        for other in scene.objects
-        if other.visible
-        and other.position.z - other.size.z / 2 > goal.position.z
-        and _overlaps(goal.position, 0.0, 0.0, other)
-    ]
-
-
-def objects_over(scene: Scene, item: SceneObject) -> list[SceneObject]:
-    """Objects resting over ``item`` (what must be lifted before it can be picked)."""
-    top = item.position.z + item.size.z / 2
-    return [
-        other
-        for other in scene.objects
-        if other.id != item.id
-        and other.visible
-        and other.position.z - other.size.z / 2 >= top - MARGIN
-        and _overlaps(item.position, item.size.x / 2, item.size.y / 2, other)
-    ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 
 from manigraph_planner.decisions import DecisionMaker
@@ -62,6 +63,8 @@ class PlannerService(Service):
     def setup(self) -> None:
         if self.explain_decisions and not self.explain.available:
             raise PolicyError(f"explain_decisions: {self.explain.problem}")
+        if self.explain_decisions:
+            self.explain.prepare()  # every decision is explained: have it before the first
         self.on(EpisodeEvent, self._on_episode)
         self.on(SkillStatus, lambda status: self._act(self.decisions.on_status(status)))
         self.on(Scene, self._on_scene)
@@ -73,6 +76,17 @@ class PlannerService(Service):
             self.decisions.policy.name,
             " (explaining every decision)" if self.explain_decisions else "",
         )
+        if self.explain.available and not self.explain_decisions:
+            # Explain queries may come any time: build the explainer beside the decisions
+            # rather than in the first query's time (the service answers scenes meanwhile).
+            threading.Thread(target=self._prepare_explainer, name="explainer", daemon=True).start()
+
+    def _prepare_explainer(self) -> None:
+        try:
+            self.explain.prepare()
+        except Exception as exc:  # reported; each explain query then says why again
+            self.log.exception("the explainer could not be built")
+            self.call_soon(self.report_error, exc)
 
     def _on_episode(self, event: EpisodeEvent) -> None:
         overtaking = self.gate.on_episode(event)

@@ -17,6 +17,7 @@ import torch
 
 from manigraph_planner.gnn.features import GraphState, scene_to_graph
 from manigraph_planner.gnn.models import ARCHITECTURES, ModelConfig, PolicyNet
+from manigraph_planner.gnn.models.dish_ensemble import with_message_passing
 from manigraph_planner.policies.base import Decision
 from manigraph_planner.policies.gnn import GNNPolicy, decision_from_logits
 from manigraph_shared.messages import (
@@ -66,12 +67,14 @@ def mixed_scene(num_objects: int, num_goals: int, seed: int) -> Scene:
 
 
 def decide_by_message_passing(policy: GNNPolicy, scene: Scene) -> Decision | None:
-    """What ``policy.decide`` computes, through PyG message passing on the edge index."""
+    """What ``policy.decide`` computes, through PyG message passing on the edge index (a
+    served policy holds only its layers' weights: the PyG network is rebuilt from them)."""
     graph = scene_to_graph(scene)
     if graph.num_objects in (0, graph.num_nodes):
         return None
     with torch.no_grad():
-        return decision_from_logits(graph, policy.net(graph.x, graph.edge_index))
+        net = with_message_passing(policy.net)
+        return decision_from_logits(graph, net(graph.x, graph.edge_index))
 
 
 def scenes(make_stack_scene: Callable[[int], Scene]) -> list[Scene]:
@@ -89,7 +92,7 @@ def pair_log_probability(graph: GraphState, node_logits: torch.Tensor, decision:
 def assert_rounding_tie(policy: GNNPolicy, scene: Scene, first: Decision, second: Decision) -> None:
     """``first`` and ``second`` score the same under float64 logits, to float32 resolution."""
     graph = scene_to_graph(scene)
-    net = copy.deepcopy(policy.net).double()
+    net = copy.deepcopy(with_message_passing(policy.net)).double()
     with torch.no_grad():
         logits = net(graph.x.double(), graph.edge_index)
     gap = pair_log_probability(graph, logits, first) - pair_log_probability(graph, logits, second)
@@ -129,6 +132,7 @@ def test_shipped_checkpoints_decide_as_message_passing_does(
     if not path.is_file():
         pytest.skip(f"no shipped checkpoint {path}")
     policy = GNNPolicy.from_checkpoint(path)
+    assert not policy.net.message_passing  # served from its weights alone, as the planner does
     assert_same_as_message_passing(policy, scenes(make_stack_scene), allow_rounding_ties=False)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+import threading
 from typing import TYPE_CHECKING
 
 from manigraph_planner.decisions import DecisionHistory
@@ -27,13 +28,20 @@ class ExplainHandler:
         policy: the served policy; anything but a GNN policy makes every request an error.
         history: the planner's recent decisions and their scenes.
         config: the mask optimisation's settings.
+
+    The explainer itself (a message-passing copy of the network, and PyG with it: ~2 s of
+    imports on two cores) is built on first use or by :meth:`prepare`, never before the
+    planner answers its first scene.
     """
 
     def __init__(
         self, policy: Policy, history: DecisionHistory, config: ExplainerConfig | None = None
     ) -> None:
         self.history = history
+        self.policy = policy
+        self.config = config
         self.explainer: SceneExplainer | None = None
+        self._building = threading.Lock()
         self.problem = ""
         # A GNN policy's class is loaded (and torch with it) iff a GNN policy was loaded:
         # any other policy is refused here without importing the explainer, or torch.
@@ -44,16 +52,16 @@ class ExplainHandler:
                 "explained (start the planner with --policy CHECKPOINT.pt)"
             )
             return
-        from manigraph_planner.explain.scene_explainer import SceneExplainer
-
-        try:
-            self.explainer = SceneExplainer(policy, config)
-        except PolicyError as exc:
-            self.problem = str(exc)
 
     @property
     def available(self) -> bool:
-        return self.explainer is not None
+        """The policy can be explained (a GNN policy)."""
+        return not self.problem
+
+    def prepare(self) -> None:
+        """Build the explainer now, if the policy can be explained (safe from any thread)."""
+        if self.available:
+            self._explainer()
 
     def __call__(self, request: ExplainRequest) -> Explanation:
         explainer = self._explainer()
@@ -89,6 +97,11 @@ class ExplainHandler:
         )
 
     def _explainer(self) -> SceneExplainer:
-        if self.explainer is None:
+        if self.problem:
             raise PolicyError(self.problem)
-        return self.explainer
+        with self._building:
+            if self.explainer is None:
+                from manigraph_planner.explain.scene_explainer import SceneExplainer
+
+                self.explainer = SceneExplainer(self.policy, self.config)
+            return self.explainer

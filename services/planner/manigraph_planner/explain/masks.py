@@ -56,6 +56,7 @@ from torch_geometric.explain.algorithm.utils import clear_masks, set_masks
 
 from manigraph_planner.explain.config import ExplainerConfig, Objective
 from manigraph_planner.gnn.models import PolicyNet
+from manigraph_planner.gnn.models.dish_ensemble import with_message_passing
 from manigraph_shared.errors import PolicyError
 
 __all__ = ["MaskExplainer", "MaskExplanation"]
@@ -110,7 +111,7 @@ class MaskExplainer:
 
     def __init__(self, net: PolicyNet, config: ExplainerConfig | None = None) -> None:
         self.config = config or ExplainerConfig()
-        self.net = copy.deepcopy(net).eval()
+        self.net = copy.deepcopy(with_message_passing(net)).eval()
         self.net.requires_grad_(False)
 
     def explain(

@@ -120,8 +120,10 @@ def save_checkpoint(
     return target
 
 
-def load_checkpoint(path: str | os.PathLike[str]) -> LoadedCheckpoint:
-    """The network (in eval mode) and provenance stored in ``path``.
+def load_checkpoint(path: str | os.PathLike[str], message_passing: bool = True) -> LoadedCheckpoint:
+    """The network (in eval mode) and provenance stored in ``path``; with
+    ``message_passing=False`` a network of the layers' weights only, for the dense inference
+    path, built without importing PyG (:mod:`~manigraph_planner.gnn.models.layer_weights`).
 
     Raises:
         PolicyError: the file is unreadable or not a manigraph GNN checkpoint, its
@@ -147,7 +149,7 @@ def load_checkpoint(path: str | os.PathLike[str]) -> LoadedCheckpoint:
     _check_envelope(payload, path)
     model = _model_config(payload["model"])
     _check_feature_spec(payload["feature_spec"], model.heads)
-    net = policy_net_for(model)
+    net = policy_net_for(model, message_passing)
     problem = _state_dict_problem(net, payload["state_dict"])
     if problem:
         raise PolicyError(

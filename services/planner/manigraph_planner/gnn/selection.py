@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import torch
 from torch import Tensor
-from torch_geometric.utils import scatter
 
 __all__ = [
     "padded_select",
@@ -65,9 +64,9 @@ def split_logits(
         - **output:** :math:`(N,)`; ``output[is_object & (batch == b)].exp().sum() == 1``
     """
     group, num_groups = _groups(is_object, batch, num_graphs)
-    peak = scatter(node_logits.detach(), group, 0, num_groups, reduce="max")
+    peak = _group_max(node_logits.detach(), group, num_groups)
     shifted = node_logits - peak[group]
-    log_norm = scatter(shifted.exp(), group, 0, num_groups, reduce="sum").log()
+    log_norm = _group_sum(shifted.exp(), group, num_groups).log()
     return shifted - log_norm[group]
 
 
@@ -115,7 +114,7 @@ def select(
           into the batched node dimension; -1 where a graph has no object (goal) nodes.
     """
     group, num_groups = _groups(is_object, batch, num_graphs)
-    peak = scatter(node_logits, group, 0, num_groups, reduce="max")
+    peak = _group_max(node_logits, group, num_groups)
     nodes = torch.arange(node_logits.numel(), device=node_logits.device)
     sentinel = node_logits.numel()
     candidate = torch.where(node_logits == peak[group], nodes, sentinel)
@@ -199,3 +198,16 @@ def _check_targets(object_is_object: Tensor, goal_is_goal: Tensor) -> None:
         raise ValueError("object_target: every target must index an object node")
     if not bool(goal_is_goal.all()):
         raise ValueError("goal_target: every target must index a goal node")
+
+
+# What ``torch_geometric.utils.scatter`` computes for "max" and "sum" over dimension 0, by the
+# same torch calls, so that selection (used by policy serving) does not import PyG.
+def _group_max(values: Tensor, group: Tensor, num_groups: int) -> Tensor:
+    """Per-group maximum of ``values``; 0 for a group without members."""
+    out = values.new_zeros(num_groups)
+    return out.scatter_reduce(0, group, values, reduce="amax", include_self=False)
+
+
+def _group_sum(values: Tensor, group: Tensor, num_groups: int) -> Tensor:
+    """Per-group sum of ``values`` (differentiable)."""
+    return values.new_zeros(num_groups).scatter_add(0, group, values)

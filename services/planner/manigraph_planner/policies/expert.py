@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from manigraph_planner.policies.base import Decision, Policy, register_policy
-from manigraph_planner.scene_geometry import is_covered, objects_above_goal, objects_over
+from manigraph_planner.scene_geometry import SceneGeometry
 from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneGoal, SceneObject
 
 
@@ -36,14 +36,15 @@ class ExpertPolicy(Policy):
         first = self.decide(scene)
         if first is None:
             return []
+        geometry = SceneGeometry(scene)
         objects = [o for o in scene.objects if o.visible]
         goals = [g for g in scene.goals if g.visible and g.category is GoalCategory.BLOCK]
         movable = [
             o
             for o in objects
-            if o.category is ObjectCategory.BLOCK and not o.filled and not is_covered(scene, o)
+            if o.category is ObjectCategory.BLOCK and not o.filled and not geometry.is_covered(o)
         ]
-        open_goals = [g for g in goals if not g.filled and not objects_above_goal(scene, g)]
+        open_goals = [g for g in goals if not g.filled and not geometry.is_blocked(g)]
         movable.sort(key=lambda o: (-round(o.position.z, 4), o.id))
         open_goals.sort(key=lambda g: (round(g.position.z, 4), g.id))
         others = [
@@ -52,13 +53,14 @@ class ExpertPolicy(Policy):
         return [first, *others]
 
     def decide(self, scene: Scene) -> Decision | None:
+        geometry = SceneGeometry(scene)
         objects = [o for o in scene.objects if o.visible]
         goals = [g for g in scene.goals if g.visible]
         free_block_goals = [g for g in goals if g.category is GoalCategory.BLOCK and not g.filled]
         blocks_to_move = [o for o in objects if o.category is ObjectCategory.BLOCK and not o.filled]
 
-        open_goals = [g for g in free_block_goals if not objects_above_goal(scene, g)]
-        movable = [o for o in blocks_to_move if not is_covered(scene, o)]
+        open_goals = [g for g in free_block_goals if not geometry.is_blocked(g)]
+        movable = [o for o in blocks_to_move if not geometry.is_covered(o)]
         if open_goals and movable:
             return Decision(_highest(movable).id, _lowest(open_goals).id)
 
@@ -67,21 +69,21 @@ class ExpertPolicy(Policy):
             in_the_way = {
                 o.id: o
                 for goal in free_block_goals
-                for o in objects_above_goal(scene, goal)
+                for o in geometry.objects_above_goal(goal)
                 if o.category is ObjectCategory.COVER
             }
             for block in blocks_to_move:
-                for o in objects_over(scene, block):
+                for o in geometry.objects_over(block):
                     if o.category is ObjectCategory.COVER:
                         in_the_way[o.id] = o
-            covers = [o for o in in_the_way.values() if not is_covered(scene, o)]
+            covers = [o for o in in_the_way.values() if not geometry.is_covered(o)]
             if covers and free_cover_goals:
                 return Decision(_highest(covers).id, _lowest(free_cover_goals).id)
 
         covers_in_goals = [
             o
             for o in objects
-            if o.category is ObjectCategory.COVER and o.filled and not is_covered(scene, o)
+            if o.category is ObjectCategory.COVER and o.filled and not geometry.is_covered(o)
         ]
         if covers_in_goals and free_cover_goals:
             cover = min(covers_in_goals, key=lambda o: (round(o.position.z, 4), o.id))

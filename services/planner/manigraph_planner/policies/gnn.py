@@ -72,7 +72,7 @@ class GNNPolicy(Policy):
     @classmethod
     def from_checkpoint(cls, path: str | Path) -> GNNPolicy:
         """Raises :class:`~manigraph_shared.errors.PolicyError` for a bad checkpoint."""
-        net, info = load_checkpoint(path)
+        net, info = load_checkpoint(path, message_passing=False)
         return cls(net, info)
 
     def node_logits(self, graph: GraphState) -> Tensor:
@@ -168,11 +168,13 @@ _GOAL_CODE_FOR = torch.tensor([3.0, 2.0])
 
 def load_gnn_policy(path: Path) -> Policy:
     """The ``.pt`` policy file loader (registered in ``policies.base.POLICY_FILE_LOADERS``):
-    a :class:`GNNPolicy`, or a dishwasher policy for a checkpoint with ``dishwasher`` heads."""
+    a :class:`GNNPolicy`, or a dishwasher policy for a checkpoint with ``dishwasher`` heads.
+    Its network holds the weights for the dense path only: serving never imports PyG (the
+    explainer rebuilds the message-passing network it needs)."""
     from manigraph_planner.gnn.models.dish_net import DishPolicyNet
     from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
 
-    net, info = load_checkpoint(path)
+    net, info = load_checkpoint(path, message_passing=False)
     if isinstance(net, DishPolicyNet):
         return DishwasherGNNPolicy(net, info)
     return GNNPolicy(net, info)

@@ -19,6 +19,9 @@ class Backbone(nn.Module, ABC):
         in_channels: size of each input node feature.
         hidden_channels: size of each hidden node state (the paper: 64).
         num_layers: number of message-passing layers (the paper: 3).
+        message_passing: build PyG's layers (training, the explainer); False: only their
+            weights (:mod:`~manigraph_planner.gnn.models.layer_weights`), enough for
+            :meth:`forward_complete` and without importing PyG (policy serving).
 
     Shapes:
         - **input:** node features :math:`(N, F_{in})`, edge indices :math:`(2, E)`
@@ -31,11 +34,14 @@ class Backbone(nn.Module, ABC):
 
     name: str
 
-    def __init__(self, in_channels: int, hidden_channels: int, num_layers: int) -> None:
+    def __init__(
+        self, in_channels: int, hidden_channels: int, num_layers: int, message_passing: bool = True
+    ) -> None:
         super().__init__()
         self.in_channels = in_channels
         self.hidden_channels = hidden_channels
         self.num_layers = num_layers
+        self.message_passing = message_passing
 
     @abstractmethod
     def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
@@ -67,16 +73,25 @@ class ConvStack(Backbone):
     complete graph, in :meth:`conv_complete`.
     """
 
-    def __init__(self, in_channels: int, hidden_channels: int, num_layers: int) -> None:
-        super().__init__(in_channels, hidden_channels, num_layers)
+    def __init__(
+        self, in_channels: int, hidden_channels: int, num_layers: int, message_passing: bool = True
+    ) -> None:
+        super().__init__(in_channels, hidden_channels, num_layers, message_passing)
         sizes = [in_channels] + [hidden_channels] * num_layers
+        make = self.make_conv if message_passing else self.make_weights
         self.convs = nn.ModuleList(
-            self.make_conv(sizes[layer], sizes[layer + 1]) for layer in range(num_layers)
+            make(sizes[layer], sizes[layer + 1]) for layer in range(num_layers)
         )
 
     @abstractmethod
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
         """One message-passing layer, called as ``conv(x, edge_index)``."""
+
+    def make_weights(self, in_channels: int, out_channels: int) -> nn.Module:
+        """The parameters of the layer :meth:`make_conv` makes, under the same names, for
+        :meth:`conv_complete` only. This default is the layer itself: an architecture
+        without a weights-only twin still serves, importing PyG."""
+        return self.make_conv(in_channels, out_channels)
 
     def conv_complete(self, conv: nn.Module, x: Tensor, mask: Tensor | None = None) -> Tensor:
         """``conv(x, fully_connected_edge_index(N))`` for one layer made by :meth:`make_conv`,

@@ -31,12 +31,20 @@ class DishEnsembleNet(DishPolicyNet):
     is the mean of theirs. It is a :class:`DishPolicyNet` to whatever decodes one, but holds
     no weights of its own (its ``__init__`` skips the single network's layers)."""
 
-    def __init__(self, config: ModelConfig, members: Sequence[DishPolicyNet] | None = None):
+    def __init__(
+        self,
+        config: ModelConfig,
+        members: Sequence[DishPolicyNet] | None = None,
+        message_passing: bool = True,
+    ):
         nn.Module.__init__(self)
         self.config = config
         member_config = dataclasses.replace(config, ensemble=1)
         if members is None:
-            members = [DishPolicyNet(member_config) for _ in range(config.ensemble)]
+            members = [
+                DishPolicyNet(member_config, message_passing) for _ in range(config.ensemble)
+            ]
+        self.message_passing = all(m.message_passing for m in members)
         if len(members) != config.ensemble or any(m.config != member_config for m in members):
             raise ValueError(f"ensemble: needs {config.ensemble} members built as {member_config}")
         self.members = nn.ModuleList(members)
@@ -61,9 +69,21 @@ class DishEnsembleNet(DishPolicyNet):
         return [m for m in self.members if isinstance(m, DishPolicyNet)]
 
 
-def policy_net_for(config: ModelConfig) -> PolicyNet:
+def policy_net_for(config: ModelConfig, message_passing: bool = True) -> PolicyNet:
     """The network class ``config`` asks for: the block policy's, a dishwasher network, or
-    an ensemble of them."""
+    an ensemble of them (``message_passing``: see :class:`PolicyNet`)."""
     if config.heads != "dishwasher":
-        return PolicyNet(config)
-    return DishEnsembleNet(config) if config.ensemble > 1 else DishPolicyNet(config)
+        return PolicyNet(config, message_passing)
+    if config.ensemble > 1:
+        return DishEnsembleNet(config, message_passing=message_passing)
+    return DishPolicyNet(config, message_passing)
+
+
+def with_message_passing(net: PolicyNet) -> PolicyNet:
+    """``net`` itself if it can pass messages, else the PyG network of its config holding
+    a copy of its weights (what the explainer's edge masks need)."""
+    if net.message_passing:
+        return net
+    twin = policy_net_for(net.config, message_passing=True)
+    twin.load_state_dict(net.state_dict(), strict=True)
+    return twin.train(net.training)

@@ -48,8 +48,8 @@ class DishHeads(NamedTuple):
 
 
 class DishPolicyNet(PolicyNet):
-    def __init__(self, config: ModelConfig) -> None:
-        super().__init__(config)
+    def __init__(self, config: ModelConfig, message_passing: bool = True) -> None:
+        super().__init__(config, message_passing)
         hidden = config.hidden_channels
         self.orientation_head = nn.Linear(hidden, NUM_ORIENTATIONS)
         self.rack_head = nn.Sequential(
@@ -96,8 +96,3 @@ class DishPolicyNet(PolicyNet):
         is_dish = x[..., DISH_COLUMNS].sum(dim=-1) > 0
         best = scores.masked_fill(~is_dish, float("-inf")).amax(dim=1, keepdim=True)
         return torch.where(torch.isfinite(best), best, torch.zeros_like(best))
-
-
-def policy_net_for(config: ModelConfig) -> PolicyNet:
-    """The network class ``config.heads`` asks for."""
-    return DishPolicyNet(config) if config.heads == "dishwasher" else PolicyNet(config)

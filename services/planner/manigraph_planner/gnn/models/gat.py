@@ -13,14 +13,14 @@ loops and ``residual=True``: the residual projection is the separate root weight
 
 from __future__ import annotations
 
-from typing import cast
+from typing import Any
 
 import torch.nn.functional as F
 from torch import Tensor, nn
-from torch_geometric.nn import GATConv
 
 from manigraph_planner.gnn.models.backbone import ConvStack, register_architecture
 from manigraph_planner.gnn.models.complete_graph import neighbour_softmax
+from manigraph_planner.gnn.models.layer_weights import GATWeights
 
 
 @register_architecture("gat")
@@ -28,15 +28,20 @@ class GATBackbone(ConvStack):
     """Stacked single-head ``GATConv`` layers with a root (residual) weight and ReLU."""
 
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
+        from torch_geometric.nn import GATConv
+
         return GATConv(in_channels, out_channels, heads=1, add_self_loops=False, residual=True)
 
-    def conv_complete(self, conv: nn.Module, x: Tensor, mask: Tensor | None = None) -> Tensor:
+    def make_weights(self, in_channels: int, out_channels: int) -> nn.Module:
+        return GATWeights(in_channels, out_channels)
+
+    def conv_complete(self, conv: Any, x: Tensor, mask: Tensor | None = None) -> Tensor:
         r"""The layer as an :math:`N \times N` attention matrix, one per graph of a padded
         batch. With one head, PyG's ``att_src`` and ``att_dst`` (shape :math:`(1, 1, C)`) are
         the two halves of :math:`\mathbf{a}`; the score of edge :math:`j \to i` is
         :math:`\mathbf{a}_{dst}^\top \theta_2 h_i + \mathbf{a}_{src}^\top \theta_2 h_j`, and
         ``res`` (:math:`\theta_1`) and ``bias`` are added after aggregation."""
-        gat = cast(GATConv, conv)
+        gat = conv
         projected = gat.lin(x)  # lin: theta_2, shared by sources and targets (no bias)
         score_src = projected @ gat.att_src.view(-1)
         score_dst = projected @ gat.att_dst.view(-1)

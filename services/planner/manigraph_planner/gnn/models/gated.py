@@ -16,12 +16,14 @@ PyG multiplies before aggregating (:math:`\theta_1^l h_j`, weight ``conv.weight[
 
 from __future__ import annotations
 
+from typing import Any
+
 import torch.nn.functional as F
 from torch import Tensor
-from torch_geometric.nn import GatedGraphConv
 
 from manigraph_planner.gnn.models.backbone import Backbone, register_architecture
 from manigraph_planner.gnn.models.complete_graph import neighbour_sum
+from manigraph_planner.gnn.models.layer_weights import GatedWeights
 from manigraph_shared.errors import ConfigError
 
 
@@ -29,15 +31,22 @@ from manigraph_shared.errors import ConfigError
 class GatedBackbone(Backbone):
     """One ``GatedGraphConv(hidden_channels, num_layers)`` followed by ReLU."""
 
-    def __init__(self, in_channels: int, hidden_channels: int, num_layers: int) -> None:
-        super().__init__(in_channels, hidden_channels, num_layers)
+    def __init__(
+        self, in_channels: int, hidden_channels: int, num_layers: int, message_passing: bool = True
+    ) -> None:
+        super().__init__(in_channels, hidden_channels, num_layers, message_passing)
         if hidden_channels < in_channels:
             raise ConfigError(
                 "hidden_channels",
                 f"the gated architecture needs at least in_channels={in_channels}, "
                 f"got {hidden_channels}",
             )
-        self.conv = GatedGraphConv(hidden_channels, num_layers, aggr="add")
+        if message_passing:
+            from torch_geometric.nn import GatedGraphConv
+
+            self.conv: Any = GatedGraphConv(hidden_channels, num_layers, aggr="add")
+        else:
+            self.conv = GatedWeights(hidden_channels, num_layers)
 
     def forward(self, x: Tensor, edge_index: Tensor) -> Tensor:
         return self.conv(x, edge_index).relu()

@@ -12,13 +12,13 @@ edge weights, so :math:`e_{j,i} = 1`. On a complete graph the sum runs over ever
 
 from __future__ import annotations
 
-from typing import cast
+from typing import Any
 
 from torch import Tensor, nn
-from torch_geometric.nn import GraphConv
 
 from manigraph_planner.gnn.models.backbone import ConvStack, register_architecture
 from manigraph_planner.gnn.models.complete_graph import neighbour_sum
+from manigraph_planner.gnn.models.layer_weights import GraphConvWeights
 
 
 @register_architecture("gcn")
@@ -26,8 +26,12 @@ class GCNBackbone(ConvStack):
     """Stacked ``GraphConv(aggr="add")`` layers with ReLU."""
 
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
+        from torch_geometric.nn import GraphConv
+
         return GraphConv(in_channels, out_channels, aggr="add")
 
-    def conv_complete(self, conv: nn.Module, x: Tensor, mask: Tensor | None = None) -> Tensor:
-        graph_conv = cast(GraphConv, conv)
-        return graph_conv.lin_rel(neighbour_sum(x, mask)) + graph_conv.lin_root(x)
+    def make_weights(self, in_channels: int, out_channels: int) -> nn.Module:
+        return GraphConvWeights(in_channels, out_channels)
+
+    def conv_complete(self, conv: Any, x: Tensor, mask: Tensor | None = None) -> Tensor:
+        return conv.lin_rel(neighbour_sum(x, mask)) + conv.lin_root(x)

@@ -24,6 +24,9 @@ class PolicyNet(nn.Module):
 
     Args:
         config: architecture and sizes.
+        message_passing: False builds only the layers' weights: :meth:`forward_complete`
+            works, :meth:`forward` (message passing) does not, and PyG is never imported
+            (see :mod:`~manigraph_planner.gnn.models.layer_weights`).
 
     Shapes:
         - **input:** node features :math:`(N, 5)`, edge indices :math:`(2, E)`,
@@ -31,11 +34,14 @@ class PolicyNet(nn.Module):
         - **output:** node logits :math:`(N,)`
     """
 
-    def __init__(self, config: ModelConfig) -> None:
+    def __init__(self, config: ModelConfig, message_passing: bool = True) -> None:
         super().__init__()
         self.config = config
+        self.message_passing = message_passing
         backbone = ARCHITECTURES[config.architecture]
-        self.backbone = backbone(config.input_size, config.hidden_channels, config.num_layers)
+        self.backbone = backbone(
+            config.input_size, config.hidden_channels, config.num_layers, message_passing
+        )
         self.head = nn.Linear(config.hidden_channels, 1)
         # Not persistent: ModelConfig is the source of truth and travels in the checkpoint.
         scale = torch.tensor(config.feature_scale, dtype=torch.float32)

@@ -11,13 +11,13 @@ PyG's :class:`~torch_geometric.nn.conv.SAGEConv` with ``aggr="mean"`` and its ro
 
 from __future__ import annotations
 
-from typing import cast
+from typing import Any
 
 from torch import Tensor, nn
-from torch_geometric.nn import SAGEConv
 
 from manigraph_planner.gnn.models.backbone import ConvStack, register_architecture
 from manigraph_planner.gnn.models.complete_graph import neighbour_mean
+from manigraph_planner.gnn.models.layer_weights import SAGEWeights
 
 
 @register_architecture("sage")
@@ -25,8 +25,12 @@ class SAGEBackbone(ConvStack):
     """Stacked ``SAGEConv(aggr="mean")`` layers with ReLU."""
 
     def make_conv(self, in_channels: int, out_channels: int) -> nn.Module:
+        from torch_geometric.nn import SAGEConv
+
         return SAGEConv(in_channels, out_channels, aggr="mean", root_weight=True)
 
-    def conv_complete(self, conv: nn.Module, x: Tensor, mask: Tensor | None = None) -> Tensor:
-        sage_conv = cast(SAGEConv, conv)
-        return sage_conv.lin_l(neighbour_mean(x, mask)) + sage_conv.lin_r(x)
+    def make_weights(self, in_channels: int, out_channels: int) -> nn.Module:
+        return SAGEWeights(in_channels, out_channels)
+
+    def conv_complete(self, conv: Any, x: Tensor, mask: Tensor | None = None) -> Tensor:
+        return conv.lin_l(neighbour_mean(x, mask)) + conv.lin_r(x)
