@@ -15,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 
-from manigraph_shared.errors import ManigraphError
+from manigraph_shared.errors import CONFIG_EXIT_CODE, ConfigError, ManigraphError
 
 GROUP = "manigraph.commands"
 
@@ -74,6 +74,9 @@ def main(argv: list[str] | None = None) -> int:
     setup_logging(args.log_level)
     try:
         return int(args.run(args) or 0)
+    except ConfigError as exc:
+        print(f"manigraph {args.command}: {exc}", file=sys.stderr)
+        return CONFIG_EXIT_CODE
     except ManigraphError as exc:
         print(f"manigraph {args.command}: {exc}", file=sys.stderr)
         return 2

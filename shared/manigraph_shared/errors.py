@@ -11,6 +11,11 @@ class ManigraphError(Exception):
     """Base class for every error manigraph raises on purpose."""
 
 
+#: Exit status of a command refused for its configuration (sysexits' EX_CONFIG): restarting
+#: the process cannot help, so the supervisor does not.
+CONFIG_EXIT_CODE = 78
+
+
 class ConfigError(ManigraphError, ValueError):
     """A configuration value is missing or out of range; ``field`` names it."""
 

@@ -29,6 +29,7 @@ from typing import Any
 
 import pytest
 
+from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import decode_log
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene, TrayAction
 from manigraph_tools.testing import Stack, free_port, stack
@@ -412,5 +413,5 @@ def test_up_with_policy_human_refuses_episodes_a_person_must_start() -> None:
         timeout=300,
         check=False,
     )
-    assert result.returncode == 2
+    assert result.returncode == CONFIG_EXIT_CODE
     assert "episodes: --policy human: a person starts each episode on the page" in result.stderr

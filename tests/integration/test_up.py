@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, Explanation
 from manigraph_tools.testing import free_port, run_up
@@ -109,7 +110,7 @@ def test_a_port_another_stack_holds_is_refused_before_anything_starts() -> None:
             text=True,
             timeout=120,
         )
-    assert result.returncode == 2
+    assert result.returncode == CONFIG_EXIT_CODE
     assert f"port: 127.0.0.1:{port} is in use" in result.stderr
     assert "stack is up" not in result.stderr
 
@@ -128,7 +129,7 @@ def test_bad_options_are_named_before_a_busy_port() -> None:
             text=True,
             timeout=120,
         )
-    assert result.returncode == 2
+    assert result.returncode == CONFIG_EXIT_CODE
     assert "episodes: --policy human" in result.stderr and "in use" not in result.stderr
 
 
@@ -152,3 +153,47 @@ def test_a_task_file_with_spares_and_jitter_runs_under_its_own_name() -> None:
     assert all(r["episode_id"].startswith("spares-and-jitter-") for r in summary["results"])
     assert "2 episodes of spares-and-jitter: success 1.000" in result.stderr
     assert "spares-and-jitter K=5 seed 3: success" in result.stderr
+
+
+def _up(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "manigraph_shared.cli", "up", *args, "--port", str(free_port())],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, **(env or {})},
+    )
+
+
+def test_the_camera_without_a_vulkan_device_is_refused_before_anything_starts() -> None:
+    """VK_ICD_FILENAMES is the Vulkan loader's own override: naming no driver is a machine
+    without one, as far as SAPIEN can tell."""
+    started = time.monotonic()
+    result = _up(
+        "--sim", "physics", "--scene-source", "camera", "--episodes", "1",
+        env={"VK_ICD_FILENAMES": "/nonexistent/icd.json"},
+    )  # fmt: skip
+    assert time.monotonic() - started < 10
+    assert result.returncode == CONFIG_EXIT_CODE
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "needs a Vulkan device" in lines[0] and "make vulkan" in lines[0]
+
+
+def test_a_missing_checkpoint_is_refused_before_anything_starts() -> None:
+    result = _up("--policy", "/nonexistent/sage.pt", "--episodes", "1")
+    assert result.returncode == CONFIG_EXIT_CODE
+    assert result.stderr.strip() == (
+        "manigraph up: policy: no such checkpoint file: /nonexistent/sage.pt"
+    )
+
+
+def test_a_checkpoint_the_planner_cannot_read_stops_the_stack_without_restarts(
+    tmp_path: Path,
+) -> None:
+    garbage = tmp_path / "garbage.pt"
+    garbage.write_bytes(b"not a checkpoint")
+    result = _up("--policy", str(garbage), "--episodes", "1")
+    assert result.returncode == 2
+    assert "is not a readable manigraph checkpoint" in result.stderr
+    assert "planner refused its configuration" in result.stderr
+    assert "restarting in" not in result.stderr

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_tools.supervisor import ProcessSpec, RestartPolicy, Supervisor
 from manigraph_tools.testing import free_port
 
@@ -54,6 +55,49 @@ def test_a_crashing_service_is_restarted_with_back_off_then_given_up_on() -> Non
     ]
     assert delays == ["0.1", "0.1", "0.2"]  # 0.05, 0.1, 0.2 doubled and capped at 0.2
     assert log.count("restarted crasher") == 3
+
+
+def test_a_service_refusing_its_configuration_is_not_restarted() -> None:
+    output = io.StringIO()
+    policy = RestartPolicy(first_delay=0.05, max_delay=0.2, max_restarts=3, stable_after=60)
+    supervisor = Supervisor(output=output, policy=policy)
+    supervisor.start(ScriptSpec("sleeper", ["import time; time.sleep(60)"]))
+    supervisor.start(ScriptSpec("refuser", [f"raise SystemExit({CONFIG_EXIT_CODE})"]))
+    try:
+        failure = _run_until_failure(supervisor, 20)
+    finally:
+        supervisor.stop(grace=2)
+    assert failure == "refuser refused its configuration (see its log above); not restarted"
+    assert supervisor.restarts == {"sleeper": 0, "refuser": 0}
+    assert "restarted refuser" not in output.getvalue()
+
+
+def test_stopping_a_stack_stops_its_services_together_and_the_router_last() -> None:
+    """Each child takes 0.5 s to stop; one by one, the three would take 1.5 s."""
+    slow_stop = (
+        "import signal, sys, time\n"
+        "def stop(*_):\n"
+        "    time.sleep(0.5); print('stopped', time.monotonic(), flush=True); sys.exit(0)\n"
+        "signal.signal(signal.SIGTERM, stop)\n"
+        "print('ready', flush=True)\n"
+        "time.sleep(60)\n"
+    )
+    output = io.StringIO()
+    supervisor = Supervisor(output=output)
+    for name in ("router", "sim", "planner"):
+        supervisor.start(ScriptSpec(name, [slow_stop]))
+    deadline = time.monotonic() + 30
+    while output.getvalue().count("ready") < 3 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    supervisor.stop(grace=5)
+    stopped = {
+        line.split("|")[0].strip(): float(line.split()[-1])
+        for line in output.getvalue().splitlines()
+        if "stopped" in line
+    }
+    assert set(stopped) == {"router", "sim", "planner"}, output.getvalue()
+    assert abs(stopped["sim"] - stopped["planner"]) < 0.4  # together, not 0.5 s apart
+    assert stopped["router"] - max(stopped["sim"], stopped["planner"]) > 0.4  # after them
 
 
 def test_the_router_dying_stops_the_stack_with_its_name() -> None:

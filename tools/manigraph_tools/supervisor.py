@@ -1,7 +1,8 @@
 """``manigraph up``: the router and every service of a stack as local child processes.
 
 Each child's output is prefixed with its name (and copied to ``<log_dir>/<name>.log``); the
-children are stopped in reverse start order with SIGTERM, then SIGKILL after a grace period.
+services are stopped together with SIGTERM, then the recorder and the router; SIGKILL follows
+for any that outlive a grace period.
 
 A service that dies is started again (``watch``) after a back-off that doubles from
 ``RestartPolicy.first_delay`` up to ``max_delay``; a child that then stays up for
@@ -10,7 +11,9 @@ that dies ``max_restarts`` times in a row (without a stable run between) gives u
 stops the stack with its name. The **router** is not restarted: every other process, and
 ``up``'s own episode client, reaches the others only through it, so while it is down nothing
 can run and a new router would have to be found again by every session; its death stops the
-stack, naming it, instead of leaving the stack half-connected.
+stack, naming it, instead of leaving the stack half-connected. Nor is a service that exits
+with ``CONFIG_EXIT_CODE``: it refused its options or the machine (no Vulkan device, say), and
+the same start would fail the same way.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from pathlib import Path
 from typing import TextIO
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.errors import ManigraphError
+from manigraph_shared.errors import CONFIG_EXIT_CODE, ManigraphError
 
 COLOURS = ("36", "33", "35", "32", "34", "31")
 
@@ -180,6 +183,9 @@ class Supervisor:
             return
         if name in NOT_RESTARTED:
             self.failure = f"{name} exited with code {code}; the stack cannot run without it"
+            return
+        if code == CONFIG_EXIT_CODE:  # it said why above; the same options fail again
+            self.failure = f"{name} refused its configuration (see its log above); not restarted"
             return
         if child.in_a_row >= self.policy.max_restarts:
             self.failure = (

@@ -36,14 +36,17 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 def _run(args: argparse.Namespace) -> int:
     from manigraph_planner.policies import load_policy
     from manigraph_planner.service import PlannerService
+    from manigraph_shared.errors import ConfigError, PolicyError
     from manigraph_shared.options import options_from_args
     from manigraph_shared.service import run_service
 
     options = options_from_args(PlannerOptions, args)
-    policy = load_policy(options.policy)
+    try:
+        policy = load_policy(options.policy)
+    except PolicyError as exc:  # a missing or unreadable policy: restarting cannot help
+        raise ConfigError("policy", str(exc).removeprefix("policy: ")) from exc
     if options.explain_decisions:
         from manigraph_planner.policies.gnn import GNNPolicy
-        from manigraph_shared.errors import ConfigError
 
         if not isinstance(policy, GNNPolicy):
             raise ConfigError(

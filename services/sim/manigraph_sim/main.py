@@ -49,6 +49,7 @@ def _run(args: argparse.Namespace) -> int:
     options = BACKENDS.options_from_args(args.backend, args)
     if not service.scenes and not getattr(options, "camera", False):
         raise ConfigError("no-scenes", "without --camera nothing would observe the world")
+    _refuse_rendering_without_vulkan(options)  # before SAPIEN is imported
     backend = BACKENDS[args.backend].from_options(options)
     camera_hz = options.camera_hz if getattr(options, "camera", False) else 0.0
     return run_service(
@@ -60,3 +61,14 @@ def _run(args: argparse.Namespace) -> int:
 
 
 command = Command(help="run the sim service (publishes Scene)", configure=_configure, run=_run)
+
+
+def _refuse_rendering_without_vulkan(options: object) -> None:
+    from manigraph_shared.errors import ConfigError
+    from manigraph_shared.preflight import vulkan_problem
+
+    for field, need in (("camera", "the rendered camera"), ("video", "the episode video")):
+        if getattr(options, field, None):
+            problem = vulkan_problem(need)
+            if problem:
+                raise ConfigError(field, problem)

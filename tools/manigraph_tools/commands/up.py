@@ -19,6 +19,7 @@ from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError, ManigraphError
 from manigraph_shared.manifest import driver_for_world, load_manifests
 from manigraph_shared.options import option_argv
+from manigraph_shared.preflight import vulkan_problem
 from manigraph_shared.registry import Registry
 from manigraph_tools.certs import make_certificates
 from manigraph_tools.commands.common import emit_json
@@ -158,6 +159,9 @@ def _up_run(args: argparse.Namespace) -> int:
     if args.scene_source == "camera":
         if args.sim != "physics":
             raise ConfigError("scene-source", "camera needs --sim physics (it renders)")
+        problem = vulkan_problem("--scene-source camera (the physics sim's rendered camera)")
+        if problem:
+            raise ConfigError("scene-source", problem)
         sim_options += ["--camera", "--no-scenes"]
     plan = plan_from_args(args, args.episodes) if args.episodes is not None else None
     human = args.policy == HUMAN
@@ -167,6 +171,8 @@ def _up_run(args: argparse.Namespace) -> int:
         )
     if human and args.explain_decisions:
         raise ConfigError("explain-decisions", f"needs a GNN planner, not --policy {HUMAN}")
+    if args.policy.endswith(".pt") and not Path(args.policy).is_file():
+        raise ConfigError("policy", f"no such checkpoint file: {args.policy}")
     # The options first: a run refused for them names them, whatever else is on the port.
     _refuse_busy_port(args.port)
     tls_dir = Path(tempfile.mkdtemp(prefix="manigraph-certs-")) if args.secure else None

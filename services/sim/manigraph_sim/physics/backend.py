@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from manigraph_shared.errors import SkillError
+from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_shared.grasp_points import grasp_height
 from manigraph_shared.messages import (
     REFUSAL_REASONS,
@@ -40,6 +40,7 @@ from manigraph_shared.messages import (
     Scene,
     SkillStatus,
 )
+from manigraph_shared.preflight import INSTALL_VULKAN
 from manigraph_sim.backend import EpisodeBackend, JointedArmBackend
 from manigraph_sim.dishwasher.model import DishwasherLayout
 from manigraph_sim.dishwasher.scene import dishwasher_scene
@@ -48,7 +49,7 @@ from manigraph_sim.manifest import CAMERA, JOINTS
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.physics.dishwasher import PhysicsDishwasher
-from manigraph_sim.physics.video import EpisodeVideo, VideoConfig
+from manigraph_sim.physics.video import EpisodeVideo, VideoConfig, vulkan_available
 from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
 from manigraph_sim.tasks.from_request import episode_layout
 from manigraph_sim.world_model import Body, Layout
@@ -115,6 +116,12 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
 
     @classmethod
     def from_options(cls, options: Any) -> PhysicsBackend:
+        if (options.video or options.camera) and not vulkan_available():
+            raise ConfigError(
+                "camera" if options.camera else "video",
+                "SAPIEN found no Vulkan rendering device (a driver is installed, but none "
+                f"answers): {INSTALL_VULKAN}",
+            )
         video = VideoConfig(str(options.video)) if options.video else None
         camera = None
         if options.camera:
