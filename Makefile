@@ -28,7 +28,8 @@ test: install lint  ## lint, then every test tier
 test-fast: install  ## unit tests only
 	$(RUN) pytest -q -m "not integration and not docker"
 
-lint: install
+lint: install  ## ruff, mypy, and this branch's commit subjects (CONTRIBUTING.md)
+	$(RUN) python scripts/check_commit_subjects.py
 	$(RUN) ruff check .
 	$(RUN) ruff format --check .
 	$(RUN) mypy shared/manigraph_shared tools/manigraph_tools lab/manigraph_lab \

@@ -145,6 +145,19 @@ def test_a_decision_whose_episode_ended_is_not_planned_again_in_the_next() -> No
     assert [c.decision_id for c in arm.sent] == ["e:9", "f:0"]
 
 
+def test_a_decision_id_used_again_moves_again_after_its_first_use_ended() -> None:
+    """An episode id run twice (a log replayed, a seed re-run under its old id) brings its
+    decision ids back; the end of the first run must not refuse the second."""
+    arm = ScriptedArm(widths=[0.04, 0.04])
+    driver = PandaMotionDriver(arm)
+    driver.begin_decision("e:0")
+    driver.pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
+    driver.end_decision("e:0", "episode_ended")
+    driver.begin_decision("e:0")  # the same id, a new run of it
+    driver.pick(Motion("e:0", "block_0", BLOCK, Quaternion()))
+    assert [c.decision_id for c in arm.sent] == ["e:0", "e:0"]
+
+
 def test_an_unreachable_object_sends_nothing() -> None:
     arm = ScriptedArm(widths=[])
     with pytest.raises(SkillError) as caught:

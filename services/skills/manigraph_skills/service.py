@@ -184,6 +184,7 @@ class SkillsService(Service):
             except queue.Empty:
                 continue
             self.in_flight.begin(action.decision_id)
+            self.driver.begin_decision(action.decision_id)  # before an end can name it
             self._running = action
             try:
                 self._execute(action)

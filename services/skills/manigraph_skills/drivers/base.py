@@ -124,6 +124,11 @@ class RobotDriver(ABC):
         """The robot went away (its process died): fail the motion under way now with
         ``reason`` instead of waiting for an answer that cannot come. Not sticky."""
 
+    def begin_decision(self, decision_id: str) -> None:
+        """``decision_id`` starts now (before any :meth:`end_decision` can name it): whatever
+        was known of an earlier decision of that id (a log replayed, an episode id used
+        again) no longer applies."""
+
     def end_decision(self, decision_id: str, reason: str) -> None:
         """The world ended ``decision_id``'s episode: send nothing more for it, not even a
         re-plan, and fail its motion under way with ``reason``. (A driver that finishes a

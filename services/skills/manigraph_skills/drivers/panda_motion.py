@@ -336,6 +336,9 @@ class PandaMotionDriver(RobotDriver):
     def abort(self, reason: str) -> None:
         self.transport.abort(reason)
 
+    def begin_decision(self, decision_id: str) -> None:
+        self._decision, self._decision_stops, self._ended = decision_id, self._stops, None
+
     def end_decision(self, decision_id: str, reason: str) -> None:
         """Safe from any thread. A world that ends an episode during its last motion (the
         goals filled as a rack passed half its rail) and resets at once answers the rest
