@@ -26,6 +26,28 @@ from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.messages import Action
 
 
+def cpu_share(seconds: float = 0.5) -> float:
+    """The share of one core a busy thread of this process gets now (1.0: a whole core)."""
+    wall_start, cpu_start = time.perf_counter(), time.thread_time()
+    while time.perf_counter() - wall_start < seconds:
+        pass
+    return (time.thread_time() - cpu_start) / (time.perf_counter() - wall_start)
+
+
+def spare_core_problem(need: float = 0.9, seconds: float = 0.5) -> str | None:
+    """Why a test that needs about one free core (a real-time loop) cannot have it here, or
+    None. Measured, not guessed from the load average: with ``sched_autogroup`` a busy
+    process in another session takes less than its load suggests, or more."""
+    share = cpu_share(seconds)
+    if share >= need:
+        return None
+    load = os.getloadavg()[0]
+    return (
+        f"needs {need:.0%} of a free core for its real-time loop; a busy thread got {share:.0%} "
+        f"(load {load:.1f} on {os.cpu_count()} cores)"
+    )
+
+
 def free_port() -> int:
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
