@@ -13,7 +13,11 @@ heap back to the OS (``malloc_trim``), so its RSS returns to where it was.
 
 The service thread publishes a ``ServiceStatus`` heartbeat every ``HEARTBEAT_SECONDS``: a
 service whose liveliness token is there but whose heartbeats stop is *stalled* (a handler that
-never returns), and ``manigraph doctor`` reports it so.
+never returns), and ``manigraph doctor`` reports it so. With ``MANIGRAPH_HEALTH_FILE`` set
+(the images set it) the same beat also touches that file while the session reaches a router,
+so a container's health check is one ``find`` of a fresh file (:mod:`manigraph_shared.health`)
+instead of a Python process and a Zenoh session, which on a loaded machine outlasted Docker's
+check timeout.
 
 A valid message a service will not act on (a scene of another episode, an action while
 stopped) is refused with :meth:`Service.reject`. Every refusal, malformed or not, is counted
@@ -34,6 +38,7 @@ from typing import Any, ClassVar, TypeVar
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.errors import ManigraphError, MessageError
+from manigraph_shared.health import HealthFile
 from manigraph_shared.inbox import DEFAULT_CAPACITY, Inbox
 from manigraph_shared.messages import Delivery, Message, ServiceState, ServiceStatus
 from manigraph_shared.messages.status import MAX_REJECTION_KINDS
@@ -222,6 +227,8 @@ class Service:
         self.bus.declare_alive(self.name)
         self.publish_status(ServiceState.OK, "ready")
         self.log.info("ready")
+        health = HealthFile.from_environment(self.bus.session)
+        health.beat()
         next_beat = time.monotonic() + HEARTBEAT_SECONDS
         next_tick = time.monotonic()
         try:
@@ -240,8 +247,10 @@ class Service:
                 if now >= next_beat:
                     next_beat = now + HEARTBEAT_SECONDS
                     self.publish_status(ServiceState.OK, self.last_error)
+                    health.beat()
                     self._trim_heap()
         finally:
+            health.clear()
             self.publish_status(ServiceState.STOPPING)
             self.teardown()
             self.log.info("stopped")

@@ -12,6 +12,7 @@ import threading
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
+from manigraph_shared.health import HealthFile
 from manigraph_tools.access import access_control
 
 log = logging.getLogger("manigraph.router")
@@ -31,6 +32,10 @@ def run_router(config: BusConfig) -> int:
             )
         else:
             log.warning("plain TCP: no authentication, no access control (development only)")
-        stop.wait()
+        health = HealthFile.from_environment()
+        health.beat()
+        while not stop.wait(1.0):
+            health.beat()
+        health.clear()
         log.info("stopping")
     return 0

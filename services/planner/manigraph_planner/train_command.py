@@ -21,6 +21,9 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--arch", default="sage", help="architecture: gcn, sage, gated or gat")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(
+        "--device", default="cpu", help="cpu, cuda or cuda:N (block policies; default cpu)"
+    )
+    parser.add_argument(
         "--epochs", type=int, help="full passes (default: 150; dishwasher heads: 300)"
     )
     parser.add_argument(
@@ -63,6 +66,10 @@ def _heads(args: argparse.Namespace) -> str:
 def _run(args: argparse.Namespace) -> int:
     use_threads(args.threads)
     if _heads(args) == "dishwasher":
+        if args.device != "cpu":
+            from manigraph_shared.errors import ConfigError
+
+            raise ConfigError("device", "the dishwasher recipe trains on the CPU only")
         return _train_dishwasher(args)
     from manigraph_planner.gnn import save_checkpoint
     from manigraph_planner.training.dataset import load_demonstrations
@@ -76,6 +83,7 @@ def _run(args: argparse.Namespace) -> int:
         seed=args.seed,
         epochs=150 if args.epochs is None else args.epochs,
         resample_every=args.resample_every,
+        device=args.device,
     )
     if args.copies is not None:
         config = replace(config, augmentation=augmentation_for(args.arch, copies=args.copies))

@@ -68,12 +68,13 @@ class PaddedLayout(BatchLayout):
         goals = torch.empty(len(samples), dtype=torch.long)
         for indices in size_groups([s.x.shape[0] for s in samples]):
             batch, logits = self._logits(net, [samples[i] for i in indices])
-            objects[indices], goals[indices] = padded_select(logits, batch.is_object, batch.mask)
+            chosen = padded_select(logits, batch.is_object, batch.mask)
+            objects[indices], goals[indices] = (c.cpu() for c in chosen)
         return objects, goals
 
     @staticmethod
     def _logits(net: PolicyNet, samples: list[Sample]) -> tuple[PaddedBatch, Tensor]:
-        batch = PaddedBatch.from_samples(samples)
+        batch = PaddedBatch.from_samples(samples).to(_device_of(net))
         return batch, net.forward_complete(batch.x, batch.mask)
 
 
@@ -92,13 +93,17 @@ class PygLayout(BatchLayout):
         batch, logits = self._logits(net, samples)
         chosen = select(logits, batch.is_object, batch.batch, batch.num_graphs)
         first_node = batch.ptr[:-1]  # select counts nodes across the whole batch
-        objects, goals = (torch.where(c >= 0, c - first_node, -1) for c in chosen)
+        objects, goals = (torch.where(c >= 0, c - first_node, -1).cpu() for c in chosen)
         return objects, goals
 
     @staticmethod
     def _logits(net: PolicyNet, samples: list[Sample]) -> tuple[Batch, Tensor]:
-        batch = pyg_batch(samples)
+        batch = pyg_batch(samples).to(_device_of(net))
         return batch, net(batch.x, batch.edge_index, batch.batch)
+
+
+def _device_of(net: PolicyNet) -> torch.device:
+    return next(net.parameters()).device
 
 
 def pyg_batch(samples: list[Sample]) -> Batch:

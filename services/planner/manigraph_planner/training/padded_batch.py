@@ -51,6 +51,16 @@ class PaddedBatch:
     def num_graphs(self) -> int:
         return self.x.shape[0]
 
+    def to(self, device: torch.device) -> PaddedBatch:
+        """The same batch on ``device`` (itself where it already is)."""
+        if self.x.device == device:
+            return self
+        return PaddedBatch(
+            *(t.to(device) for t in (self.x, self.mask, self.is_object)),
+            self.object_index.to(device),
+            self.goal_index.to(device),
+        )
+
 
 def size_groups(sizes: Sequence[int], max_ratio: float = 3.0) -> list[list[int]]:
     """Splits a batch into groups of similar graph sizes, to pad each to its own largest.

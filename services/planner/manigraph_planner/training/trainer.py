@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import random
+import re
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
@@ -45,6 +46,8 @@ class TrainConfig:
     #: on complete graphs padded per group of similar sizes; "pyg", the slower reference, PyG
     #: message passing over explicit edges. Same loss and gradients up to float rounding.
     batch_layout: str = "padded"
+    #: Where the network trains: "cpu", "cuda" or "cuda:N" (the checkpoint is CPU either way).
+    device: str = "cpu"
 
     def __post_init__(self) -> None:
         for name in ("epochs", "batch_size"):
@@ -60,6 +63,7 @@ class TrainConfig:
         if self.learning_rate <= 0:
             raise ConfigError("learning_rate", "must be > 0")
         BATCH_LAYOUTS.check(self.batch_layout)
+        _check_device(self.device)
         if self.augmentation is None:
             object.__setattr__(self, "augmentation", augmentation_for(self.architecture))
 
@@ -74,6 +78,20 @@ class TrainConfig:
 
     def to_dict(self) -> dict[str, object]:
         return asdict(self)
+
+
+def _check_device(device: str) -> None:
+    if device == "cpu":
+        return
+    if not re.fullmatch(r"cuda(:\d+)?", device):
+        raise ConfigError("device", f"'{device}' is not cpu, cuda or cuda:N")
+    if not torch.cuda.is_available():
+        raise ConfigError("device", f"{device}: torch sees no CUDA device on this machine")
+    index = int(device.partition(":")[2] or 0)
+    if index >= torch.cuda.device_count():
+        raise ConfigError(
+            "device", f"{device}: this machine has {torch.cuda.device_count()} CUDA device(s)"
+        )
 
 
 #: Samples per forward pass in :func:`accuracy`; bounds memory, as a padded GAT batch holds
@@ -144,7 +162,7 @@ def _train(
     generator = torch.Generator().manual_seed(config.seed)
     assert config.augmentation is not None  # set in __post_init__
     samples = config.augmentation.apply(demos.samples, generator)
-    net = PolicyNet(config.model_config())
+    net = PolicyNet(config.model_config()).to(config.device)
     optimiser = torch.optim.Adam(
         net.parameters(), lr=config.learning_rate, weight_decay=config.weight_decay
     )
@@ -179,8 +197,9 @@ def _train(
         "demonstration_samples": len(demos.samples),
         "episodes": demos.episodes,
         "train_seconds": round(time.perf_counter() - started, 2),
+        "device": config.device,
     }
-    return net, metrics
+    return net.cpu(), metrics
 
 
 def default_output(architecture: str, seed: int) -> Path:
