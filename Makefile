@@ -43,6 +43,7 @@ format: install
 bench: install  ## speed figures (not tests): medians and ratios
 	$(RUN) python bench/bench_roundtrip.py
 	$(RUN) python bench/bench_tls_roundtrip.py
+	$(RUN) python bench/bench_startup.py
 	$(RUN) python bench/bench_recorder.py
 	$(RUN) python bench/bench_foxglove.py
 	$(RUN) python bench/bench_policy_inference.py
@@ -51,6 +52,8 @@ bench: install  ## speed figures (not tests): medians and ratios
 	$(RUN) python bench/bench_explainer.py
 	$(RUN) python bench/bench_ik.py
 	$(RUN) python bench/bench_physics.py
+	$(RUN) python bench/bench_estop.py --busy 20
+	$(RUN) python bench/bench_training.py --device cuda
 
 soak: install  ## reliability soak (~30 min): 100k fuzzed payloads per key, floods, explain bomb, then 3 episodes
 	$(RUN) python bench/soak.py

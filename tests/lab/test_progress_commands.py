@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from manigraph_shared.cli import main
+from manigraph_shared.errors import CONFIG_EXIT_CODE
 
 
 class Terminal(io.StringIO):
@@ -66,7 +67,7 @@ def test_train_takes_its_thread_count_and_refuses_zero(
     train_argv = ["train", str(demos), "--arch", "gcn", "--epochs", "1", "-o", str(checkpoint)]
     before = torch.get_num_threads()
     try:
-        assert main([*train_argv, "--threads", "0"]) == 2
+        assert main([*train_argv, "--threads", "0"]) == CONFIG_EXIT_CODE
         assert "threads" in capsys.readouterr().err and not checkpoint.exists()
         assert main([*train_argv, "--threads", "1"]) == 0
         assert torch.get_num_threads() == 1 and checkpoint.exists()
@@ -78,8 +79,13 @@ def test_suite_and_select_refuse_zero_threads_before_any_work(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "suite"
-    assert main(["suite", "--out", str(out), "--archs", "gcn", "--threads", "0"]) == 2
+    assert (
+        main(["suite", "--out", str(out), "--archs", "gcn", "--threads", "0"]) == CONFIG_EXIT_CODE
+    )
     assert "threads" in capsys.readouterr().err and not out.exists()
     kept = tmp_path / "kept.pt"
-    assert main(["select", str(tmp_path / "a.pt"), "-o", str(kept), "--threads", "0"]) == 2
+    assert (
+        main(["select", str(tmp_path / "a.pt"), "-o", str(kept), "--threads", "0"])
+        == CONFIG_EXIT_CODE
+    )
     assert "threads" in capsys.readouterr().err and not kept.exists()

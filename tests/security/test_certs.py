@@ -11,7 +11,7 @@ from cryptography import x509
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
 from manigraph_shared.cli import main
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.errors import CONFIG_EXIT_CODE, ConfigError
 from manigraph_tools.certs import IDENTITIES, make_certificates
 
 
@@ -78,11 +78,11 @@ def test_the_command_refuses_to_overwrite_and_keeps_an_existing_set(
         ["ca.pem"] + [f"{i}.{ext}" for i in IDENTITIES for ext in ("pem", "key")]
     )
     before = (out / "planner.pem").read_bytes()
-    assert main(["certs", "--out", str(out)]) == 2
+    assert main(["certs", "--out", str(out)]) == CONFIG_EXIT_CODE
     assert f"{out}/ca.pem exists; pass --force" in capsys.readouterr().err
     assert main(["certs", "--out", str(out), "--keep-existing"]) == 0
     assert (out / "planner.pem").read_bytes() == before
     (out / "planner.key").unlink()  # an incomplete set is not kept: it is refused
-    assert main(["certs", "--out", str(out), "--keep-existing"]) == 2
+    assert main(["certs", "--out", str(out), "--keep-existing"]) == CONFIG_EXIT_CODE
     assert main(["certs", "--out", str(out), "--force"]) == 0
     assert (out / "planner.pem").read_bytes() != before
