@@ -114,7 +114,18 @@ def measure(
 def start_planner(running: Stack, policy: str) -> None:
     if "planner" in running.processes:
         running.stop("planner")
+    (running.log_dir / "planner.log").unlink(missing_ok=True)
     running.start("planner", "planner", "--policy", CHECKPOINTS[policy])
+
+
+def wait_explainer(running: Stack, timeout: float = 120.0) -> None:
+    """A GNN planner builds its explainer beside its decisions after it is ready (PyG's
+    import): time the decisions once that is done, as a planner that has run a while."""
+    deadline = time.monotonic() + timeout
+    while "explainer ready" not in running.log("planner"):
+        if time.monotonic() > deadline:
+            raise SystemExit("the planner's explainer was not ready in time")
+        time.sleep(0.2)
 
 
 def main() -> None:
@@ -140,6 +151,8 @@ def main() -> None:
                 for policy in args.policies:
                     start_planner(running, policy)
                     running.wait_alive(bus, "planner")
+                    if policy != "expert":
+                        wait_explainer(running)
                     time.sleep(0.3)
                     for blocks in args.blocks:
                         template = scene_for(blocks, "template")

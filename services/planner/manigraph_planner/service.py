@@ -84,6 +84,7 @@ class PlannerService(Service):
     def _prepare_explainer(self) -> None:
         try:
             self.explain.prepare()
+            self.log.info("explainer ready")
         except Exception as exc:  # reported; each explain query then says why again
             self.log.exception("the explainer could not be built")
             self.call_soon(self.report_error, exc)
