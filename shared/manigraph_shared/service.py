@@ -222,12 +222,12 @@ class Service:
 
     # --- life cycle -------------------------------------------------------------------------
     def run(self) -> None:
+        health = HealthFile.from_environment(self.bus.session)
         self.publish_status(ServiceState.STARTING)
         self.setup()
         self.bus.declare_alive(self.name)
         self.publish_status(ServiceState.OK, "ready")
         self.log.info("ready")
-        health = HealthFile.from_environment(self.bus.session)
         health.beat()
         next_beat = time.monotonic() + HEARTBEAT_SECONDS
         next_tick = time.monotonic()
@@ -299,6 +299,9 @@ _LIBC = _load_libc()
 def run_service(factory: Callable[[Bus], Service], bus_config: BusConfig) -> int:
     """Open the bus, run the service until SIGINT/SIGTERM, then close everything."""
     limit_malloc_arenas()
+    # A file left by a killed predecessor (a container's /tmp survives its restart) must not
+    # report this process healthy while it is still looking for its router.
+    HealthFile.from_environment().clear()
     bus = Bus.open(bus_config)
     service = factory(bus)
 

@@ -55,3 +55,6 @@ def test_the_health_file_follows_the_service_and_its_bus(
         assert running.processes["planner"].poll() is None
         running.stop("planner")
         assert not planner.exists()
+        planner.touch()  # as a killed planner leaves it; a new one, with no router to find,
+        running.start("planner", "planner")  # clears it before it looks for one
+        assert wait_until(lambda: not planner.exists())

@@ -23,6 +23,8 @@ def run_router(config: BusConfig) -> int:
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     overrides = {"access_control": access_control()} if config.tls else {}
+    health = HealthFile.from_environment()
+    health.clear()  # a killed predecessor's file says nothing about this router
     with Bus.open(config, overrides) as bus:
         bus.declare_alive("router")
         log.info("zenoh router listening on %s", ",".join(config.listen))
@@ -32,7 +34,6 @@ def run_router(config: BusConfig) -> int:
             )
         else:
             log.warning("plain TCP: no authentication, no access control (development only)")
-        health = HealthFile.from_environment()
         health.beat()
         while not stop.wait(1.0):
             health.beat()

@@ -56,7 +56,9 @@ class PaddedBatch:
         if self.x.device == device:
             return self
         return PaddedBatch(
-            *(t.to(device) for t in (self.x, self.mask, self.is_object)),
+            self.x.to(device),
+            self.mask.to(device),
+            self.is_object.to(device),
             self.object_index.to(device),
             self.goal_index.to(device),
         )
