@@ -155,23 +155,13 @@ def test_a_task_file_with_spares_and_jitter_runs_under_its_own_name() -> None:
     assert "spares-and-jitter K=5 seed 3: success" in result.stderr
 
 
-def _up(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "manigraph_shared.cli", "up", *args, "--port", str(free_port())],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        env={**os.environ, **(env or {})},
-    )
-
-
 def test_the_camera_without_a_vulkan_device_is_refused_before_anything_starts() -> None:
     """VK_ICD_FILENAMES is the Vulkan loader's own override: naming no driver is a machine
     without one, as far as SAPIEN can tell."""
     started = time.monotonic()
-    result = _up(
+    result = run_up(
         "--sim", "physics", "--scene-source", "camera", "--episodes", "1",
-        env={"VK_ICD_FILENAMES": "/nonexistent/icd.json"},
+        env={"VK_ICD_FILENAMES": "/nonexistent/icd.json"}, check=False,
     )  # fmt: skip
     assert time.monotonic() - started < 10
     assert result.returncode == CONFIG_EXIT_CODE
@@ -180,7 +170,7 @@ def test_the_camera_without_a_vulkan_device_is_refused_before_anything_starts() 
 
 
 def test_a_missing_checkpoint_is_refused_before_anything_starts() -> None:
-    result = _up("--policy", "/nonexistent/sage.pt", "--episodes", "1")
+    result = run_up("--policy", "/nonexistent/sage.pt", "--episodes", "1", check=False)
     assert result.returncode == CONFIG_EXIT_CODE
     assert result.stderr.strip() == (
         "manigraph up: policy: no such checkpoint file: /nonexistent/sage.pt"
@@ -192,7 +182,7 @@ def test_a_checkpoint_the_planner_cannot_read_stops_the_stack_without_restarts(
 ) -> None:
     garbage = tmp_path / "garbage.pt"
     garbage.write_bytes(b"not a checkpoint")
-    result = _up("--policy", str(garbage), "--episodes", "1")
+    result = run_up("--policy", str(garbage), "--episodes", "1", check=False)
     assert result.returncode == 2
     assert "is not a readable manigraph checkpoint" in result.stderr
     assert "planner refused its configuration" in result.stderr

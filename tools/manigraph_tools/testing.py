@@ -247,15 +247,22 @@ def open_raw_session(endpoint: str, **tls: str) -> zenoh.Session:
     return zenoh.open(config)
 
 
-def run_up(*args: str, timeout: float = 180.0) -> subprocess.CompletedProcess[str]:
-    """``manigraph up ARGS`` on a free port, to completion; fails loudly if it fails."""
+def run_up(
+    *args: str,
+    timeout: float = 180.0,
+    check: bool = True,
+    env: dict[str, str] | None = None,
+) -> subprocess.CompletedProcess[str]:
+    """``manigraph up ARGS`` on a free port, to completion, with ``env`` over this process's
+    environment; with ``check`` it fails loudly if ``up`` fails."""
     result = subprocess.run(
         [sys.executable, "-m", "manigraph_shared.cli", "up", *args, "--port", str(free_port())],
         capture_output=True,
         text=True,
         timeout=timeout,
         check=False,
+        env={**os.environ, **(env or {})},
     )
-    if result.returncode != 0:
+    if check and result.returncode != 0:
         raise AssertionError(f"manigraph up {' '.join(args)} failed:\n{result.stderr[-3000:]}")
     return result

@@ -33,10 +33,10 @@ class ExpertPolicy(Policy):
     def ranked(self, scene: Scene) -> list[Decision]:
         """Its decision first, then every other movable block (highest first) to every open
         block goal (lowest first): what a planner tries when the first made no progress."""
-        first = self.decide(scene)
+        geometry = SceneGeometry(scene)
+        first = self._decide(scene, geometry)
         if first is None:
             return []
-        geometry = SceneGeometry(scene)
         objects = [o for o in scene.objects if o.visible]
         goals = [g for g in scene.goals if g.visible and g.category is GoalCategory.BLOCK]
         movable = [
@@ -53,7 +53,9 @@ class ExpertPolicy(Policy):
         return [first, *others]
 
     def decide(self, scene: Scene) -> Decision | None:
-        geometry = SceneGeometry(scene)
+        return self._decide(scene, SceneGeometry(scene))
+
+    def _decide(self, scene: Scene, geometry: SceneGeometry) -> Decision | None:
         objects = [o for o in scene.objects if o.visible]
         goals = [g for g in scene.goals if g.visible]
         free_block_goals = [g for g in goals if g.category is GoalCategory.BLOCK and not g.filled]
