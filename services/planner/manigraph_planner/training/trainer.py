@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import multiprocessing
 import random
 import re
 import time
@@ -14,6 +15,12 @@ import torch
 
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_planner.training.augment import Augmentation
+from manigraph_planner.training.augmented_draws import (
+    AugmentedDraws,
+    Draws,
+    InlineDraws,
+    draw_epochs,
+)
 from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
 from manigraph_planner.training.dataset import Demonstrations, Sample
 from manigraph_planner.training.padded_batch import PaddedBatch
@@ -159,9 +166,33 @@ def _train(
 ) -> tuple[PolicyNet, dict[str, object]]:
     torch.manual_seed(config.seed)
     random.seed(config.seed)
-    generator = torch.Generator().manual_seed(config.seed)
     assert config.augmentation is not None  # set in __post_init__
-    samples = config.augmentation.apply(demos.samples, generator)
+    fresh = draw_epochs(config.epochs, config.resample_every or 0)
+    threads = torch.get_num_threads()
+    # A daemonic process (a multiprocessing pool's worker) may not start the draw worker.
+    forks = "fork" in multiprocessing.get_all_start_methods()
+    if len(fresh) == 1 or multiprocessing.current_process().daemon or not forks:
+        draws = InlineDraws(config.augmentation, demos.samples, config.seed)
+        return _fit(demos, config, draws, set(fresh), bar, on_epoch)
+    # The draw worker takes one of the threads this run was given: the small dense layers
+    # gain less from a second intra-op thread than the draws do from a core of their own.
+    torch.set_num_threads(max(1, threads - 1))
+    try:
+        with AugmentedDraws(config.augmentation, demos.samples, config.seed, len(fresh)) as bg:
+            return _fit(demos, config, bg, set(fresh), bar, on_epoch)
+    finally:
+        torch.set_num_threads(threads)
+
+
+def _fit(
+    demos: Demonstrations,
+    config: TrainConfig,
+    draws: Draws,
+    fresh: set[int],
+    bar: Progress,
+    on_epoch: EpochCallback | None,
+) -> tuple[PolicyNet, dict[str, object]]:
+    samples = draws.take()
     net = PolicyNet(config.model_config()).to(config.device)
     optimiser = torch.optim.Adam(
         net.parameters(), lr=config.learning_rate, weight_decay=config.weight_decay
@@ -173,8 +204,8 @@ def _train(
     order = list(range(len(samples)))
     loss_value = float("nan")
     for epoch in range(1, config.epochs + 1):
-        if config.resample_every and epoch > 1 and (epoch - 1) % config.resample_every == 0:
-            samples = config.augmentation.apply(demos.samples, generator)
+        if epoch in fresh and epoch > 1:
+            samples = draws.take()
         random.shuffle(order)
         total = 0.0
         for b in range(batches_per_epoch):
