@@ -18,6 +18,7 @@ from typing import Any, TypeVar
 import zenoh
 
 from manigraph_shared.bus_config import BusConfig
+from manigraph_shared.cells import cell_key
 from manigraph_shared.errors import BusError, ManigraphError, MessageError, RequestRefused
 from manigraph_shared.messages import Delivery, Message
 
@@ -71,19 +72,26 @@ def _json(value: object) -> str:
 class Bus:
     """One process's connection to the manigraph bus."""
 
-    def __init__(self, session: zenoh.Session) -> None:
+    def __init__(self, session: zenoh.Session, cell: str | None = None) -> None:
         self.session = session
+        #: The robot cell every key of this bus is in (:mod:`manigraph_shared.cells`);
+        #: ``None``: the default cell, today's keys.
+        self.cell = cell
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._lock = threading.Lock()
         self._declared: list[Any] = []
 
     @classmethod
     def open(cls, config: BusConfig, overrides: Mapping[str, object] | None = None) -> Bus:
-        return cls(open_session(config, overrides))
+        return cls(open_session(config, overrides), config.cell)
+
+    def scoped(self, key: str) -> str:
+        """``key``, declared for the default cell, in this bus's cell."""
+        return cell_key(key, self.cell)
 
     # --- pub/sub ----------------------------------------------------------------------------
     def publish(self, message: Message) -> None:
-        key = message.key_for()
+        key = self.scoped(message.key_for())
         with self._lock:
             publisher = self._publishers.get(key)
             if publisher is None:
@@ -101,7 +109,7 @@ class Bus:
         key: str | None = None,
     ) -> None:
         """Call ``on_message`` (on a Zenoh thread) for each valid sample of ``message_type``."""
-        key = key or message_type.key_pattern()
+        key = self.scoped(key or message_type.key_pattern())
 
         def deliver(sample: zenoh.Sample) -> None:
             sample_key = str(sample.key_expr)
@@ -120,11 +128,11 @@ class Bus:
 
     def subscribe_raw(self, key: str, on_sample: Callable[[zenoh.Sample], None]) -> None:
         """Every sample under ``key`` undecoded (the recorder's view)."""
-        self._declared.append(self.session.declare_subscriber(key, on_sample))
+        self._declared.append(self.session.declare_subscriber(self.scoped(key), on_sample))
 
     def put_raw(self, key: str, payload: bytes, delivery: Delivery = Delivery.RELIABLE) -> None:
         """Publish bytes as recorded (replay): the receiver validates them as usual."""
-        self.session.put(key, payload, **_qos_for(delivery))
+        self.session.put(self.scoped(key), payload, **_qos_for(delivery))
 
     # --- request / reply --------------------------------------------------------------------
     def serve(
@@ -134,7 +142,7 @@ class Bus:
         key: str | None = None,
     ) -> None:
         """Answer queries on ``request_type.key``; errors become error replies, never silence."""
-        key = key or request_type.key
+        key = self.scoped(key or request_type.key)
 
         def answer(query: zenoh.Query) -> None:
             try:
@@ -159,7 +167,7 @@ class Bus:
         key: str | None = None,
     ) -> R:
         """Send ``request`` to its queryable and decode the one reply, or raise ``BusError``."""
-        key = key or request.key_for()
+        key = self.scoped(key or request.key_for())
         replies = self.session.get(key, payload=request.encode(), timeout=timeout)
         for reply in replies:
             if reply.ok is not None:
@@ -170,13 +178,19 @@ class Bus:
 
     # --- liveliness -------------------------------------------------------------------------
     def declare_alive(self, service: str) -> None:
-        self._declared.append(self.session.liveliness().declare_token(f"{ALIVE_PREFIX}/{service}"))
+        token = self.session.liveliness().declare_token(f"{self._alive_prefix}/{service}")
+        self._declared.append(token)
+
+    @property
+    def _alive_prefix(self) -> str:
+        return self.scoped(ALIVE_PREFIX)
 
     def alive_services(self, timeout: float = 2.0) -> set[str]:
         names = set()
-        for reply in self.session.liveliness().get(f"{ALIVE_PREFIX}/**", timeout=timeout):
+        prefix = self._alive_prefix
+        for reply in self.session.liveliness().get(f"{prefix}/**", timeout=timeout):
             if reply.ok is not None:
-                names.add(str(reply.ok.key_expr).removeprefix(f"{ALIVE_PREFIX}/"))
+                names.add(str(reply.ok.key_expr).removeprefix(f"{prefix}/"))
         return names
 
     def watch_alive(self, on_change: Callable[[str, bool], None]) -> None:
@@ -184,17 +198,17 @@ class Bus:
         and whenever a service's liveliness token appears or disappears; a killed process's
         token goes within milliseconds."""
 
+        prefix = self._alive_prefix
+
         def changed(sample: zenoh.Sample) -> None:
-            name = str(sample.key_expr).removeprefix(f"{ALIVE_PREFIX}/")
+            name = str(sample.key_expr).removeprefix(f"{prefix}/")
             try:
                 on_change(name, sample.kind == zenoh.SampleKind.PUT)
             except Exception:  # a callback bug must not silence the watcher
                 log.exception("liveliness callback failed")
 
         self._declared.append(
-            self.session.liveliness().declare_subscriber(
-                f"{ALIVE_PREFIX}/**", changed, history=True
-            )
+            self.session.liveliness().declare_subscriber(f"{prefix}/**", changed, history=True)
         )
 
     def close(self) -> None:

@@ -17,6 +17,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from manigraph_shared.cells import check_cell
 from manigraph_shared.errors import ConfigError
 
 DEFAULT_ROUTER = "tcp/127.0.0.1:7447"
@@ -32,6 +33,7 @@ ENV = {
     "wait_seconds": "MANIGRAPH_ZENOH_WAIT_SECONDS",
     "tls_dir": "MANIGRAPH_TLS_DIR",
     "tls_identity": "MANIGRAPH_TLS_IDENTITY",
+    "cell": "MANIGRAPH_CELL",
 }
 
 #: The CA certificate's file name inside a TLS directory written by ``manigraph certs``.
@@ -62,8 +64,13 @@ class BusConfig:
     tls_dir: Path | None = None
     #: Whose certificate this process presents (its common name is what access control sees).
     tls_identity: str | None = None
+    #: The robot cell whose keys this process uses (:mod:`manigraph_shared.cells`); ``None``:
+    #: the default cell.
+    cell: str | None = None
 
     def __post_init__(self) -> None:
+        if self.cell is not None:
+            check_cell(self.cell)
         if self.mode not in MODES:
             raise ConfigError("mode", f"'{self.mode}' is not one of {', '.join(MODES)}")
         for name in ("connect", "listen"):
@@ -143,7 +150,8 @@ class BusConfig:
     def describe(self) -> str:
         where = ",".join(self.listen if self.mode == "router" else self.connect) or "-"
         who = f" as {self.tls_identity}" if self.tls else ""
-        return f"{self.mode} {where}{who}"
+        cell = f" in cell {self.cell}" if self.cell else ""
+        return f"{self.mode} {where}{who}{cell}"
 
 
 def add_bus_arguments(parser: argparse.ArgumentParser) -> None:
@@ -181,6 +189,11 @@ def add_bus_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--tls-identity",
         help=f"which certificate in --tls-dir to present, e.g. planner [{ENV['tls_identity']}]",
+    )
+    group.add_argument(
+        "--cell",
+        help="the robot cell whose keys to use, manigraph/CELL/... (default: the default "
+        f"cell, manigraph/...; docs/scaling.md) [{ENV['cell']}]",
     )
 
 
@@ -231,6 +244,7 @@ def bus_config_from_args(
         wait_seconds=_seconds(wait, ENV["wait_seconds"]) if wait is not None else wait_seconds,
         tls_dir=Path(str(tls_dir)) if tls_dir else None,
         tls_identity=str(chosen_identity) if chosen_identity else None,
+        cell=str(cell) if (cell := pick("cell")) else None,
     )
 
 

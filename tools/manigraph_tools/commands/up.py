@@ -4,27 +4,32 @@ run them and exit."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import shutil
 import signal
 import socket
 import sys
 import tempfile
 import time
+from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
+from manigraph_shared.cells import cell_names
 from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError, ManigraphError
 from manigraph_shared.manifest import driver_for_world, load_manifests
 from manigraph_shared.options import option_argv
 from manigraph_shared.preflight import vulkan_problem
 from manigraph_shared.registry import Registry
+from manigraph_tools.cell_episodes import run_cells
 from manigraph_tools.certs import make_certificates
 from manigraph_tools.commands.common import emit_json
 from manigraph_tools.commands.run import episode_arguments, plan_from_args
-from manigraph_tools.episodes import run_episodes
+from manigraph_tools.episodes import EpisodePlan, run_episodes
 from manigraph_tools.supervisor import ProcessSpec, Supervisor
 
 
@@ -115,6 +120,13 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="GNN policies: publish an Explanation beside every decision (lands in --record)",
     )
+    parser.add_argument(
+        "--cells",
+        type=int,
+        help="start N robot cells (cell-1 ... cell-N: each its own sim, planner and skills "
+        "under manigraph/<cell>/...) on one router; with --episodes each runs them on its own "
+        "seeds and the JSON holds one success rate per cell (docs/scaling.md)",
+    )
     parser.add_argument("--port", type=int, default=7447, help="router port on 127.0.0.1")
     parser.add_argument(
         "--secure",
@@ -128,6 +140,51 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         backends.add_arguments(
             parser.add_argument_group("sim backend options (passed to manigraph sim)")
         )
+
+
+def _cell_specs(
+    args: argparse.Namespace,
+    plan: EpisodePlan | None,
+    sim_options: list[str],
+    human: bool,
+    cell: str | None,
+    spec: Callable[[str, list[str], dict[str, str]], ProcessSpec],
+) -> list[ProcessSpec]:
+    """The processes of one robot cell: its sim, planner (or demonstration page) and skills,
+    named ``sim@cell-1`` and so on where the cell is not the default."""
+    where = {"MANIGRAPH_CELL": cell or ""}
+    suffix = f"{CELL_MARK}{cell}" if cell else ""
+    planner = ["planner", "--policy", args.policy]
+    if args.explain_decisions:
+        planner.append("--explain-decisions")
+    if plan is not None:
+        # A decision may run as long as the run lets an episode go without news (a physics
+        # PickAndPlace that turns a dish over first takes 20-60 s).
+        planner += ["--decision-timeout", f"{plan.stall_timeout:g}"]
+    specs = [
+        spec(f"sim{suffix}", ["sim", "--backend", args.sim, *sim_options], where),
+        spec(f"demo-ui{suffix}", _demo_ui_argv(args), where)
+        if human
+        else spec(f"planner{suffix}", planner, where),
+        spec(f"skills{suffix}", ["skills", "--driver", _skills_driver(args.sim)], where),
+    ]
+    if args.scene_source == "camera":
+        specs.append(spec(f"perception{suffix}", SIM_CAMERA_PERCEPTION, where))
+    return specs
+
+
+#: Between a service and its cell in a process name: ``sim@cell-1``.
+CELL_MARK = "@"
+
+
+def _service(process: str) -> str:
+    return process.partition(CELL_MARK)[0]
+
+
+def _in(process: ProcessSpec, cell: str | None) -> bool:
+    """Whether ``process`` belongs to ``cell`` (the router and recorder: the default cell)."""
+    _, _, its_cell = process.name.partition(CELL_MARK)
+    return (its_cell or None) == cell
 
 
 def _refuse_busy_port(port: int) -> None:
@@ -173,6 +230,11 @@ def _up_run(args: argparse.Namespace) -> int:
         raise ConfigError("explain-decisions", f"needs a GNN planner, not --policy {HUMAN}")
     if args.policy.endswith(".pt") and not Path(args.policy).is_file():
         raise ConfigError("policy", f"no such checkpoint file: {args.policy}")
+    if args.cells is not None and (human or args.scene_source == "camera"):
+        raise ConfigError("cells", f"one cell only with --policy {HUMAN} or --scene-source camera")
+    if args.cells is not None and args.secure:
+        # The router's grants name the default cell's keys; per-cell identities are to come.
+        raise ConfigError("cells", "--secure has no per-cell access control yet: one cell only")
     # The options first: a run refused for them names them, whatever else is on the port.
     _refuse_busy_port(args.port)
     tls_dir = Path(tempfile.mkdtemp(prefix="manigraph-certs-")) if args.secure else None
@@ -187,29 +249,16 @@ def _up_run(args: argparse.Namespace) -> int:
     if tls_dir is not None:
         make_certificates(tls_dir, force=True)
 
-    def spec(name: str, argv: list[str]) -> ProcessSpec:
-        identity = {"MANIGRAPH_TLS_IDENTITY": name} if tls_dir else {}
-        return ProcessSpec(name, argv, {**bus_env, **identity})
+    def spec(name: str, argv: list[str], extra: dict[str, str] | None = None) -> ProcessSpec:
+        identity = {"MANIGRAPH_TLS_IDENTITY": _service(name)} if tls_dir else {}
+        return ProcessSpec(name, argv, {**bus_env, **identity, **(extra or {})})
 
     specs = [spec("router", ["router", "--listen", endpoint])]
     if args.record:
         specs.append(spec("recorder", ["record", "--output", str(args.record)]))
-    specs += [
-        spec("sim", ["sim", "--backend", args.sim, *sim_options]),
-        spec("demo-ui", _demo_ui_argv(args))
-        if human
-        else spec(
-            "planner",
-            ["planner", "--policy", args.policy]
-            + (["--explain-decisions"] if args.explain_decisions else [])
-            # A decision may run as long as the run lets an episode go without news (a
-            # physics PickAndPlace that turns a dish over first takes 20-60 s).
-            + (["--decision-timeout", f"{plan.stall_timeout:g}"] if plan is not None else []),
-        ),
-        spec("skills", ["skills", "--driver", _skills_driver(args.sim)]),
-    ]
-    if args.scene_source == "camera":
-        specs.append(spec("perception", SIM_CAMERA_PERCEPTION))
+    cells: list[str | None] = [None] if args.cells is None else list(cell_names(args.cells))
+    for cell in cells:
+        specs += _cell_specs(args, plan, sim_options, human, cell, spec)
     supervisor = Supervisor(args.log_dir)
     summary: dict[str, object] | None = None
     client = BusConfig(
@@ -224,9 +273,13 @@ def _up_run(args: argparse.Namespace) -> int:
         for process in specs:
             supervisor.start(process)
         supervisor.watch()  # a dead service is restarted; a dead router stops the stack
-        with Bus.open(client) as bus:
+        with contextlib.ExitStack() as stack:
+            buses = {
+                cell: stack.enter_context(Bus.open(replace(client, cell=cell))) for cell in cells
+            }
             # Services import torch and SAPIEN: 40-90 s each at load 15+ on two cores.
-            supervisor.wait_alive(bus, [process.name for process in specs], timeout=180.0)
+            for cell, bus in buses.items():
+                supervisor.wait_alive(bus, [_service(s.name) for s in specs if _in(s, cell)], 180.0)
             security = "mutual TLS + access control" if tls_dir else "plain TCP"
             print(
                 "stack is up: " + ", ".join(s.name for s in specs) + f" ({security})",
@@ -244,7 +297,10 @@ def _up_run(args: argparse.Namespace) -> int:
                 while True:
                     supervisor.raise_if_failed()
                     time.sleep(0.5)
-            summary = run_episodes(bus, plan)
+            if args.cells is None:
+                summary = run_episodes(buses[None], plan)
+            else:
+                summary = run_cells({str(c): bus for c, bus in buses.items()}, plan)
     except KeyboardInterrupt:
         if supervisor.failure is None:
             print("stopping the stack", file=sys.stderr)
