@@ -19,7 +19,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_sim.backend import SimBackend
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_skills.drivers.panda_motion import position_in
+from manigraph_skills.drivers.joint_transport import position_in
 
 
 class InProcessGripperTransport:

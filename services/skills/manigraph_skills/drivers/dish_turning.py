@@ -256,7 +256,7 @@ def _tilt_once(
                         failure = failure or exc
                         continue
                     trajectory.opening = grasp.opening
-                    found = driver._contact(trajectory, obstacles)
+                    found = driver.plans.contact(trajectory, obstacles)
                     if found is None:
                         log.info(
                             "setting %s down turned at %s, fingers towards %s",
@@ -320,7 +320,7 @@ def move_dish(
             return planner.place(q, at, taken + turn, carry_z)
 
         setting_down = Grasp(height, 0.0, 0.0, obstacles, np.pi, opening)
-        carry = driver._avoiding(to_cell, setting_down, there, f"moving {item.id}")
+        carry = driver.plans.avoiding(to_cell, setting_down, there, f"moving {item.id}")
         try:
             driver._run(decision_id, carry)
         except SkillError as exc:
@@ -386,7 +386,7 @@ def _clear_let_go(
     contact = None
     for way in let_go_sideways(driver.planner, q):
         way.opening = opening
-        found = driver._contact(way, obstacles)
+        found = driver.plans.contact(way, obstacles)
         if found is None:
             return way
         contact = contact or found

@@ -35,7 +35,8 @@ from manigraph_shared.messages import (
 from manigraph_shared.panda import FINGER_OPEN
 from manigraph_skills.drivers.franka_config import FrankaConfig
 from manigraph_skills.drivers.franka_limits import TrajectoryLimits
-from manigraph_skills.drivers.panda_motion import PandaMotionDriver, object_seen_after
+from manigraph_skills.drivers.joint_transport import object_seen_after
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.motion import HOME_Q, PandaModel
 
 log = logging.getLogger("manigraph.skills.franka")

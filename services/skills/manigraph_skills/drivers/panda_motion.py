@@ -1,5 +1,7 @@
 """A Panda driver that plans its own motion: Pinocchio IK on the skill side, joint
-trajectories to the robot. The robot end (sim or hardware) is a ``JointTransport``.
+trajectories to the robot. The robot end (sim or hardware) is a ``JointTransport``
+(``joint_transport``); the plans that clear the arm are ``replanning``'s. This module
+executes them: one decision's motions, their checks, stops and the end of its episode.
 
 Checks, each reported as a ``SkillError`` reason:
 
@@ -24,11 +26,8 @@ from __future__ import annotations
 
 import itertools
 import logging
-import threading
 import time
 from collections.abc import Callable
-from dataclasses import replace
-from typing import Protocol
 
 import numpy as np
 
@@ -43,13 +42,14 @@ from manigraph_shared.messages import (
     Quaternion,
     Scene,
     SceneObject,
-    SceneRack,
     Vector3,
 )
 from manigraph_shared.orientations import postures_like, up_axis_orientation
 from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp, Motion, RobotDriver
 from manigraph_skills.drivers.dish_turning import turn_dish
+from manigraph_skills.drivers.joint_transport import JointTransport
 from manigraph_skills.drivers.registry import MotionOptions
+from manigraph_skills.drivers.replanning import Replanner
 from manigraph_skills.motion import (
     HOME_Q,
     GraspPlanner,
@@ -57,100 +57,17 @@ from manigraph_skills.motion import (
     PandaModel,
     PlanConfig,
 )
-from manigraph_skills.motion.collision import ArmCollisionModel, Contact, refusal
-from manigraph_skills.motion.model import wrapped
+from manigraph_skills.motion.collision import ArmCollisionModel
 from manigraph_skills.motion.plan import UP, grasp_yaw
 from manigraph_skills.obstacles import Obstacle
 
 log = logging.getLogger("manigraph.skills.motion")
 
-#: After the planned motion collides: the carry height as chosen, then the hand's own
-#: height if it is above the planner's ceiling, then the ceiling (``PlanConfig.max_carry_z``);
-#: at each, the arm as planned and with its elbow swung to either side of the target's bearing
-#: (``ELBOW_SWING``), each with the hand as chosen and turned a quarter (a block or a square
-#: cover is held the same either way).
-QUARTER = np.pi / 2
-#: The last carry height tried, metres: the hand (10 cm above the TCP) under a pulled-out
-#: top rack's floor and handle (0.30 m), the fingertips over a pulled-out bottom rack's floor
-#: (0.125 m) and the dishes on the counter. Carried at the ceiling (0.30 m), or at 0.20 m,
-#: the hand reaching for a dish of the counter's far row met the top rack's front edge or
-#: its handle on every re-plan.
-LOW_CARRY_Z = 0.15
 #: Planning failures that going home first may cure (the hand is empty).
 HOMING_HELPS = ("no_ik_solution", "collision")
-#: Gains of the null-space elbow swing (``IKSolver.elbow_push``), gentle first: it acts at
-#: every IK sample along the motion, so it adds up over a long one (at 0.05 the elbow of a
-#: far, low grasp from the home pose swings ~0.3 m aside) but not over a short one (from
-#: above a tower to a block beside it only 0.3 cleared the tower).
-ELBOW_SWING = (0.05, 0.3)
-#: The fingers are alike: a hand turned half round about the vertical holds what it holds
-#: the same way, and every object here (blocks, covers, plates, bowls) is square. Its wrist
-#: joint is then half a turn from where it was: a far corner of the counter that the wrist
-#: could not turn to (``no_ik_solution``, at its joint limit) is reached turned half round,
-#: and the forearm passes a neighbour on the other side.
-HALF_TURN = np.pi
 #: After letting go of a rack's handle the hand rises and backs off this far towards the
 #: robot, metres, clear of the handle and the rack.
 HANDLE_BACK_OFF = 0.1
-
-
-class JointTransport(Protocol):
-    """Where joint trajectories go: the sim over the bus, a real arm, or a backend in-process."""
-
-    def execute(self, command: JointTrajectoryCommand) -> JointTrajectoryResult:
-        """Run ``command`` to the end and answer it."""
-        ...
-
-    def joint_positions(self) -> np.ndarray:
-        """The arm's current joint positions, radians."""
-        ...
-
-    def object_position(self, object_id: str, after: float) -> np.ndarray | None:
-        """Where ``object_id`` is, observed after time ``after``; None if unknown."""
-        ...
-
-    def stop(self) -> None:
-        """Emergency stop: make a running ``execute`` return or raise at once."""
-        ...
-
-    def resume(self) -> None:
-        """Accept trajectories again."""
-        ...
-
-    def abort(self, reason: str) -> None:
-        """The robot went away: make a running ``execute`` raise ``SkillError(reason)``."""
-        ...
-
-
-def object_seen_after(
-    lock: threading.Condition,
-    latest_scene: Callable[[], Scene | None],
-    object_id: str,
-    after: float,
-    timeout: float = 1.0,
-) -> np.ndarray | None:
-    """Where ``object_id`` (an object, or a rack: its handle) is in the newest scene stamped at
-    or after ``after`` (waiting up to ``timeout`` for one on ``lock``, which the scene's writer
-    notifies); None if none came or it is not in it. Shared by the transports that cache
-    streamed scenes."""
-    with lock:
-        lock.wait_for(
-            lambda: (scene := latest_scene()) is not None and scene.stamp >= after, timeout
-        )
-        scene = latest_scene()
-    if scene is None or scene.stamp < after:
-        return None
-    return position_in(scene, object_id)
-
-
-def position_in(scene: Scene, object_id: str) -> np.ndarray | None:
-    """Where object ``object_id`` is in ``scene``, or rack ``object_id``'s handle; None if
-    neither is in it."""
-    things: list[SceneObject | SceneRack] = [*scene.objects, *scene.racks]
-    for thing in things:
-        if thing.id == object_id:
-            return np.array(thing.position.as_tuple())
-    return None
 
 
 class PandaMotionDriver(RobotDriver):
@@ -169,6 +86,7 @@ class PandaMotionDriver(RobotDriver):
         self.model = PandaModel()
         self.planner = GraspPlanner(self.model, config)
         self.collision = ArmCollisionModel(self.model) if check_collisions else None
+        self.plans = Replanner(self.model, self.planner, self.collision, self._raise_if_stopped)
         self.min_grasp_width = options.min_grasp_width
         self.placement_tolerance = options.placement_tolerance
         self._ids = itertools.count()
@@ -202,7 +120,7 @@ class PandaMotionDriver(RobotDriver):
         self._picked = None
         result = self._run(
             decision_id,
-            self._avoiding(
+            self.plans.avoiding(
                 lambda planner, q, turn, carry: planner.pick(q, target, yaw + turn, carry),
                 grasp,
                 target,
@@ -210,7 +128,7 @@ class PandaMotionDriver(RobotDriver):
             ),
             home_around=grasp.obstacles,
         )
-        # The yaw the hand took (``_avoiding`` may have turned it): put back with it.
+        # The yaw the hand took (``plans.avoiding`` may have turned it): put back with it.
         taken = self.planner.yaw_of(np.array(result.positions)) if result.positions else yaw
         self._picked = (object_id, target, taken, grasp)
         if result.gripper_width < self.min_grasp_width:
@@ -230,7 +148,7 @@ class PandaMotionDriver(RobotDriver):
         try:
             carry = self._run(
                 decision_id,
-                self._avoiding(
+                self.plans.avoiding(
                     lambda planner, q, turn, carry_z: planner.place(q, hand, yaw + turn, carry_z),
                     grasp,
                     hand,
@@ -264,7 +182,7 @@ class PandaMotionDriver(RobotDriver):
         try:
             self._run(
                 decision_id,
-                self._checked(
+                self.plans.checked(
                     lambda q: self.planner.place(q, hand, yaw), grasp.obstacles, grasp.opening
                 ),
             )
@@ -309,7 +227,7 @@ class PandaMotionDriver(RobotDriver):
         # Yaw 0: the fingers close along y, across the tab.
         held = self._run(
             decision_id,
-            self._checked(lambda q: self.planner.slide(q, grip, shift, 0.0), ()),
+            self.plans.checked(lambda q: self.planner.slide(q, grip, shift, 0.0), ()),
             home_around=(),
         )
         if held.gripper_width < self.min_grasp_width:
@@ -318,7 +236,7 @@ class PandaMotionDriver(RobotDriver):
                 "handle_missed", f"fingers closed to {held.gripper_width * 1000:.1f} mm"
             )
         released = self._run(
-            decision_id, self._checked(lambda q: self.planner.release(q, HANDLE_BACK_OFF), ())
+            decision_id, self.plans.checked(lambda q: self.planner.release(q, HANDLE_BACK_OFF), ())
         )
         seen = self.transport.object_position(rack_id, after=released.stamp)
         if seen is not None and abs(seen[0] - start[0]) < distance / 2:
@@ -353,123 +271,8 @@ class PandaMotionDriver(RobotDriver):
         """Open as wide as ``grasp`` says where the hand is and retreat (after a placement,
         or after a lost grasp, so the next attempt starts clean)."""
         return self._run(
-            decision_id, self._checked(self.planner.release, grasp.obstacles, grasp.opening)
+            decision_id, self.plans.checked(self.planner.release, grasp.obstacles, grasp.opening)
         )
-
-    def _avoiding(
-        self,
-        make: Callable[[GraspPlanner, np.ndarray, float, float], JointTrajectory],
-        grasp: Grasp,
-        target: np.ndarray,
-        motion: str,
-    ) -> Callable[[np.ndarray], JointTrajectory]:
-        """``make(planner, q, turn, carry_z)`` as planned; if an arm link would touch
-        something, re-planned with the hand turned, the elbow swung aside and higher, and
-        last carried low (``LOW_CARRY_Z``), until one is clear. Last of all, the same with the
-        hand turned half round (``HALF_TURN``). ``motion`` names it in the refusal ("taking
-        it: panda_hand would touch ...")."""
-        bearing = float(np.arctan2(target[1], target[0]))
-        aside = np.array([-np.sin(bearing), np.cos(bearing), 0.0])
-        pushes = [tuple(gain * side * aside) for gain in ELBOW_SWING for side in (1.0, -1.0)]
-        planners = [self.planner] + [
-            GraspPlanner(self.model, self.planner.config, elbow_push=push) for push in pushes
-        ]
-        low = replace(self.planner.config, max_carry_z=LOW_CARRY_Z)
-        low_planners = [GraspPlanner(self.model, low)] + [
-            GraspPlanner(self.model, low, elbow_push=push) for push in pushes
-        ]
-
-        turns = (0.0, grasp.other_turn)
-        flipped = (HALF_TURN, grasp.other_turn + HALF_TURN)
-        half_turned = tuple(t for t in flipped if not _same_yaw(t, turns))
-
-        def plan(q: np.ndarray) -> JointTrajectory:
-            heights = self._carry_heights(q, grasp.carry_z)
-            options = []
-            # The hand as chosen (and at its other yaw) first; then turned half round.
-            for yaws in (turns, half_turned):
-                options += [
-                    (planner, turn, carry)
-                    for carry in heights
-                    for planner in planners
-                    for turn in yaws
-                ]
-                if grasp.carry_z < LOW_CARRY_Z:
-                    options += [
-                        (planner, turn, grasp.carry_z) for planner in low_planners for turn in yaws
-                    ]
-            contacts: dict[tuple[str, str], Contact] = {}
-            failure: SkillError | None = None
-            for planner, turn, carry in options:
-                self._raise_if_stopped()  # a re-plan takes 50-500 ms: stop between them
-                try:
-                    trajectory = make(planner, q, turn, carry)
-                except SkillError as exc:  # e.g. no IK solution this high or turned
-                    failure = failure or exc
-                    continue
-                trajectory.opening = grasp.opening
-                found = self._contact(trajectory, grasp.obstacles)
-                if found is None:
-                    if contacts:
-                        log.info(
-                            "re-planned around %s: carry %.2f m, turn %.2f, elbow %s",
-                            next(iter(contacts.values())),
-                            carry,
-                            turn,
-                            "as planned" if planner is self.planner else "swung aside",
-                        )
-                    return trajectory
-                contacts.setdefault((found.link, found.obstacle), found)
-            if contacts:
-                raise SkillError("collision", f"{motion}: {refusal(contacts)}")
-            assert failure is not None
-            raise failure
-
-        return plan
-
-    def _carry_heights(self, q: np.ndarray, carry_z: float) -> list[float]:
-        """The carry heights to plan at, in turn: as chosen; the hand's own height, if it is
-        above the planner's ceiling (``PlanConfig.max_carry_z``); the ceiling.
-
-        A hand above the ceiling first comes down to it where it is, before moving across.
-        After setting a block on a tower taller than the ceiling (K = 9: its top at 0.36 m)
-        the hand retreats above it, and coming down there would put the fingers into the
-        tower's top block, on every re-plan at or under the ceiling; moving across at the
-        hand's own height first does not; nor, just out of a rack's slot, into the dish in it."""
-        ceiling = self.planner.config.max_carry_z
-        hand = float(self.model.tcp_pose(q).translation[2])
-        heights = [carry_z]
-        if hand > max(ceiling, carry_z):
-            heights.append(hand)
-        if ceiling > carry_z:
-            heights.append(ceiling)
-        return heights
-
-    def _checked(
-        self,
-        make: Callable[[np.ndarray], JointTrajectory],
-        obstacles: tuple[Obstacle, ...],
-        opening: float | None = None,
-    ) -> Callable[[np.ndarray], JointTrajectory]:
-        """``make``, the fingers open ``opening`` apart (None: fully), refused as ``collision``
-        if an arm link would touch something."""
-
-        def plan(q: np.ndarray) -> JointTrajectory:
-            trajectory = make(q)
-            trajectory.opening = opening
-            found = self._contact(trajectory, obstacles)
-            if found is not None:
-                raise SkillError("collision", str(found))
-            return trajectory
-
-        return plan
-
-    def _contact(
-        self, trajectory: JointTrajectory, obstacles: tuple[Obstacle, ...]
-    ) -> Contact | None:
-        if self.collision is None:
-            return None
-        return self.collision.first_contact(trajectory, obstacles)
 
     def _run(
         self,
@@ -512,7 +315,7 @@ class PandaMotionDriver(RobotDriver):
                 if exc.reason not in HOMING_HELPS or np.allclose(q, HOME_Q, atol=0.05):
                     raise
                 homing = self.planner.home(q)
-                if self._contact(homing, obstacles) is not None:
+                if self.plans.contact(homing, obstacles) is not None:
                     raise
                 log.info("going home first: %s", exc.detail)
                 result = self.transport.execute(self._command(decision_id, homing))
@@ -549,9 +352,3 @@ class PandaMotionDriver(RobotDriver):
             ],
             stamp=time.time(),
         )
-
-
-def _same_yaw(turn: float, turns: tuple[float, ...]) -> bool:
-    """Whether ``turn`` is one of ``turns`` as an angle (a plate's other yaw is already half a
-    turn)."""
-    return any(abs(wrapped(turn - other)) < 1e-6 for other in turns)

@@ -22,7 +22,8 @@ from manigraph_shared.messages import (
     Scene,
 )
 from manigraph_shared.scene_gate import SceneGate
-from manigraph_skills.drivers.panda_motion import PandaMotionDriver, object_seen_after
+from manigraph_skills.drivers.joint_transport import object_seen_after
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
 
 class BusJointTransport:
