@@ -25,9 +25,10 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN
 from manigraph_sim.geometric.backend import GeometricBackend
+from manigraph_tools.demo_ui.clicks import Click, ClickRefused
 from manigraph_tools.demo_ui.http import BadRequest, DemoHttpServer, click_from_json
 from manigraph_tools.demo_ui.scene_view import scene_view, world_extent
-from manigraph_tools.demo_ui.session import Click, ClickRefused, DemoSession
+from manigraph_tools.demo_ui.session import DemoSession
 
 
 class Sink:

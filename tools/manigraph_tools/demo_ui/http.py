@@ -26,7 +26,8 @@ from importlib.resources import files
 from typing import Any, Protocol
 
 from manigraph_shared.messages import Action, TrayAction
-from manigraph_tools.demo_ui.session import Click, ClickRefused, DemoSession
+from manigraph_tools.demo_ui.clicks import Click, ClickRefused
+from manigraph_tools.demo_ui.session import DemoSession
 
 log = logging.getLogger("manigraph.demo-ui.http")
 

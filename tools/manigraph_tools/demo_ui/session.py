@@ -31,7 +31,6 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from manigraph_shared.errors import ManigraphError
-from manigraph_shared.ids import derived_id
 from manigraph_shared.messages import (
     Action,
     EpisodeEvent,
@@ -42,11 +41,10 @@ from manigraph_shared.messages import (
     SkillStatus,
     TrayAction,
 )
-from manigraph_shared.orientations import NUM_ORIENTATIONS, ORIENTATION_NAMES, nearest_orientation
+from manigraph_shared.orientations import ORIENTATION_NAMES
+from manigraph_tools.demo_ui.clicks import Click, ClickRefused, action_for, describe
 from manigraph_tools.demo_ui.scene_view import same_world, scene_view
 
-#: ``Action.policy`` of every decision a person makes through the page.
-POLICY = "human"
 #: A decision whose skill never reports is given up after this long (seconds).
 DECISION_TIMEOUT = 60.0
 #: Messages kept for the page.
@@ -64,10 +62,6 @@ HINTS = {
 }
 
 
-class ClickRefused(ManigraphError):
-    """A click the page must not turn into an action; the text is shown to the person."""
-
-
 class DemonstrationSink(Protocol):
     """Where finished demonstrations go (``manigraph_shared.demonstrations.DemonstrationLog``)."""
 
@@ -77,16 +71,6 @@ class DemonstrationSink(Protocol):
         steps: list[tuple[Scene, Action]],
         end: EpisodeEvent | None,
     ) -> int: ...
-
-
-@dataclass(frozen=True)
-class Click:
-    """What the page asks for: an object to a goal (in an orientation), or a tray toggle."""
-
-    object_id: str | None = None
-    goal_id: str | None = None
-    orientation_index: int | None = None
-    tray_action: TrayAction = TrayAction.NONE
 
 
 @dataclass
@@ -202,7 +186,7 @@ class DemoSession:
                     "steps_recorded": len(self.steps),
                     "refused": self.refused,
                 },
-                "pending": None if pending is None else _describe(pending),
+                "pending": None if pending is None else describe(pending),
                 "scene": scene_view(scene) if scene is not None else None,
                 "orientations": list(ORIENTATION_NAMES),
                 "recorded": {
@@ -262,7 +246,7 @@ class DemoSession:
                 return
             self.pending = None
             self.ready_after = max(self.ready_after, status.stamp)
-            what = _describe(pending.action)
+            what = describe(pending.action)
             if status.state is SkillState.SUCCEEDED:
                 self.steps.append((pending.scene, pending.action))
                 self.say("ok", f"{what}: done")
@@ -321,54 +305,15 @@ class DemoSession:
             assert self.scene is not None
             self.pending = _Pending(action, self.scene, time.monotonic())
             self.step += 1
-            self.say("info", f"{_describe(action)}: sent")
+            self.say("info", f"{describe(action)}: sent")
             return action
 
     def _action_for(self, click: Click) -> Action:
         busy = self._busy_reason()
         if busy is not None:
             raise ClickRefused(busy)
-        scene = self.scene
-        assert scene is not None and self.episode_id is not None
-        orientation = click.orientation_index
-        if click.tray_action is not TrayAction.NONE:
-            rack_id = click.tray_action.rack_id
-            assert rack_id is not None
-            if not any(rack.id == rack_id for rack in scene.racks):
-                raise ClickRefused(f"this world has no {rack_id}: no rack to toggle")
-            object_id = goal_id = rack_id
-            orientation = None
-        else:
-            if click.goal_id is None:
-                raise ClickRefused(f"{click.object_id} selected: now click a goal")
-            object_id, goal_id = click.object_id or "", click.goal_id
-            try:
-                item, goal = scene.object(object_id), scene.goal(goal_id)
-            except KeyError as missing:
-                raise ClickRefused(f"the scene has no {missing.args[0]}") from None
-            if not item.visible or not goal.visible:
-                hidden = object_id if not item.visible else goal_id
-                raise ClickRefused(f"{hidden} is hidden (inside a closed box)")
-            if item.category.value != goal.category.value:
-                raise ClickRefused(
-                    f"{object_id} is a {item.category.value}: it goes to a "
-                    f"{item.category.value} goal, not to {goal_id} ({goal.category.value})"
-                )
-            if orientation is not None and not 0 <= orientation < NUM_ORIENTATIONS:
-                raise ClickRefused(f"orientation_index: must be in 0..{NUM_ORIENTATIONS - 1}")
-            if orientation is None and scene.racks:
-                orientation = nearest_orientation(goal.orientation)  # the slot's own
-        return Action(
-            decision_id=derived_id(self.episode_id, ":", str(self.step)),
-            episode_id=self.episode_id,
-            scene_sequence=scene.sequence,
-            object_id=object_id,
-            goal_id=goal_id,
-            orientation_index=orientation,
-            tray_action=click.tray_action,
-            policy=POLICY,
-            stamp=self.clock(),
-        )
+        assert self.scene is not None and self.episode_id is not None
+        return action_for(click, self.scene, self.episode_id, self.step, self.clock)
 
     # --- the demonstration -------------------------------------------------------------------
     def _begin(self, episode_id: str) -> None:
@@ -393,7 +338,7 @@ class DemoSession:
 
     def _give_up(self, why: str) -> None:
         assert self.pending is not None
-        self.say("error", f"{_describe(self.pending.action)}: given up, {why}")
+        self.say("error", f"{describe(self.pending.action)}: given up, {why}")
         self.pending = None
         self.ready_after = self.clock()
         self.refused += 1
@@ -429,14 +374,3 @@ class DemoSession:
             f"demonstration {self.demonstrations} recorded: {count} steps of "
             f"{end.episode_id} to {self.output}",
         )
-
-
-def _describe(action: Action) -> str:
-    if action.tray_action is not TrayAction.NONE:
-        return f"toggle {action.tray_action.rack_id}"
-    turn = (
-        f" ({ORIENTATION_NAMES[action.orientation_index]})"
-        if action.orientation_index is not None
-        else ""
-    )
-    return f"{action.object_id} -> {action.goal_id}{turn}"
