@@ -53,7 +53,7 @@ class EvalOptions(Options):
 
 
 def _eval_configure(parser: argparse.ArgumentParser) -> None:
-    from manigraph_tools.episodes import EpisodeOptions
+    from manigraph_tools.episode_plan import EpisodeOptions
 
     add_option_arguments(parser, EvalOptions)
     # The episode flags of run and up; every episode runs to its end in-process, no timeout.
@@ -68,7 +68,7 @@ def _eval_configure(parser: argparse.ArgumentParser) -> None:
 def _eval_run(args: argparse.Namespace) -> int:
     from manigraph_lab.evaluate import EvalSpec, evaluate
     from manigraph_planner.policies import load_policy
-    from manigraph_tools.episodes import EpisodeOptions
+    from manigraph_tools.episode_plan import EpisodeOptions
 
     options = options_from_args(EvalOptions, args)
     episodes = options_from_args(EpisodeOptions, args)

@@ -9,7 +9,7 @@ import pytest
 
 from manigraph_shared.errors import ConfigError, TaskError
 from manigraph_sim.tasks.task_file import parse_task_file
-from manigraph_tools.episodes import read_task_file
+from manigraph_tools.episode_plan import read_task_file
 
 
 def test_an_oversized_task_file_is_refused_before_anything_is_sent(tmp_path: Path) -> None:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from manigraph_tools.episodes import EpisodeOptions, summarize
+from manigraph_tools.episode_plan import EpisodeOptions, summarize
 
 
 def test_a_dishwasher_run_is_named_and_summarised_by_its_dishes_not_blocks() -> None:

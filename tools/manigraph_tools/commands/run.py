@@ -10,7 +10,8 @@ from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
 from manigraph_shared.options import add_option_arguments, options_from_args
 from manigraph_tools.commands.common import emit_json, wait_services
-from manigraph_tools.episodes import EpisodeOptions, EpisodePlan, run_episodes
+from manigraph_tools.episode_plan import EpisodeOptions, EpisodePlan
+from manigraph_tools.episodes import run_episodes
 
 
 def episode_arguments(parser: argparse.ArgumentParser) -> None:

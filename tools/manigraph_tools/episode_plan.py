@@ -1,0 +1,232 @@
+"""Which episodes a run asks for and what it reports: the flags ``manigraph run``, ``up`` and
+``eval`` share (:class:`EpisodeOptions`), the plan they make (:class:`EpisodePlan`: one seeded
+``EpisodeRequest`` per episode), a ``--task-file`` read and named, each episode's
+:class:`EpisodeResult` and the run's summary (:func:`summarize`). Running the plan against a
+stack is :mod:`manigraph_tools.episodes`'."""
+
+from __future__ import annotations
+
+import re
+import statistics
+import tomllib
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.messages import EpisodeRequest
+from manigraph_shared.options import Interval, Options, option
+
+AT_LEAST_ONE = Interval(1, None)
+#: The services an episode needs.
+RUN_SERVICES = ("sim", "planner", "skills")
+
+
+@dataclass(frozen=True)
+class EpisodeOptions(Options):
+    """Which episodes to run: the flags ``manigraph run``, ``up`` and ``eval`` share
+    (``add_option_arguments(parser, EpisodeOptions)``)."""
+
+    task: str = option("stack", help="task name")
+    task_file: Path | None = option(None, help="your own TOML layout (docs/running.md)")
+    blocks: int = option(4, help="blocks per stack K", within=AT_LEAST_ONE)
+    stacks: int = option(1, help="number of stacks s", within=AT_LEAST_ONE)
+    objects: int | None = option(
+        None, help="dishes (dishwasher: half plates, half bowls; default 10)", within=AT_LEAST_ONE
+    )
+    preference: str | None = option(
+        None, help="how to load the dishwasher: top-bottom (default) or left-right"
+    )
+    episodes: int | None = option(
+        None,
+        help="run N episodes, then exit (up without it: keep the stack running)",
+        within=AT_LEAST_ONE,
+    )
+    seed: int = option(0, help="seed of the first episode", within=Interval(0, None))
+    timeout: float = option(
+        120.0, help="seconds per episode", within=Interval(0, None, low_open=True)
+    )
+    stall_timeout: float = option(
+        30.0,
+        help="fail an episode after this long without a decision or skill status",
+        within=Interval(0, None, low_open=True),
+        unit="s",
+    )
+    json: bool = option(False, help="print only the JSON summary (stdout, one line)")
+
+    def task_text(self) -> str | None:
+        """The task file's text (validated later, by the sim), or None without one."""
+        return read_task_file(self.task_file)
+
+    def label(self) -> str:
+        """What episodes are named after: the task file's name (its stem, as an identifier),
+        else the task and K."""
+        if self.task_file is None and self.task == "dishwasher":
+            return f"dishwasher-{self.objects}" if self.objects else "dishwasher"
+        if self.task_file is None:
+            return f"{self.task}-{self.blocks}"
+        return re.sub(r"[^A-Za-z0-9_.\-]+", "-", self.task_file.stem)[:40] or "task-file"
+
+    def plan(self, episodes: int, run_id: str = "run") -> EpisodePlan:
+        task_file = self.task_text()
+        about = describe_task_file(task_file) if task_file is not None else None
+        return EpisodePlan(
+            task="file" if task_file is not None else self.task,
+            task_file=task_file,
+            task_file_name=self.label() if task_file is not None else None,
+            name=about[0] if about else None,
+            blocks=about[1] if about else self.blocks,
+            stacks=self.stacks,
+            objects=self.objects,
+            preference=self.preference,
+            episodes=episodes,
+            seed=self.seed,
+            timeout=self.timeout,
+            stall_timeout=self.stall_timeout,
+            run_id=run_id,
+        )
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    episode_id: str
+    seed: int
+    success: bool
+    goals_filled: int
+    goals_total: int
+    steps: int
+    #: Wall-clock seconds from the reset request to the end event.
+    seconds: float
+    reason: str
+    #: Simulated seconds, from a world with a clock (physics); None otherwise.
+    sim_seconds: float | None = None
+
+
+@dataclass(frozen=True)
+class EpisodePlan:
+    task: str
+    blocks: int
+    stacks: int
+    episodes: int
+    seed: int
+    timeout: float = 120.0
+    run_id: str = "run"
+    task_file: str | None = None  # TOML text of a user layout
+    task_file_name: str | None = None  # what the file is called (its stem)
+    name: str | None = None  # the file's own ``name``
+    #: No decision and no skill status of the episode for this long fails it.
+    stall_timeout: float = 30.0
+    #: Longest wait for every service to be back before an episode.
+    recover_timeout: float = 60.0
+    services: tuple[str, ...] = RUN_SERVICES
+    objects: int | None = None  # dishwasher
+    preference: str | None = None  # dishwasher
+
+    def describe(self) -> str:
+        """What the episodes are, for progress lines: the dishwasher's dishes and
+        preference (each as asked: left out, the sim's default), else the task (or file)
+        and K."""
+        if self.task == "dishwasher":
+            asked = [f"{self.objects} dishes" if self.objects else "", self.preference or ""]
+            return " ".join(["dishwasher", *filter(None, asked)])
+        return f"{self.task_file_name or self.task} K={self.blocks}"
+
+    def request(self, index: int) -> EpisodeRequest:
+        seed = self.seed + index
+        return EpisodeRequest(
+            episode_id=f"{self.run_id}-{index:04d}",
+            task="file" if self.task_file is not None else self.task,
+            blocks=self.blocks,
+            stacks=self.stacks,
+            objects=self.objects,
+            preference=self.preference,
+            seed=seed,
+            task_file=self.task_file,
+        )
+
+
+def describe_task_file(text: str) -> tuple[str | None, int] | None:
+    """The file's ``name`` and its number of blocks (spares included), read leniently for
+    naming episodes and summaries: the sim validates the file, and refuses it naming the
+    field. None when the text is not TOML."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        return None
+    objects = data.get("objects")
+    blocks = (
+        sum(isinstance(o, dict) and o.get("category") == "block" for o in objects)
+        if isinstance(objects, list)
+        else 0
+    )
+    name = data.get("name")
+    # A file without blocks is still the sim's to refuse, naming the field: K stays >= 1 here.
+    return (name if isinstance(name, str) else None, max(blocks, 1))
+
+
+def read_task_file(path: Path | None) -> str | None:
+    """The text of a ``--task-file`` (its layout is validated later, by the sim), or None
+    without one. A file too long to travel in a reset request is refused here."""
+    if path is None:
+        return None
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
+        raise ConfigError("task-file", f"cannot read {path}: {why}") from None
+    limit = _task_file_limit()
+    if len(text) > limit:
+        raise ConfigError(
+            "task-file", f"{path} has {len(text):,} characters; a task file holds at most {limit:,}"
+        )
+    return text
+
+
+def _task_file_limit() -> int:
+    """``EpisodeRequest.task_file``'s max_length, from the contract itself."""
+    for constraint in EpisodeRequest.model_fields["task_file"].metadata:
+        if hasattr(constraint, "max_length"):
+            return int(constraint.max_length)
+    raise AssertionError("EpisodeRequest.task_file lost its max_length")
+
+
+def _size(plan: EpisodePlan) -> dict[str, object]:
+    """What the episodes hold: dishes and the preference, or blocks and stacks."""
+    if plan.task == "dishwasher":
+        return {"objects": plan.objects, "preference": plan.preference}
+    return {"blocks": plan.blocks, "stacks": plan.stacks}
+
+
+def summarize(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, object]:
+    count = len(results)
+    named = {"task_file": plan.task_file_name, "name": plan.name} if plan.task_file else {}
+    return {
+        "task": plan.task,
+        **named,
+        **_size(plan),
+        "seed": plan.seed,
+        "episodes": count,
+        "success_rate": sum(r.success for r in results) / count if count else 0.0,
+        "goals_filled_rate": (
+            statistics.fmean(r.goals_filled / max(r.goals_total, 1) for r in results)
+            if count
+            else 0.0
+        ),
+        "mean_steps": statistics.fmean(r.steps for r in results) if count else 0.0,
+        "mean_seconds": statistics.fmean(r.seconds for r in results) if count else 0.0,
+        **_simulated(results),
+        "results": [asdict(r) for r in results],
+    }
+
+
+def _simulated(results: list[EpisodeResult]) -> dict[str, float]:
+    """Mean simulated seconds per episode and the real-time factor (simulated over wall time:
+    1 in real time, ~30 flat out), over the episodes whose world has a clock."""
+    timed = [r for r in results if r.sim_seconds is not None]
+    if not timed:
+        return {}
+    simulated = sum(r.sim_seconds or 0.0 for r in timed)
+    wall = sum(r.seconds for r in timed)
+    return {
+        "mean_sim_seconds": round(simulated / len(timed), 3),
+        "realtime_factor": round(simulated / wall, 3) if wall > 0 else 0.0,
+    }
