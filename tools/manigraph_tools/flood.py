@@ -14,7 +14,8 @@ from pathlib import Path
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import MessageError
 from manigraph_shared.messages import Delivery, Message, Scene, SceneGoal, SceneObject, Vector3
-from manigraph_tools.fuzzing import Mutator, message_types, seed_objects
+from manigraph_tools.fuzzing import message_types
+from manigraph_tools.mutation_fuzzer import Mutator, seed_objects
 
 
 def concrete_key(cls: type[Message]) -> str:
