@@ -27,13 +27,14 @@ from __future__ import annotations
 import argparse
 import collections
 import json
-import subprocess
 import tempfile
 import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from soak_episodes import EpisodesMeanwhile  # bench/soak_episodes.py
+from soak_payloads import big_scene, overlapping_task_file  # bench/soak_payloads.py
 from soak_stack import SERVICES, SoakStack, soak_stack  # bench/soak_stack.py
 
 from manigraph_shared.errors import MessageError
@@ -43,9 +44,6 @@ from manigraph_shared.messages import (
     EpisodeRequest,
     ExplainRequest,
     Scene,
-    SceneGoal,
-    SceneObject,
-    Vector3,
 )
 from manigraph_shared.messages.base import MAX_PAYLOAD_BYTES
 from manigraph_tools.flood import concrete_key, flood_scenes, fuzz_stack
@@ -53,7 +51,6 @@ from manigraph_tools.fuzzing import message_types
 
 RSS_TOLERANCE = 0.20
 Counter = collections.Counter[str]
-HUNG_REASONS = ("timeout", "no_progress")  # what the run client says of an episode that hung
 REPO = Path(__file__).resolve().parents[1]
 
 
@@ -271,62 +268,6 @@ class Soak:
         return run
 
 
-class EpisodesMeanwhile:
-    """Real ``manigraph run --blocks 4 --episodes 1`` runs, one after another, in a thread."""
-
-    def __init__(self, soak: SoakStack, run_timeout: float = 1800.0) -> None:
-        self.soak = soak
-        self.run_timeout = run_timeout
-        self.results: list[dict[str, object]] = []
-        self.hung = 0
-        self.failed = 0
-        self._reasons: collections.Counter[str] = collections.Counter()
-        self._done = threading.Event()
-        self._thread = threading.Thread(target=self._loop, daemon=True)
-
-    def start(self) -> None:
-        self._thread.start()
-
-    def stop(self) -> None:
-        """Let the episode under way finish, then stop."""
-        self._done.set()
-        self._thread.join()
-
-    def _loop(self) -> None:
-        seed = 1000
-        while not self._done.is_set():
-            args = ("run", "--blocks", "4", "--episodes", "1", "--seed", str(seed), "--json")
-            try:
-                result = self.soak.running.run(*args, timeout=self.run_timeout)
-            except subprocess.TimeoutExpired:
-                self.hung += 1
-                self._reasons["run did not finish"] += 1
-                continue
-            seed += 1
-            lines = result.stdout.strip().splitlines()
-            if not lines or not lines[-1].startswith("{"):
-                self.failed += 1
-                self._reasons[f"no summary (exit {result.returncode})"] += 1
-                continue
-            for episode in json.loads(lines[-1])["results"]:
-                self.results.append(episode)
-                if episode["success"]:
-                    continue
-                reason = str(episode["reason"])
-                self._reasons[reason.split(":")[0]] += 1
-                if reason.startswith(HUNG_REASONS):
-                    self.hung += 1
-                else:
-                    self.failed += 1
-
-    def summary(self) -> str:
-        done = sum(bool(r["success"]) for r in self.results)
-        return f"episodes meanwhile: {done}/{len(self.results)} succeeded, {self.hung} hung"
-
-    def failures(self) -> str:
-        return ", ".join(f"{reason} x{n}" for reason, n in self._reasons.items())
-
-
 def count_recorded(path: Path, decode: bool) -> tuple[Counter, Counter]:
     """Messages per key in one recorder file, and (with ``decode``) the invalid ones among
     those on a fuzzed key."""
@@ -342,44 +283,6 @@ def count_recorded(path: Path, decode: bool) -> tuple[Counter, Counter]:
             except MessageError:
                 invalid[item.topic] += 1
     return total, invalid
-
-
-def big_scene(objects: int, goals: int) -> Scene:
-    return Scene(
-        episode_id="bomb",
-        stamp=time.time(),
-        sequence=0,
-        objects=[
-            SceneObject(
-                id=f"block_{i}",
-                category="block",
-                position=Vector3(x=0.3 + 0.02 * (i % 20), y=-0.3 + 0.05 * (i // 20), z=0.02),
-                size=Vector3(x=0.04, y=0.04, z=0.04),
-            )
-            for i in range(objects)
-        ],
-        goals=[
-            SceneGoal(
-                id=f"goal_{i}", category="block", position=Vector3(x=0.5, y=0.2, z=0.02 + 0.04 * i)
-            )
-            for i in range(goals)
-        ],
-    )
-
-
-def overlapping_task_file(size: int) -> str:
-    lines = []
-    for i in range(256):
-        lines += [
-            "[[objects]]",
-            f'id = "block_{i}"',
-            'category = "block"',
-            "position = [0.5, 0.0, 0.02]",
-            "",
-        ]
-    lines += ["[[goals]]", 'id = "g"', 'category = "block"', "position = [0.4, 0.2, 0.02]", ""]
-    text = "\n".join(lines)
-    return (text + "#" * size)[: size - 1] + "\n"
 
 
 def table(rows: list[Row]) -> str:
