@@ -87,11 +87,13 @@ def _new(msgtype: str, **fields: Any) -> Any:
 
 
 def ros_time(stamp: float) -> Any:
-    """Seconds since the epoch as ``builtin_interfaces/msg/Time`` (nanoseconds rounded)."""
-    total = round(stamp * 1e9)
-    return _new(
-        "builtin_interfaces/msg/Time", sec=total // 1_000_000_000, nanosec=total % 1_000_000_000
-    )
+    """Seconds since the epoch as ``builtin_interfaces/msg/Time``: whole seconds, then the
+    fraction rounded to a nanosecond (``stamp * 1e9`` would lose ~100 ns to float64)."""
+    sec = math.floor(stamp)
+    nanosec = round((stamp - sec) * 1e9)
+    if nanosec >= 1_000_000_000:
+        sec, nanosec = sec + 1, nanosec - 1_000_000_000
+    return _new("builtin_interfaces/msg/Time", sec=sec, nanosec=nanosec)
 
 
 def header(stamp: float, frame_id: str) -> Any:
