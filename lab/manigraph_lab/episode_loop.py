@@ -28,7 +28,7 @@ from manigraph_shared.messages import (
     SkillState,
     Vector3,
 )
-from manigraph_sim.backend import EpisodeBackend, SimBackend
+from manigraph_sim.backend_base import EpisodeBackend, SimBackend
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_skills.drivers.base import RobotDriver
 from manigraph_skills.drivers.gripper import GripperDriver

@@ -17,7 +17,7 @@ from manigraph_shared.messages import (
     RobotCommand,
     RobotFeedback,
 )
-from manigraph_sim.backend import SimBackend
+from manigraph_sim.backend_base import SimBackend
 from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_skills.drivers.joint_transport import position_in
 

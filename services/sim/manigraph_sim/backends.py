@@ -12,7 +12,8 @@ Register a new backend with its options dataclass::
 
     BACKENDS.add_lazy("mine", "my_package.backend:MyBackend", options=MyOptions)
 
-``MyBackend.from_options(options)`` then builds it (:class:`~manigraph_sim.backend.SimBackend`).
+``MyBackend.from_options(options)`` then builds it
+(:class:`~manigraph_sim.backend_base.SimBackend`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from manigraph_shared.options import Interval, Options, option
 from manigraph_shared.registry import Registry
 
 if TYPE_CHECKING:
-    from manigraph_sim.backend import SimBackend
+    from manigraph_sim.backend_base import SimBackend
 
 __all__ = ["BACKENDS", "GeometricOptions", "PhysicsOptions", "create_backend"]
 

@@ -17,7 +17,7 @@ from manigraph_shared.messages import (
     SkillStatus,
 )
 from manigraph_shared.service import Service
-from manigraph_sim.backend import JointedArmBackend, SimBackend
+from manigraph_sim.backend_base import JointedArmBackend, SimBackend
 from manigraph_sim.manifest import JOINTS
 
 #: Failures that refuse a command outright (counted as rejections in the status), as opposed

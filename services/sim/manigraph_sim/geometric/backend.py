@@ -17,7 +17,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.orientations import nearest_orientation
 from manigraph_shared.workspace import Workspace
-from manigraph_sim.backend import EpisodeBackend
+from manigraph_sim.backend_base import EpisodeBackend
 from manigraph_sim.dishwasher.model import DishwasherLayout
 from manigraph_sim.dishwasher.scene import dishwasher_scene
 from manigraph_sim.dishwasher.world import DishwasherWorld

@@ -41,7 +41,7 @@ from manigraph_shared.messages import (
     SkillStatus,
 )
 from manigraph_shared.preflight import INSTALL_VULKAN
-from manigraph_sim.backend import EpisodeBackend, JointedArmBackend
+from manigraph_sim.backend_base import EpisodeBackend, JointedArmBackend
 from manigraph_sim.dishwasher.model import DishwasherLayout
 from manigraph_sim.dishwasher.scene import dishwasher_scene
 from manigraph_sim.geometric.world import GeometricWorld
