@@ -212,6 +212,33 @@ def test_the_documented_layout_is_the_one_the_tools_build() -> None:
     assert panel["config"]["topics"] == {SCENE_TOPIC: {"visible": True}}
 
 
+def test_the_layout_has_the_camera_joint_plots_and_decision_tables() -> None:
+    """Every panel docs/foxglove.md promises, on the topics a run writes."""
+    from manigraph_shared.messages import Action, Explanation, JointState
+
+    def panels(node: dict[str, Any]) -> list[dict[str, Any]]:
+        if node.get("type") == "panel":
+            return [node]
+        return [p for item in node.get("items", []) for p in panels(item["content"])]
+
+    found = panels(json.loads(layout_json())["content"])
+    by_type: dict[str, list[dict[str, Any]]] = {}
+    for panel in found:
+        by_type.setdefault(panel["panelType"], []).append(panel["config"])
+    [image] = by_type["Image"]
+    assert image["imageMode"]["imageTopic"] == "/camera/front/image"
+    assert image["imageMode"]["calibrationTopic"] == "/camera/front/calibration"
+    assert image["imageMode"]["annotations"] == {"/camera/front/markers": {"visible": True}}
+    [plot] = by_type["Plot"]
+    assert [series["value"] for series in plot["paths"]] == [
+        f"{JointState.key}.positions[{i}]" for i in range(len(ARM_JOINTS))
+    ]
+    assert [series["label"] for series in plot["paths"]] == list(ARM_JOINTS)
+    assert sorted(table["topicPath"] for table in by_type["Table"]) == sorted(
+        [Action.key, Explanation.key]
+    )
+
+
 def test_dish_slots_are_drawn_sized_like_their_dishes(decode_protobuf: ProtobufDecoder) -> None:
     # A recorder once lost every later sample of a dishwasher run: its view had no size for
     # a plate slot and the writer thread died on the KeyError.
