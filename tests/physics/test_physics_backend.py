@@ -23,7 +23,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_sim.backends import create_backend
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig
+from manigraph_sim.physics.physics_world import ARM_JOINTS, PhysicsConfig
 from manigraph_skills.drivers import Motion
 from manigraph_skills.workspace import Workspace
 

@@ -10,9 +10,9 @@ from manigraph_planner.policies import load_policy
 from manigraph_shared.errors import SkillError, TaskError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN
+from manigraph_sim.dishwasher.dishwasher_world import DishwasherWorld
 from manigraph_sim.dishwasher.model import BOTTOM, TOP, Preference
 from manigraph_sim.dishwasher.scene import dishwasher_scene
-from manigraph_sim.dishwasher.world import DishwasherWorld
 from manigraph_sim.tasks import get_task
 from manigraph_sim.tasks.base import TaskParams
 

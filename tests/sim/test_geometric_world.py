@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from manigraph_shared.errors import ConfigError, SkillError, TaskError
-from manigraph_sim.geometric.world import GeometricWorld
+from manigraph_sim.geometric.geometric_world import GeometricWorld
 from manigraph_sim.tasks import get_task
 from manigraph_sim.tasks.base import TaskParams
 from manigraph_sim.world_model import BLOCK_SIZE, Body, Goal

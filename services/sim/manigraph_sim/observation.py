@@ -16,7 +16,7 @@ from manigraph_shared.messages import (
     SceneObject,
     Vector3,
 )
-from manigraph_sim.geometric.world import GeometricWorld
+from manigraph_sim.geometric.geometric_world import GeometricWorld
 
 
 def vector(values: np.ndarray) -> Vector3:

@@ -11,7 +11,7 @@ from manigraph_shared.messages import (
     SceneRack,
 )
 from manigraph_shared.orientations import orientation
-from manigraph_sim.dishwasher.world import DishwasherWorld
+from manigraph_sim.dishwasher.dishwasher_world import DishwasherWorld
 from manigraph_sim.observation import vector
 
 

@@ -18,10 +18,10 @@ from manigraph_shared.messages import (
 from manigraph_shared.orientations import nearest_orientation
 from manigraph_shared.workspace import Workspace
 from manigraph_sim.backend_base import EpisodeBackend
+from manigraph_sim.dishwasher.dishwasher_world import DishwasherWorld
 from manigraph_sim.dishwasher.model import DishwasherLayout
 from manigraph_sim.dishwasher.scene import dishwasher_scene
-from manigraph_sim.dishwasher.world import DishwasherWorld
-from manigraph_sim.geometric.world import GeometricWorld
+from manigraph_sim.geometric.geometric_world import GeometricWorld
 from manigraph_sim.manifest import GRIPPER
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.tasks.box_geometry import BoxGeometry

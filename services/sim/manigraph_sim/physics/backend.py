@@ -44,13 +44,13 @@ from manigraph_shared.preflight import INSTALL_VULKAN
 from manigraph_sim.backend_base import EpisodeBackend, JointedArmBackend
 from manigraph_sim.dishwasher.model import DishwasherLayout
 from manigraph_sim.dishwasher.scene import dishwasher_scene
-from manigraph_sim.geometric.world import GeometricWorld
+from manigraph_sim.geometric.geometric_world import GeometricWorld
 from manigraph_sim.manifest import CAMERA, JOINTS
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.physics.dishwasher import PhysicsDishwasher
+from manigraph_sim.physics.physics_world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig, vulkan_available
-from manigraph_sim.physics.world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
 from manigraph_sim.tasks.from_request import episode_layout
 from manigraph_sim.world_model import Body, Layout
 

@@ -18,8 +18,9 @@ bodies, all built from boxes (nothing downloaded).
   (``physical_counter_x``), resting at their own height.
 
 The task's state is read back off the simulated poses as a
-:class:`~manigraph_sim.dishwasher.world.DishwasherWorld` (:meth:`PhysicsDishwasher.view`), so
-the geometric world's rules, success test and Scene are applied unchanged.
+:class:`~manigraph_sim.dishwasher.dishwasher_world.DishwasherWorld`
+(:meth:`PhysicsDishwasher.view`), so the geometric world's rules, success test and Scene are
+applied unchanged.
 """
 
 from __future__ import annotations
@@ -40,14 +41,14 @@ from manigraph_shared.grasp_points import (
 )
 from manigraph_shared.messages import Quaternion
 from manigraph_shared.orientations import ORIENTATIONS, postures_like, up_axis_orientation
+from manigraph_sim.dishwasher.dishwasher_world import DishwasherWorld
 from manigraph_sim.dishwasher.model import (
     BOWL,
     PLATE,
     Dish,
     DishwasherLayout,
 )
-from manigraph_sim.dishwasher.world import DishwasherWorld
-from manigraph_sim.physics.world import PhysicsWorld
+from manigraph_sim.physics.physics_world import PhysicsWorld
 
 Part = tuple[sapien.Pose, np.ndarray]  # a box: pose relative to its body, half size
 

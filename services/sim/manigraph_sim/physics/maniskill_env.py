@@ -33,7 +33,7 @@ from mani_skill.utils.registration import register_env
 from mani_skill.utils.structs.pose import Pose
 
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
-from manigraph_sim.physics.world import (
+from manigraph_sim.physics.physics_world import (
     BLOCK_COLOURS,
     BOX_COLOUR,
     COVER_COLOUR,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from manigraph_shared.errors import TaskError
+from manigraph_sim.dishwasher.dishwasher_world import resting_height
 from manigraph_sim.dishwasher.model import (
     BOTTOM,
     BOWL,
@@ -19,7 +20,6 @@ from manigraph_sim.dishwasher.model import (
     Rack,
     Slot,
 )
-from manigraph_sim.dishwasher.world import resting_height
 from manigraph_sim.tasks.base import Task, register_task
 from manigraph_sim.world_model import Body, Goal
 
