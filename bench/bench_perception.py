@@ -28,8 +28,8 @@ import cv2
 import numpy as np
 import sapien
 
-from manigraph_perception.calibrate import KnownMarker, fit_camera_pose
-from manigraph_perception.calibration import Calibration
+from manigraph_perception.calibration_file import Calibration
+from manigraph_perception.calibration_fit import KnownMarker, fit_camera_pose
 from manigraph_perception.detection import detect, detector_for
 from manigraph_perception.pipeline import Perception
 from manigraph_shared.markers import MarkerMap, MarkerSpec, marker_in_object, sim_marker_map

@@ -25,9 +25,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from manigraph_perception.calibration import Calibration
+from manigraph_perception.calibration_file import Calibration
 from manigraph_perception.pipeline import Perception
-from manigraph_perception.world import WorldConfig
+from manigraph_perception.world_belief import WorldConfig
 from manigraph_shared.markers import sim_marker_map
 from manigraph_shared.messages import EpisodeRequest, TaskLayout
 from manigraph_sim.physics.camera import CameraConfig, degrade, encode_image

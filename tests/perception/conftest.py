@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from manigraph_perception.calibration import Calibration, load_calibration
+from manigraph_perception.calibration_file import Calibration, load_calibration
 from manigraph_shared.markers import MarkerMap, sim_marker_map
 from manigraph_shared.messages import TaskLayout
 

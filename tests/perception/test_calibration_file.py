@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from manigraph_perception.calibration import Calibration, load_calibration
+from manigraph_perception.calibration_file import Calibration, load_calibration
 from manigraph_perception.layout_file import load_layout
 from manigraph_shared.errors import ConfigError
 

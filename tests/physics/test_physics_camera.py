@@ -21,7 +21,7 @@ pytestmark = pytest.mark.slow
 
 @pytest.mark.skipif(not vulkan_available(), reason="no Vulkan device (scripts/install-vulkan.sh)")
 def test_the_camera_sees_every_block_where_it_is() -> None:
-    from manigraph_perception.calibration import Calibration
+    from manigraph_perception.calibration_file import Calibration
     from manigraph_perception.detection import ObjectPoser, detect, detector_for
 
     backend = PhysicsBackend(camera=CameraConfig(format="png"))

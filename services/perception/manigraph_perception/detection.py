@@ -16,7 +16,7 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-from manigraph_perception.calibration import Calibration
+from manigraph_perception.calibration_file import Calibration
 from manigraph_perception.deblur import MIN_BLUR_PX, BlurGauge, wiener
 from manigraph_shared.markers import MarkerMap, marker_corners, marker_in_object
 

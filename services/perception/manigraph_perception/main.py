@@ -34,12 +34,12 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from manigraph_perception.calibration import load_calibration
+    from manigraph_perception.calibration_file import load_calibration
     from manigraph_perception.layout_file import load_layout
     from manigraph_perception.pipeline import Perception
     from manigraph_perception.service import PerceptionService
     from manigraph_perception.sources import VideoSource
-    from manigraph_perception.world import WorldConfig
+    from manigraph_perception.world_belief import WorldConfig
     from manigraph_shared.bus import Bus
     from manigraph_shared.errors import ConfigError
     from manigraph_shared.markers import load_marker_map, sim_marker_map

@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from manigraph_perception.calibration import Calibration
+from manigraph_perception.calibration_file import Calibration
 from manigraph_perception.detection import ObjectPoser, detect, detector_for
-from manigraph_perception.world import WorldConfig, WorldModel
+from manigraph_perception.world_belief import WorldConfig, WorldModel
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.markers import MarkerMap
 from manigraph_shared.messages import (

@@ -10,7 +10,8 @@ import cv2
 import numpy as np
 import pytest
 
-from manigraph_perception.calibrate import (
+from manigraph_perception.calibration_file import Calibration, load_calibration
+from manigraph_perception.calibration_fit import (
     CharucoSpec,
     KnownMarker,
     calibrate_intrinsics,
@@ -19,7 +20,6 @@ from manigraph_perception.calibrate import (
     observe_markers,
     residuals_mm,
 )
-from manigraph_perception.calibration import Calibration, load_calibration
 from manigraph_shared.cli import main
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.markers import marker_in_object

@@ -16,7 +16,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from manigraph_perception.calibration import Calibration
+from manigraph_perception.calibration_file import Calibration
 from manigraph_perception.detection import detect, detector_for
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.markers import DICTIONARIES, marker_corners

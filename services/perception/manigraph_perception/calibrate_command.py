@@ -58,7 +58,8 @@ def _read_grey(paths: list[Path]) -> list:
 def _run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from manigraph_perception.calibrate import (
+    from manigraph_perception.calibration_file import load_calibration
+    from manigraph_perception.calibration_fit import (
         CharucoSpec,
         calibrate_intrinsics,
         fit_camera_pose,
@@ -67,7 +68,6 @@ def _run(args: argparse.Namespace) -> int:
         observe_markers,
         residuals_mm,
     )
-    from manigraph_perception.calibration import load_calibration
     from manigraph_shared.errors import ConfigError
 
     greys = _read_grey(args.images)

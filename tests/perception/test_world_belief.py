@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from manigraph_perception.detection import ObjectPose
-from manigraph_perception.world import WorldConfig, WorldModel, quaternion_of
+from manigraph_perception.world_belief import WorldConfig, WorldModel, quaternion_of
 from manigraph_shared.messages import LayoutGoal, LayoutObject, TaskLayout, Vector3
 
 BLOCK = Vector3(x=0.04, y=0.04, z=0.04)
