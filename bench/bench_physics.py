@@ -15,12 +15,12 @@ import numpy as np
 
 from manigraph_lab.in_process import InProcessJointTransport
 from manigraph_shared.messages import Action, EpisodeRequest, SkillState
+from manigraph_shared.workspace import Workspace
 from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver
 from manigraph_skills.motion.model import top_down
 from manigraph_skills.pick_and_place import PickAndPlace
-from manigraph_skills.workspace import Workspace
 
 
 def move(

@@ -28,12 +28,12 @@ from manigraph_shared.messages import (
     SkillState,
     Vector3,
 )
+from manigraph_shared.workspace import Workspace
 from manigraph_sim.backend_base import EpisodeBackend, SimBackend
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_skills.drivers.base import RobotDriver
 from manigraph_skills.drivers.gripper import GripperDriver
 from manigraph_skills.pick_and_place import PickAndPlace
-from manigraph_skills.workspace import Workspace
 
 
 @dataclass

@@ -16,10 +16,10 @@ from manigraph_shared.messages import (
     Scene,
     SkillStatus,
 )
+from manigraph_shared.workspace import Workspace
 from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.pick_and_place import PickAndPlace
-from manigraph_skills.workspace import Workspace
 
 
 class InProcessLoop:

@@ -21,11 +21,11 @@ from manigraph_shared.messages import (
     SkillState,
     Vector3,
 )
+from manigraph_shared.workspace import Workspace
 from manigraph_sim.backends import create_backend
 from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_sim.physics.physics_world import ARM_JOINTS, PhysicsConfig
 from manigraph_skills.drivers import Motion
-from manigraph_skills.workspace import Workspace
 
 Loop = Any  # tests/physics/conftest.py: Loop
 

@@ -76,7 +76,7 @@ from manigraph_shared.errors import SkillError
 from manigraph_shared.service import run_service
 from manigraph_skills.drivers.base import RobotDriver
 from manigraph_skills.service import SkillsService
-from manigraph_skills.workspace import Workspace
+from manigraph_shared.workspace import Workspace
 
 class LongPlanning(RobotDriver):
     name = "long-planning"

@@ -21,11 +21,11 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_shared.panda import ARM_JOINTS
+from manigraph_shared.workspace import Workspace
 from manigraph_skills.drivers import DRIVERS
 from manigraph_skills.drivers.base import Grasp, Motion
 from manigraph_skills.drivers.franka import FrankaDriver
 from manigraph_skills.drivers.franka_config import FrankaConfig
-from manigraph_skills.workspace import Workspace
 from manigraph_tools.testing import free_port
 
 franky = pytest.importorskip("franky")

@@ -12,9 +12,9 @@ from manigraph_shared.messages import (
     SkillStatus,
     Vector3,
 )
+from manigraph_shared.workspace import Workspace
 from manigraph_skills.drivers.base import Motion, RobotDriver
 from manigraph_skills.pick_and_place import PickAndPlace
-from manigraph_skills.workspace import Workspace
 
 
 class RecordingArm(RobotDriver):

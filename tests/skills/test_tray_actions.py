@@ -17,10 +17,10 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_shared.orientations import UPSIDE_DOWN, nearest_orientation
+from manigraph_shared.workspace import Workspace
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_skills.drivers.base import Motion, RobotDriver
 from manigraph_skills.pick_and_place import PickAndPlace
-from manigraph_skills.workspace import Workspace
 
 
 def action(step: int, obj: str, goal: str, **extra: object) -> Action:

@@ -36,8 +36,8 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from manigraph_shared.service import run_service
+    from manigraph_shared.workspace import Workspace
     from manigraph_skills.service import SkillsService
-    from manigraph_skills.workspace import Workspace
 
     name = auto_driver(os.environ) if args.driver == "auto" else args.driver
     workspace = Workspace.parse(args.workspace) if args.workspace else Workspace()

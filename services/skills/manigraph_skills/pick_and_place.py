@@ -10,10 +10,10 @@ from collections.abc import Callable
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus, TrayAction
 from manigraph_shared.orientations import orientation
+from manigraph_shared.workspace import Workspace
 from manigraph_skills.dish_rules import check_dish_move
 from manigraph_skills.drivers.base import Motion, RobotDriver
 from manigraph_skills.grasp_choice import choose_grasps
-from manigraph_skills.workspace import Workspace
 
 SKILL = "pick_and_place"
 

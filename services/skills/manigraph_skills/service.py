@@ -45,11 +45,11 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.scene_gate import SceneGate
 from manigraph_shared.service import Service
+from manigraph_shared.workspace import Workspace
 from manigraph_skills.drivers.base import RobotDriver
 from manigraph_skills.in_flight import ActionInFlight
 from manigraph_skills.pick_and_place import SKILL, PickAndPlace
 from manigraph_skills.scene_cache import SceneCache
-from manigraph_skills.workspace import Workspace
 
 #: Actions waiting for the worker; a real planner has at most one decision in flight.
 QUEUE_CAPACITY = 4

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from manigraph_shared.errors import ConfigError
-from manigraph_skills.workspace import Workspace
+from manigraph_shared.workspace import Workspace
 
 ENV_PREFIX = "MANIGRAPH_FRANKA_"
 

@@ -19,8 +19,8 @@ import numpy as np
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import JointTrajectoryCommand
 from manigraph_shared.panda import ARM_JOINTS
+from manigraph_shared.workspace import Workspace
 from manigraph_skills.motion import PandaModel
-from manigraph_skills.workspace import Workspace
 
 #: Franka Panda datasheet limits, in ``ARM_JOINTS`` order.
 Q_MIN = np.array([-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973])
