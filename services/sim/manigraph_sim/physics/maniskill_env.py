@@ -49,7 +49,8 @@ from manigraph_sim.world_model import Layout
 
 
 class ManigraphEnv(BaseEnv):
-    """A manigraph task with the Panda; subclasses name the task (CPU simulation, one env)."""
+    """A manigraph task with the Panda; a subclass per task names it (``ENVIRONMENTS``; CPU
+    simulation, one env)."""
 
     SUPPORTED_ROBOTS = ["panda"]
     agent: Panda
@@ -172,43 +173,56 @@ class ManigraphEnv(BaseEnv):
         return self.compute_dense_reward(obs, action, info)
 
 
-@register_env("Manigraph-Stack-v0", max_episode_steps=2000)
-class ManigraphStackEnv(ManigraphEnv):
-    """K-block stacking (manigraph's ``stack`` task): build the inverted stack elsewhere."""
+#: Each task as a ManiSkill environment: its id, manigraph's task, its step limit, what it is.
+ENVIRONMENTS = (
+    (
+        "Manigraph-Stack-v0",
+        "stack",
+        2000,
+        "K-block stacking (manigraph's ``stack`` task): build the inverted stack elsewhere.",
+    ),
+    (
+        "Manigraph-Pyramid-v0",
+        "pyramid",
+        4000,
+        "K-pyramid (manigraph's ``pyramid`` task) from one stack of K blocks.",
+    ),
+    (
+        "Manigraph-MultiStack-v0",
+        "multistack",
+        4000,
+        "K-block s-stack (manigraph's ``multistack`` task).",
+    ),
+    (
+        "Manigraph-BoxPack-v0",
+        "box-pack",
+        4000,
+        "Box packing (manigraph's ``box-pack`` task): cover off, blocks in, cover back on.",
+    ),
+    (
+        "Manigraph-BoxUnpack-v0",
+        "box-unpack",
+        4000,
+        "Box unpacking (manigraph's ``box-unpack`` task): cover off, blocks out, cover back.",
+    ),
+    (
+        "Manigraph-BoxRearrangement-v0",
+        "box-rearrangement",
+        6000,
+        "Box rearrangement (``box-rearrangement``): blocks from one closed box to the other.",
+    ),
+)
 
-    task_name = "stack"
+
+def _registered(env_id: str, task_name: str, max_episode_steps: int, doc: str) -> type:
+    """A :class:`ManigraphEnv` subclass for ``task_name``, registered as ``env_id`` and named
+    after it (``Manigraph-BoxPack-v0``: ``ManigraphBoxPackEnv``)."""
+    name = f"Manigraph{env_id.split('-')[1]}Env"
+    namespace = {"task_name": task_name, "__doc__": doc, "__module__": __name__}
+    env = type(name, (ManigraphEnv,), namespace)
+    env.__qualname__ = name
+    return register_env(env_id, max_episode_steps=max_episode_steps)(env)
 
 
-@register_env("Manigraph-Pyramid-v0", max_episode_steps=4000)
-class ManigraphPyramidEnv(ManigraphEnv):
-    """K-pyramid (manigraph's ``pyramid`` task) from one stack of K blocks."""
-
-    task_name = "pyramid"
-
-
-@register_env("Manigraph-MultiStack-v0", max_episode_steps=4000)
-class ManigraphMultiStackEnv(ManigraphEnv):
-    """K-block s-stack (manigraph's ``multistack`` task)."""
-
-    task_name = "multistack"
-
-
-@register_env("Manigraph-BoxPack-v0", max_episode_steps=4000)
-class ManigraphBoxPackEnv(ManigraphEnv):
-    """Box packing (manigraph's ``box-pack`` task): cover off, blocks in, cover back on."""
-
-    task_name = "box-pack"
-
-
-@register_env("Manigraph-BoxUnpack-v0", max_episode_steps=4000)
-class ManigraphBoxUnpackEnv(ManigraphEnv):
-    """Box unpacking (manigraph's ``box-unpack`` task): cover off, blocks out, cover back."""
-
-    task_name = "box-unpack"
-
-
-@register_env("Manigraph-BoxRearrangement-v0", max_episode_steps=6000)
-class ManigraphBoxRearrangementEnv(ManigraphEnv):
-    """Box rearrangement (``box-rearrangement``): blocks from one closed box to the other."""
-
-    task_name = "box-rearrangement"
+#: The registered environment classes by id.
+ENV_CLASSES = {row[0]: _registered(*row) for row in ENVIRONMENTS}
