@@ -23,7 +23,7 @@ from manigraph_shared.messages import (
 from manigraph_shared.panda import ARM_JOINTS
 from manigraph_shared.workspace import Workspace
 from manigraph_skills.drivers import DRIVERS
-from manigraph_skills.drivers.base import Grasp, Motion
+from manigraph_skills.drivers.base import Grasp, Motion, TrayToggle
 from manigraph_skills.drivers.franka import FrankaDriver
 from manigraph_skills.drivers.franka_config import FrankaConfig
 from manigraph_tools.testing import free_port
@@ -260,7 +260,7 @@ def test_a_rack_toggle_runs_through_franky_grasp_slide_release() -> None:
 
     franka = driver()
     handle = Vector3(x=0.51, y=0.0, z=0.30)  # the top rack pulled out (docs/dishwasher.md)
-    franka.toggle_tray("e:0", "rack_top", handle, True)  # push it in
+    franka.toggle_tray(TrayToggle("e:0", "rack_top", handle, True))  # push it in
     robot, gripper = FakeRobot.last, FakeGripper.last
     assert robot is not None and gripper is not None
     # Down to the handle, close, slide along the rail; open, back off: three arm motions.
@@ -282,7 +282,7 @@ def test_a_rack_part_of_the_way_out_slides_only_as_far_as_it_has_left_to_go() ->
 
     franka = driver()
     handle = Vector3(x=0.57, y=0.0, z=0.30)  # the top rack 10 cm out
-    franka.toggle_tray("e:0", "rack_top", handle, True, travel=0.10)  # push it in
+    franka.toggle_tray(TrayToggle("e:0", "rack_top", handle, True, travel=0.10))  # push it in
     grasped, slid = _grasped_and_slid()
     assert np.allclose(slid - grasped, [0.10, 0.0, 0.0], atol=0.005)
 
@@ -307,7 +307,7 @@ def test_a_rack_is_pulled_out_as_far_as_its_rail_goes(rail: float | None) -> Non
     world's racks slide 12 cm); without it, the shared ``RACK_TRAVEL`` (16 cm)."""
     franka = driver()
     handle = Vector3(x=0.67, y=0.0, z=0.30)  # the top rack pushed in
-    franka.toggle_tray("e:0", "rack_top", handle, False, rail=rail)  # pull it out
+    franka.toggle_tray(TrayToggle("e:0", "rack_top", handle, False, rail=rail))  # pull it out
     grasped, slid = _grasped_and_slid()
     assert np.allclose(slid - grasped, [-(rail or 0.16), 0.0, 0.0], atol=0.005)
 

@@ -19,7 +19,7 @@ from manigraph_shared.messages import (
 from manigraph_shared.orientations import UPSIDE_DOWN, nearest_orientation
 from manigraph_shared.workspace import Workspace
 from manigraph_sim.geometric.backend import GeometricBackend
-from manigraph_skills.drivers.base import Motion, RobotDriver
+from manigraph_skills.drivers.base import Motion, RobotDriver, TrayToggle
 from manigraph_skills.pick_and_place import PickAndPlace
 
 
@@ -82,7 +82,9 @@ class ArmWithoutTrays(RobotDriver):
 
 def test_a_driver_without_tray_support_refuses_as_unsupported() -> None:
     with pytest.raises(SkillError) as refused:
-        ArmWithoutTrays().toggle_tray("e:0", "rack_top", Vector3(x=0.5, y=0.0, z=0.3), False)
+        ArmWithoutTrays().toggle_tray(
+            TrayToggle("e:0", "rack_top", Vector3(x=0.5, y=0.0, z=0.3), False)
+        )
     assert refused.value.reason == "unsupported"
 
 

@@ -12,7 +12,7 @@ from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus, Tr
 from manigraph_shared.orientations import orientation
 from manigraph_shared.workspace import Workspace
 from manigraph_skills.dish_rules import check_dish_move
-from manigraph_skills.drivers.base import Motion, RobotDriver
+from manigraph_skills.drivers.base import Motion, RobotDriver, TrayToggle
 from manigraph_skills.grasp_choice import choose_grasps
 
 SKILL = "pick_and_place"
@@ -101,5 +101,7 @@ class PickAndPlace:
             raise SkillError("outside_workspace", f"{rack_id} handle at {rack.position.as_tuple()}")
         status(SkillState.RUNNING)
         self.driver.toggle_tray(
-            action.decision_id, rack_id, rack.position, rack.open, rack.travel, rack.rail
+            TrayToggle(
+                action.decision_id, rack_id, rack.position, rack.open, rack.travel, rack.rail
+            )
         )

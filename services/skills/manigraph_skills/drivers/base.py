@@ -1,7 +1,8 @@
 """What a skill needs from a robot: grasp an object at a pose, release it at another.
 
 A driver implements :meth:`RobotDriver.pick` and :meth:`RobotDriver.place`, each taking one
-:class:`Motion`; what a motion says is declared once, there. Drivers are registered by name
+:class:`Motion`, and may implement :meth:`RobotDriver.toggle_tray`, taking one
+:class:`TrayToggle`; what each says is declared once, there. Drivers are registered by name
 with their options in ``manigraph_skills.drivers.registry``.
 """
 
@@ -55,6 +56,22 @@ class Motion:
     grasp: Grasp = CENTRE_GRASP
 
 
+@dataclass(frozen=True)
+class TrayToggle:
+    """One rack toggle of decision ``decision_id``: grasp rack ``rack_id``'s handle (at
+    ``handle``) and push the rack in if ``is_open``, else pull it out (dishwasher).
+    ``travel``: how far it is out now, where the scene measured it (None: all the way if
+    open, else not at all); ``rail``: how far it slides out all the way, where the scene says
+    (None: ``grasp_points.RACK_TRAVEL``)."""
+
+    decision_id: str
+    rack_id: str
+    handle: Vector3
+    is_open: bool
+    travel: float | None = None
+    rail: float | None = None
+
+
 class RobotDriver(ABC):
     """Raises ``SkillError(reason)`` when the robot could not do what was asked.
 
@@ -83,20 +100,9 @@ class RobotDriver(ABC):
     def place(self, motion: Motion) -> None:
         """Carry the held object to the motion's position and release it."""
 
-    def toggle_tray(
-        self,
-        decision_id: str,
-        rack_id: str,
-        handle: Vector3,
-        is_open: bool,
-        travel: float | None = None,
-        rail: float | None = None,
-    ) -> None:
-        """Grasp rack ``rack_id``'s handle (at ``handle``) and push the rack in if
-        ``is_open``, else pull it out (dishwasher); ``travel``: how far it is out now, where
-        the scene measured it (None: all the way if open, else not at all); ``rail``: how far
-        it slides out all the way, where the scene says (None: ``grasp_points.RACK_TRAVEL``).
-        A driver that cannot refuses with reason ``unsupported``."""
+    def toggle_tray(self, toggle: TrayToggle) -> None:
+        """Push the rack in or pull it out as ``toggle`` says. A driver that cannot refuses
+        with reason ``unsupported``."""
         name = getattr(self, "name", type(self).__name__)
         raise SkillError("unsupported", f"the {name} driver cannot toggle a tray yet")
 

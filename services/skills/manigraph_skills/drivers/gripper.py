@@ -18,9 +18,8 @@ from manigraph_shared.messages import (
     Quaternion,
     RobotCommand,
     RobotFeedback,
-    Vector3,
 )
-from manigraph_skills.drivers.base import Motion, RobotDriver
+from manigraph_skills.drivers.base import Motion, RobotDriver, TrayToggle
 
 
 class GripperTransport(Protocol):
@@ -74,14 +73,7 @@ class GripperDriver(RobotDriver):
     def place(self, motion: Motion) -> None:
         self._send(GripperOp.PLACE, motion)
 
-    def toggle_tray(
-        self,
-        decision_id: str,
-        rack_id: str,
-        handle: Vector3,
-        is_open: bool,
-        travel: float | None = None,
-        rail: float | None = None,
-    ) -> None:
+    def toggle_tray(self, toggle: TrayToggle) -> None:
         """One ``toggle_tray`` command naming the rack, at its handle."""
-        self._send(GripperOp.TOGGLE_TRAY, Motion(decision_id, rack_id, handle, Quaternion()))
+        motion = Motion(toggle.decision_id, toggle.rack_id, toggle.handle, Quaternion())
+        self._send(GripperOp.TOGGLE_TRAY, motion)

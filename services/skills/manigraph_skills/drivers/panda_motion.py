@@ -42,10 +42,15 @@ from manigraph_shared.messages import (
     Quaternion,
     Scene,
     SceneObject,
-    Vector3,
 )
 from manigraph_shared.orientations import postures_like, up_axis_orientation
-from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp, Motion, RobotDriver
+from manigraph_skills.drivers.base import (
+    PLANNING_FAILURES,
+    Grasp,
+    Motion,
+    RobotDriver,
+    TrayToggle,
+)
 from manigraph_skills.drivers.dish_turning import turn_dish
 from manigraph_skills.drivers.joint_transport import JointTransport
 from manigraph_skills.drivers.registry import MotionOptions
@@ -206,22 +211,15 @@ class PandaMotionDriver(RobotDriver):
             return item
         return turn_dish(self, decision_id, item, wanted, scene)
 
-    def toggle_tray(
-        self,
-        decision_id: str,
-        rack_id: str,
-        handle: Vector3,
-        is_open: bool,
-        travel: float | None = None,
-        rail: float | None = None,
-    ) -> None:
+    def toggle_tray(self, toggle: TrayToggle) -> None:
         """Down onto the rack's handle tab (``grasp_points.rack_grip``), close across it,
         pull the rack out along -x (or push it in) as far as it has left to go, release and
         rise."""
-        start = np.array(handle.as_tuple())
+        decision_id, rack_id, is_open = toggle.decision_id, toggle.rack_id, toggle.is_open
+        start = np.array(toggle.handle.as_tuple())
         grip = start + rack_grip(rack_id)
-        rail = RACK_TRAVEL if rail is None else rail
-        out = (rail if is_open else 0.0) if travel is None else travel
+        rail = RACK_TRAVEL if toggle.rail is None else toggle.rail
+        out = (rail if is_open else 0.0) if toggle.travel is None else toggle.travel
         distance = out if is_open else rail - out
         shift = np.array([distance if is_open else -distance, 0.0, 0.0])
         # Yaw 0: the fingers close along y, across the tab.
