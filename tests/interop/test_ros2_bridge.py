@@ -43,11 +43,12 @@ def test_joint_states_tf_and_markers_arrive_in_rmw_zenohs_format(running_stack: 
     running_stack.start("router")
     running_stack.start("ros2", "ros2", "--domain-id", str(DOMAIN))
     samples: queue.Queue[zenoh.Sample] = queue.Queue()
-    session = open_raw_session(running_stack.endpoint)
-    try:
-        subscriber = session.declare_subscriber(f"{DOMAIN}/**", samples.put)
-        with running_stack.client() as bus:
-            running_stack.wait_alive(bus, "ros2")
+    with running_stack.client() as bus:
+        running_stack.wait_alive(bus, "ros2")
+        # Opened once the router answers: a bare session tries to connect only once.
+        session = open_raw_session(running_stack.endpoint)
+        try:
+            subscriber = session.declare_subscriber(f"{DOMAIN}/**", samples.put)
             state = JointState(
                 joint_names=list(ARM_JOINTS),
                 positions=[0.1, -0.785398163397, 0.2, -2.35619449, 0.3, 1.57079632679, 0.785],
@@ -99,9 +100,9 @@ def test_joint_states_tf_and_markers_arrive_in_rmw_zenohs_format(running_stack: 
                 for reply in session.liveliness().get(f"@ros2_lv/{DOMAIN}/**", timeout=2.0)
                 if reply.ok is not None
             ]
-        subscriber.undeclare()
-    finally:
-        session.close()
+            subscriber.undeclare()
+        finally:
+            session.close()
 
     assert set(received) == wanted, f"got {sorted(received)}"
 
