@@ -1,4 +1,5 @@
-"""``manigraph train``: learn a GNN policy from MCAP demonstrations, write a checkpoint.
+"""``manigraph train``: learn a GNN policy from MCAP demonstrations (or a LeRobot dataset
+that ``manigraph export`` wrote), write a checkpoint.
 
 The logs say which policy they teach: decisions on dishwasher scenes (with racks) train the
 four-headed dishwasher policy (``training.dishwasher``), any other the paper's object and goal
@@ -17,7 +18,12 @@ from manigraph_shared.cli import Command
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("demos", type=Path, nargs="+", help="MCAP logs with scenes and actions")
+    parser.add_argument(
+        "demos",
+        type=Path,
+        nargs="+",
+        help="MCAP logs with scenes and actions, or LeRobot dataset folders (meta/info.json)",
+    )
     parser.add_argument("--arch", default="sage", help="architecture: gcn, sage, gated or gat")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(

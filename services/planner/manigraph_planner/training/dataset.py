@@ -2,10 +2,11 @@
 
 Any log with ``manigraph/world/scene`` and ``manigraph/planner/action`` channels is training
 data: ``manigraph demos`` output, the demonstration page's (``manigraph demo-ui``), or a run
-recorded with ``manigraph up --record``. An action is paired with the scene whose
-``episode_id`` and ``sequence`` it names (``scene_sequence``). Decisions on a dishwasher scene
-(one with racks) are the four-headed policy's (``training.dishwasher``) and are skipped here;
-:func:`count_heads` says which kind a log holds.
+recorded with ``manigraph up --record``; so is a LeRobot dataset that ``manigraph export``
+wrote (``training.sources`` says which reader takes a path). An action is paired with the
+scene whose ``episode_id`` and ``sequence`` it names (``scene_sequence``). Decisions on a
+dishwasher scene (one with racks) are the four-headed policy's (``training.dishwasher``) and
+are skipped here; :func:`count_heads` says which kind a log holds.
 """
 
 from __future__ import annotations
@@ -19,8 +20,8 @@ import torch
 from torch import Tensor
 
 from manigraph_planner.gnn.features import GraphState, scene_to_graph
+from manigraph_planner.training.sources import read_source
 from manigraph_shared.errors import LogError
-from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, Scene
 
 
@@ -50,10 +51,7 @@ def read_decisions(paths: Iterable[Path]) -> tuple[dict[tuple[str, int], Scene],
     scenes: dict[tuple[str, int], Scene] = {}
     actions: list[Action] = []
     for path in sorted(paths):
-        if not path.is_file():
-            raise LogError(f"demonstrations: no such file: {path}")
-        for item in read_log(path, [Scene.key, Action.key]):
-            message = item.decode()
+        for message in read_source(path):  # an MCAP log, a LeRobot dataset (training.sources)
             if isinstance(message, Scene):
                 scenes[(message.episode_id, message.sequence)] = message
             elif isinstance(message, Action):
