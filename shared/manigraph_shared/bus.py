@@ -72,11 +72,15 @@ def _json(value: object) -> str:
 class Bus:
     """One process's connection to the manigraph bus."""
 
-    def __init__(self, session: zenoh.Session, cell: str | None = None) -> None:
+    def __init__(
+        self, session: zenoh.Session, cell: str | None = None, owns_session: bool = True
+    ) -> None:
         self.session = session
         #: The robot cell every key of this bus is in (:mod:`manigraph_shared.cells`);
         #: ``None``: the default cell, today's keys.
         self.cell = cell
+        #: Whether :meth:`close` closes the session too (not for a view from :meth:`in_cell`).
+        self.owns_session = owns_session
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._lock = threading.Lock()
         self._declared: list[Any] = []
@@ -84,6 +88,12 @@ class Bus:
     @classmethod
     def open(cls, config: BusConfig, overrides: Mapping[str, object] | None = None) -> Bus:
         return cls(open_session(config, overrides), config.cell)
+
+    def in_cell(self, cell: str | None) -> Bus:
+        """A view of this bus's session in ``cell``: its own declarations, which its
+        :meth:`close` undeclares, leaving the session (and the other views) open. One process
+        serves several cells this way on one session."""
+        return Bus(self.session, cell, owns_session=False)
 
     def scoped(self, key: str) -> str:
         """``key``, declared for the default cell, in this bus's cell."""
@@ -216,7 +226,13 @@ class Bus:
             with contextlib.suppress(zenoh.ZError):
                 entity.undeclare()
         self._declared.clear()
-        if not self.session.is_closed():
+        if not self.owns_session:  # the session stays: its publishers go with the view
+            with self._lock:
+                publishers, self._publishers = list(self._publishers.values()), {}
+            for publisher in publishers:
+                with contextlib.suppress(zenoh.ZError):
+                    publisher.undeclare()
+        elif not self.session.is_closed():
             self.session.close()
 
     def __enter__(self) -> Bus:

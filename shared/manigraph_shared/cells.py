@@ -14,7 +14,16 @@ import re
 
 from manigraph_shared.errors import ConfigError
 
-__all__ = ["PREFIX", "RESERVED", "cell_key", "cell_names", "cell_of", "check_cell"]
+__all__ = [
+    "PREFIX",
+    "RESERVED",
+    "cell_key",
+    "cell_names",
+    "cell_of",
+    "check_cell",
+    "check_cells",
+    "default_key",
+]
 
 PREFIX = "manigraph"
 #: The second segments of the default cell's keys: no cell may be named like them.
@@ -53,6 +62,28 @@ def cell_of(key: str) -> str | None:
     if len(parts) < 3 or parts[0] != PREFIX or parts[1] in RESERVED:
         return None
     return parts[1]
+
+
+def default_key(key: str) -> str:
+    """A concrete key of any cell as the default cell's (where its type is declared):
+    ``manigraph/left/world/scene`` -> ``manigraph/world/scene``."""
+    cell = cell_of(key)
+    return key if cell is None else f"{PREFIX}/{key.split('/', 2)[2]}"
+
+
+def check_cells(names: list[str]) -> list[str]:
+    """``names`` if each can name a cell and none repeats, else a ``ConfigError`` (``cells``)."""
+    if not names:
+        raise ConfigError("cells", "name at least one cell")
+    for name in names:
+        try:
+            check_cell(name)
+        except ConfigError as exc:
+            raise ConfigError("cells", exc.problem) from None
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise ConfigError("cells", f"named twice: {', '.join(repeated)}")
+    return names
 
 
 def cell_names(count: int) -> list[str]:

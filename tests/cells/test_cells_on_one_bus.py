@@ -98,6 +98,19 @@ def test_up_runs_each_cell_on_its_own_seeds_and_reports_each() -> None:
     seeds = {cell: [r["seed"] for r in s["results"]] for cell, s in summary["cells"].items()}
     assert seeds == {"cell-1": [5, 6], "cell-2": [7, 8]}
     assert "[cell-2] episode 2/2" in result.stderr
+    # One planner process served both cells (each cell its own sim and skills).
+    up_line = next(line for line in result.stderr.splitlines() if "stack is up:" in line)
+    processes = up_line.split("stack is up: ", 1)[1].rsplit(" (", 1)[0].split(", ")
+    assert sorted(processes) == sorted(
+        ["router", "planner", "sim@cell-1", "skills@cell-1", "sim@cell-2", "skills@cell-2"]
+    )
+
+
+def test_up_can_still_start_a_planner_per_cell() -> None:
+    result = run_up("--cells", "2", "--planner-per-cell", "--blocks", "3", "--episodes", "1")
+    assert "planner@cell-1" in result.stderr and "planner@cell-2" in result.stderr
+    summary = json.loads(result.stdout.splitlines()[-1])
+    assert summary["success_rate_by_cell"] == {"cell-1": 1.0, "cell-2": 1.0}
 
 
 def test_up_refuses_cells_with_the_secure_bus_before_starting() -> None:

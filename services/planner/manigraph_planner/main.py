@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import argparse
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
 from manigraph_shared.options import Interval, Options, add_option_arguments, option
+
+if TYPE_CHECKING:
+    from manigraph_shared.bus import Bus
 
 
 @dataclass(frozen=True)
@@ -26,6 +30,19 @@ class PlannerOptions(Options):
         within=Interval(0, 3600, low_open=True),
         unit="s",
     )
+    cells: str | None = option(
+        None,
+        help="serve these robot cells, comma-separated (cell-1,cell-2): one planner thread "
+        "per cell sharing the loaded policy (docs/scaling.md); default: the one cell of --cell",
+    )
+
+    def cell_list(self) -> list[str] | None:
+        """The cells of ``--cells``, checked; None without it."""
+        if self.cells is None:
+            return None
+        from manigraph_shared.cells import check_cells
+
+        return check_cells([name.strip() for name in self.cells.split(",")])
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
@@ -41,6 +58,10 @@ def _run(args: argparse.Namespace) -> int:
     from manigraph_shared.service import run_service
 
     options = options_from_args(PlannerOptions, args)
+    cells = options.cell_list()  # a bad cell name stops here, before torch is imported
+    bus_config = bus_config_from_args(args)
+    if cells is not None and bus_config.cell is not None:
+        raise ConfigError("cells", "give --cells or --cell, not both")
     try:
         policy = load_policy(options.policy)
     except PolicyError as exc:  # a missing or unreadable policy: restarting cannot help
@@ -53,12 +74,21 @@ def _run(args: argparse.Namespace) -> int:
                 "explain-decisions",
                 f"only GNN policies can be explained, not '{policy.name}' (give a checkpoint)",
             )
-    return run_service(
-        lambda bus: PlannerService(
+    if cells is None:
+        return run_service(
+            lambda bus: PlannerService(
+                bus, policy, options.explain_decisions, decision_timeout=options.decision_timeout
+            ),
+            bus_config,
+        )
+    from manigraph_shared.cell_services import run_cell_services
+
+    def planner_of(bus: Bus, _cell: str | None) -> PlannerService:
+        return PlannerService(
             bus, policy, options.explain_decisions, decision_timeout=options.decision_timeout
-        ),
-        bus_config_from_args(args),
-    )
+        )
+
+    return run_cell_services(planner_of, bus_config, cells)
 
 
 command = Command(help="run the planner service (policy -> Action)", configure=_configure, run=_run)

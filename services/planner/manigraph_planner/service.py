@@ -40,6 +40,12 @@ class PlannerService(Service):
         policy: the policy served.
         explain_decisions: also publish an ``Explanation`` after every decision (GNN only),
             so explanations land in the MCAP log beside the decisions.
+        decision_timeout: seconds a decision may wait for its skill's final status.
+
+    A planner process serving several cells runs one of these per cell
+    (:mod:`manigraph_shared.cell_services`), sharing only ``policy``: each has its own scene
+    gate, decisions and recovery history, and its own explainer, so one cell's explanations
+    (or a flood of explain queries, refused ``explainer_busy``) never hold up another's.
     """
 
     name = "planner"

@@ -123,9 +123,16 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--cells",
         type=int,
-        help="start N robot cells (cell-1 ... cell-N: each its own sim, planner and skills "
-        "under manigraph/<cell>/...) on one router; with --episodes each runs them on its own "
-        "seeds and the JSON holds one success rate per cell (docs/scaling.md)",
+        help="start N robot cells (cell-1 ... cell-N: each its own sim and skills under "
+        "manigraph/<cell>/..., one planner serving them all) on one router; with --episodes "
+        "each runs them on its own seeds and the JSON holds one success rate per cell "
+        "(docs/scaling.md)",
+    )
+    parser.add_argument(
+        "--planner-per-cell",
+        action="store_true",
+        help="with --cells: a planner process per cell instead of one for all (N copies of "
+        "the policy and of torch; for comparison, docs/scaling.md)",
     )
     parser.add_argument("--port", type=int, default=7447, help="router port on 127.0.0.1")
     parser.add_argument(
@@ -149,11 +156,25 @@ def _cell_specs(
     human: bool,
     cell: str | None,
     spec: Callable[[str, list[str], dict[str, str]], ProcessSpec],
+    with_planner: bool = True,
 ) -> list[ProcessSpec]:
-    """The processes of one robot cell: its sim, planner (or demonstration page) and skills,
-    named ``sim@cell-1`` and so on where the cell is not the default."""
+    """The processes of one robot cell: its sim, planner (or demonstration page; no planner
+    where one serves every cell) and skills, named ``sim@cell-1`` and so on where the cell is
+    not the default."""
     where = {"MANIGRAPH_CELL": cell or ""}
     suffix = f"{CELL_MARK}{cell}" if cell else ""
+    specs = [spec(f"sim{suffix}", ["sim", "--backend", args.sim, *sim_options], where)]
+    if human:
+        specs.append(spec(f"demo-ui{suffix}", _demo_ui_argv(args), where))
+    elif with_planner:
+        specs.append(spec(f"planner{suffix}", _planner_argv(args, plan), where))
+    specs.append(spec(f"skills{suffix}", ["skills", "--driver", _skills_driver(args.sim)], where))
+    if args.scene_source == "camera":
+        specs.append(spec(f"perception{suffix}", SIM_CAMERA_PERCEPTION, where))
+    return specs
+
+
+def _planner_argv(args: argparse.Namespace, plan: EpisodePlan | None) -> list[str]:
     planner = ["planner", "--policy", args.policy]
     if args.explain_decisions:
         planner.append("--explain-decisions")
@@ -161,16 +182,7 @@ def _cell_specs(
         # A decision may run as long as the run lets an episode go without news (a physics
         # PickAndPlace that turns a dish over first takes 20-60 s).
         planner += ["--decision-timeout", f"{plan.stall_timeout:g}"]
-    specs = [
-        spec(f"sim{suffix}", ["sim", "--backend", args.sim, *sim_options], where),
-        spec(f"demo-ui{suffix}", _demo_ui_argv(args), where)
-        if human
-        else spec(f"planner{suffix}", planner, where),
-        spec(f"skills{suffix}", ["skills", "--driver", _skills_driver(args.sim)], where),
-    ]
-    if args.scene_source == "camera":
-        specs.append(spec(f"perception{suffix}", SIM_CAMERA_PERCEPTION, where))
-    return specs
+    return planner
 
 
 #: Between a service and its cell in a process name: ``sim@cell-1``.
@@ -232,6 +244,8 @@ def _up_run(args: argparse.Namespace) -> int:
         raise ConfigError("policy", f"no such checkpoint file: {args.policy}")
     if args.cells is not None and (human or args.scene_source == "camera"):
         raise ConfigError("cells", f"one cell only with --policy {HUMAN} or --scene-source camera")
+    if args.planner_per_cell and args.cells is None:
+        raise ConfigError("planner-per-cell", "only with --cells")
     if args.cells is not None and args.secure:
         # The router's grants name the default cell's keys; per-cell identities are to come.
         raise ConfigError("cells", "--secure has no per-cell access control yet: one cell only")
@@ -257,8 +271,13 @@ def _up_run(args: argparse.Namespace) -> int:
     if args.record:
         specs.append(spec("recorder", ["record", "--output", str(args.record)]))
     cells: list[str | None] = [None] if args.cells is None else list(cell_names(args.cells))
+    # One planner process for every cell (one torch, one copy of the policy), unless asked.
+    shared_planner = args.cells is not None and not args.planner_per_cell
     for cell in cells:
-        specs += _cell_specs(args, plan, sim_options, human, cell, spec)
+        specs += _cell_specs(args, plan, sim_options, human, cell, spec, not shared_planner)
+    if shared_planner:
+        served = ",".join(str(cell) for cell in cells)
+        specs.append(spec("planner", [*_planner_argv(args, plan), "--cells", served]))
     supervisor = Supervisor(args.log_dir)
     summary: dict[str, object] | None = None
     client = BusConfig(
@@ -279,7 +298,10 @@ def _up_run(args: argparse.Namespace) -> int:
             }
             # Services import torch and SAPIEN: 40-90 s each at load 15+ on two cores.
             for cell, bus in buses.items():
-                supervisor.wait_alive(bus, [_service(s.name) for s in specs if _in(s, cell)], 180.0)
+                names = [_service(s.name) for s in specs if _in(s, cell)]
+                if shared_planner:  # its token is in every cell it serves
+                    names.append("planner")
+                supervisor.wait_alive(bus, names, 180.0)
             security = "mutual TLS + access control" if tls_dir else "plain TCP"
             print(
                 "stack is up: " + ", ".join(s.name for s in specs) + f" ({security})",
