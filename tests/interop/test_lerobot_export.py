@@ -79,6 +79,11 @@ def expected_nodes(scene: Scene) -> dict[str, list[Any]]:
     }
 
 
+#: Building lerobot's venv the first time downloads torch (minutes); later runs reuse it.
+VENV_BUILD_TIMEOUT = pytest.mark.timeout(1800)
+
+
+@VENV_BUILD_TIMEOUT
 def test_lerobot_reads_every_step_of_20_demonstrations_back(
     demo_log: Path, lerobot: Path, tmp_path: Path
 ) -> None:
@@ -138,6 +143,7 @@ def test_lerobot_reads_every_step_of_20_demonstrations_back(
     assert positions > 20 * 5
 
 
+@VENV_BUILD_TIMEOUT
 def test_camera_frames_come_back_pixel_for_pixel(
     robot_log: Path, lerobot: Path, tmp_path: Path
 ) -> None:
