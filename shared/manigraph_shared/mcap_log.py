@@ -21,6 +21,7 @@ from mcap.reader import NonSeekingReader
 from mcap.records import Channel, Schema
 from mcap.writer import CompressionType, Writer
 
+from manigraph_shared.cells import cell_of, default_key
 from manigraph_shared.errors import LogError
 from manigraph_shared.messages import Message, key_matches, message_type_for_key
 from manigraph_shared.messages.base import PREFIX
@@ -35,8 +36,13 @@ class LoggedMessage:
     log_time_ns: int
     data: bytes
 
+    @property
+    def cell(self) -> str | None:
+        """The robot cell the message came from (``None``: the default cell)."""
+        return cell_of(self.topic)
+
     def decode(self) -> Message:
-        message_type = message_type_for_key(self.topic)
+        message_type = message_type_for_key(default_key(self.topic))
         if message_type is None:
             raise LogError(f"'{self.topic}' is not a key of the manigraph contract")
         return message_type.decode(self.data, self.topic)
@@ -111,7 +117,8 @@ class McapLogWriter:
         self._stream.close()
 
     def _channel_for(self, topic: str) -> int:
-        message_type = message_type_for_key(topic)
+        # A cell's key (manigraph/<cell>/world/scene) has its default-cell key's schema.
+        message_type = message_type_for_key(default_key(topic))
         schema_id = 0
         if message_type is not None:
             name = message_type.type_name()

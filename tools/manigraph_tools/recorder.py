@@ -15,6 +15,10 @@ the last 100 ms of samples. What the recorder can cost is bounded too:
 Beside the JSON channels (one per key, byte for byte what was on the bus), the writer thread
 also writes Foxglove's well-known types, ``/foxglove/scene`` and ``/foxglove/tf``
 (:mod:`manigraph_tools.foxglove_bridge`), so the log opens in Foxglove's 3D panel as it is.
+
+Robot cells (:mod:`manigraph_shared.cells`): a recorder in the default cell records every
+cell, each on its own channels (the key is the topic: ``manigraph/cell-1/world/scene``), and
+draws each cell apart (``/cell-1/foxglove/scene``); ``--cell NAME`` records that cell only.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from pathlib import Path
 import zenoh
 
 from manigraph_shared.bus import ALIVE_PREFIX, Bus
+from manigraph_shared.cells import cell_of, default_key
 from manigraph_shared.errors import ManigraphError
 from manigraph_shared.mcap_log import McapLogWriter, is_finalised, recover_log
 from manigraph_shared.messages.base import PREFIX
@@ -37,6 +42,8 @@ from manigraph_tools.foxglove_bridge import FOXGLOVE_SCHEMAS, FoxgloveBridge
 DEFAULT_MAX_BYTES = 256 * 1024 * 1024
 DEFAULT_MAX_SECONDS = 3600.0
 MAX_QUEUED_BYTES = 64 * 1024 * 1024
+#: Cells drawn for Foxglove apart (every cell's samples are logged whatever their number).
+MAX_DRAWN_CELLS = 64
 #: A file in the output directory untouched this long has no live recorder (a live one writes
 #: its own heartbeat every second and flushes every 100 ms).
 ABANDONED_AFTER_SECONDS = 10.0
@@ -75,7 +82,10 @@ class Recorder(Service):
         self.path = resolve_output(output)
         self.first_path = self.path
         self.flush_interval = flush_interval
+        #: The default cell's Foxglove view; every other cell seen gets its own in
+        #: ``_cell_views`` (at most ``MAX_DRAWN_CELLS``).
         self._foxglove = FoxgloveBridge() if foxglove else None
+        self._cell_views: dict[str, FoxgloveBridge] = {}
         self.max_bytes = max_bytes
         self.max_seconds = max_seconds
         self.files: list[Path] = []
@@ -161,13 +171,19 @@ class Recorder(Service):
         self._log.close()
 
     def _write_foxglove(
-        self, bridge: FoxgloveBridge, key: str, data: bytes, log_time_ns: int
+        self, default_view: FoxgloveBridge, key: str, data: bytes, log_time_ns: int
     ) -> None:
-        """The sample's Foxglove view, if it has one. One the view cannot draw costs only
-        the view: the sample is already written, the writer goes on, and the first failure
-        per key is logged with its traceback."""
+        """The sample's Foxglove view, if it has one, drawn in its cell's view. One the view
+        cannot draw costs only the view: the sample is already written, the writer goes on,
+        and the first failure per key is logged with its traceback."""
+        cell = cell_of(key)
+        bridge = default_view if cell is None else self._cell_views.get(cell)
+        if bridge is None:
+            if len(self._cell_views) >= MAX_DRAWN_CELLS:  # forged cell names cannot grow this
+                return
+            bridge = self._cell_views[str(cell)] = FoxgloveBridge()
         try:
-            converted = list(bridge.convert(key, data))
+            converted = list(bridge.convert(default_key(key), data))
         except Exception:
             self.foxglove_failures += 1
             if key not in self._foxglove_failed_keys:
@@ -175,7 +191,11 @@ class Recorder(Service):
                 self.log.exception("cannot draw %s for Foxglove (the sample is logged)", key)
             return
         for item in converted:
-            self._log.write(item.topic, item.message.encode(), log_time_ns)
+            topic = item.topic if cell is None else f"/{cell}{item.topic}"
+            if cell is not None:
+                schema = FOXGLOVE_SCHEMAS[item.topic]
+                self._log.add_channel(topic, "protobuf", schema.name, schema.encoding, schema.data)
+            self._log.write(topic, item.message.encode(), log_time_ns)
 
     def trim_heap(self) -> bool:
         """Give freed heap back to the OS (glibc keeps it) during a burst, and once more when

@@ -65,7 +65,8 @@ def _record_run(args: argparse.Namespace) -> int:
 
 record_command = Command(
     help="record every manigraph/** sample to MCAP (flushed every 100 ms, rotated by size "
-    "and age); --recover finalises a killed recorder's file",
+    "and age), every robot cell on its own channels (--cell NAME: that cell only); --recover "
+    "finalises a killed recorder's file",
     configure=_record_configure,
     run=_record_run,
 )

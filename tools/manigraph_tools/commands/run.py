@@ -40,7 +40,8 @@ def _run_run(args: argparse.Namespace) -> int:
 
 
 run_command = Command(
-    help="run seeded episodes on an already running stack; last line: one JSON object",
+    help="run seeded episodes on an already running stack (--cell NAME: in that robot cell); "
+    "last line: one JSON object",
     configure=_run_configure,
     run=_run_run,
 )
