@@ -34,6 +34,11 @@ def key_table() -> str:
         "| `manigraph/alive/<service>` | liveliness token | - | every service | "
         "present while the service runs |"
     )
+    lines.append(
+        "| `manigraph/<cell>/...` | any of the above | as above | that cell's services | "
+        "the same key in robot cell `<cell>`, its second segment (`manigraph/cell-1/world/scene`); "
+        "the default cell has none (`docs/scaling.md`) |"
+    )
     return "\n".join(lines)
 
 
