@@ -7,7 +7,15 @@ import argparse
 import pytest
 
 from manigraph_shared.bus_config import BusConfig, add_bus_arguments, bus_config_from_args
-from manigraph_shared.cells import RESERVED, cell_key, cell_names, cell_of, check_cell
+from manigraph_shared.cells import (
+    RESERVED,
+    cell_key,
+    cell_names,
+    cell_of,
+    check_cell,
+    check_cells,
+    default_key,
+)
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import Message
 
@@ -52,3 +60,16 @@ def test_the_cell_comes_from_the_flag_or_the_environment() -> None:
     assert bus_config_from_args(parser.parse_args([]), environ=env).cell == "right"
     assert bus_config_from_args(parser.parse_args(["--cell", "left"]), environ=env).cell == "left"
     assert bus_config_from_args(parser.parse_args([]), environ={"MANIGRAPH_CELL": ""}).cell is None
+
+
+def test_a_cells_key_goes_back_to_the_key_its_type_is_declared_on() -> None:
+    assert default_key("manigraph/left/world/scene") == "manigraph/world/scene"
+    assert default_key("manigraph/left/status/planner") == "manigraph/status/planner"
+    assert default_key("manigraph/world/scene") == "manigraph/world/scene"
+
+
+@pytest.mark.parametrize("names", [[], ["left", "Left"], ["a", "b", "a"], ["world"]])
+def test_a_bad_list_of_cells_is_refused_naming_cells(names: list[str]) -> None:
+    with pytest.raises(ConfigError, match=r"^cells: "):
+        check_cells(names)
+    assert check_cells(["a", "b"]) == ["a", "b"]

@@ -18,8 +18,11 @@ from manigraph_planner.policies.expert import ExpertPolicy
 from manigraph_planner.service import PlannerService
 from manigraph_shared.bus import Bus
 from manigraph_shared.cell_services import CellServices
+from manigraph_shared.errors import RequestRefused
 from manigraph_shared.messages import (
     Action,
+    ExplainRequest,
+    Explanation,
     Scene,
     SceneGoal,
     SceneObject,
@@ -135,6 +138,24 @@ def test_one_planner_process_decides_in_each_cell_and_only_there(running_stack: 
         time.sleep(0.3)  # anything misrouted would have arrived by now
         assert actions["left"].ids() == ["ep-left:0"]
         assert actions["right"].ids() == [f"ep-right:{step}" for step in range(4)]
+
+
+def test_each_cell_explains_its_own_decisions_only(running_stack: Stack) -> None:
+    running_stack.start("router")
+    policy = "checkpoints/sage.pt"
+    running_stack.start("planner", "planner", "--policy", policy, "--cells", "left,right")
+    with cell_buses(running_stack, "left", "right") as buses:
+        for bus in buses.values():  # torch first: on a loaded machine this takes a while
+            running_stack.wait_alive(bus, "planner", timeout=180.0)
+        actions = Actions(buses["left"])
+        buses["left"].publish(two_block_scene("ep-left", time.time(), 0))
+        decided = actions.wait_for("ep-left:0", 30.0)
+        # The explainer may still be building (PyG's import): the query waits for it.
+        why = buses["left"].request(ExplainRequest(decision_id="ep-left:0"), Explanation, 60.0)
+        assert why.decision_id == "ep-left:0"
+        assert (why.object, why.goal) == (decided.object_id, decided.goal_id)
+        with pytest.raises(RequestRefused, match="decision_id"):  # not the right cell's
+            buses["right"].request(ExplainRequest(decision_id="ep-left:0"), Explanation, 60.0)
 
 
 def test_a_bad_cell_list_stops_the_planner_naming_cells() -> None:
