@@ -42,6 +42,7 @@ from manigraph_planner.gnn.models import ARCHITECTURES
 from manigraph_planner.policies.base import Policy
 from manigraph_planner.training.dataset import Sample
 from manigraph_shared.errors import ConfigError
+from manigraph_shared.registry import Registry
 
 __all__ = ["BASELINES", "Baseline", "PPOSettings", "Stage", "register_baseline", "train_stage"]
 
@@ -174,15 +175,17 @@ class Baseline(ABC):
         return gnn
 
 
-BASELINES: dict[str, Baseline] = {}
+#: Every baseline by name, one instance each (the one ``Registry`` every swapped part uses).
+BASELINES: Registry[Baseline] = Registry("baseline")
 
 
 def register_baseline(name: str) -> Callable[[type[Baseline]], type[Baseline]]:
+    """Register one instance of the decorated class as ``name``; a second entry under a name
+    is refused (``ConfigError``, a ``ValueError``)."""
+
     def register(cls: type[Baseline]) -> type[Baseline]:
-        if name in BASELINES:
-            raise ValueError(f"baseline: '{name}' is already registered")
         cls.name = name
-        BASELINES[name] = cls()
+        BASELINES.add(name, cls())
         return cls
 
     return register
