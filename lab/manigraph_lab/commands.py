@@ -1,6 +1,7 @@
 """The lab's subcommands: ``demos``, ``eval``, ``suite`` and ``select`` (training lives with the
 planner). Long work shows a progress bar on stderr when stderr is a terminal (and ``eval``
-not given ``--json``); piped or redirected, only results are printed."""
+not given ``--json``); piped or redirected, only results are printed. ``suite`` and ``select``
+run their cells as Ray tasks (``--workers``, ``--ray-address``, ``--no-ray``)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from manigraph_lab.sweep import SweepOptions, add_sweep_options
 from manigraph_planner.threads import add_threads_option, use_threads
 from manigraph_shared.cli import Command
 from manigraph_shared.options import (
@@ -121,11 +123,13 @@ def _suite_configure(parser: argparse.ArgumentParser) -> None:
         help="first episode seed of the table (reported: 0; choosing a recipe: 1000+)",
     )
     add_threads_option(parser)
+    add_sweep_options(parser)
 
 
 def _suite_run(args: argparse.Namespace) -> int:
     from manigraph_lab.suite import run_suite
 
+    sweep = SweepOptions.from_args(args)
     use_threads(args.threads)
     run_suite(
         args.out,
@@ -136,6 +140,7 @@ def _suite_run(args: argparse.Namespace) -> int:
         args.epochs,
         progress=sys.stderr,
         eval_seed=args.eval_seed,
+        sweep=sweep,
     )
     print((args.out / "generalization.md").read_text())
     return 0
@@ -154,14 +159,16 @@ def _select_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--episodes", type=int, default=30, help="validation episodes per cell")
     parser.add_argument("--table", type=Path, help="also write the Markdown table here")
     add_threads_option(parser)
+    add_sweep_options(parser)
 
 
 def _select_run(args: argparse.Namespace) -> int:
     from manigraph_lab.selection import select_checkpoint
 
+    sweep = SweepOptions.from_args(args)
     use_threads(args.threads)
     chosen, table = select_checkpoint(
-        args.checkpoints, args.output, args.episodes, progress=sys.stderr
+        args.checkpoints, args.output, args.episodes, progress=sys.stderr, sweep=sweep
     )
     if args.table is not None:
         args.table.parent.mkdir(parents=True, exist_ok=True)

@@ -20,8 +20,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TextIO
 
-from manigraph_lab.evaluate import success_rate
-from manigraph_lab.suite import Cell, cells
+from manigraph_lab.suite import Cell, cells, eval_cell
+from manigraph_lab.sweep import Job, Outcome, SweepError, SweepOptions, run_jobs
+from manigraph_shared.errors import ConfigError
 from manigraph_shared.progress import Progress
 
 #: First episode seed of validation episodes.
@@ -44,25 +45,42 @@ def validation_cells(episodes: int, seed: int = VALIDATION_SEED) -> list[Cell]:
 
 
 def score(
-    checkpoints: list[Path], table: list[Cell], progress: TextIO | None = None
+    checkpoints: list[Path],
+    table: list[Cell],
+    progress: TextIO | None = None,
+    sweep: SweepOptions | None = None,
 ) -> list[Candidate]:
-    """Every candidate's success per cell; ``progress``: stream for bars (on a terminal only)
-    and for one line per cell."""
-    from manigraph_planner.policies import load_policy
+    """Every candidate's success per cell, one sweep job per (candidate, cell); ``progress``:
+    stream for bars (on a terminal only) and for one line per cell; ``sweep``: where the
+    jobs run (default: sequentially in this process).
 
-    candidates = []
-    bar = Progress(len(checkpoints) * len(table), "select", unit="cell", stream=progress)
-    for path in checkpoints:
-        policy = load_policy(str(path))
-        scores = {}
-        for cell in table:
-            bar.status(path.name)
-            scores[cell.label] = success_rate(policy, cell.spec, progress)
-            bar.note(f"  {path.name}: {cell.label}: {scores[cell.label]:.3f}")
-            bar.update()
-        candidates.append(Candidate(path, scores))
+    Raises:
+        ConfigError: a checkpoint is listed twice.
+        SweepError: some cells failed (each named); the scored ones were printed.
+    """
+    repeated = sorted({str(p) for p in checkpoints if checkpoints.count(p) > 1})
+    if repeated:
+        raise ConfigError("checkpoints", f"listed more than once: {', '.join(repeated)}")
+    jobs = [
+        Job(f"{path.name} ({path}): {cell.label}", eval_cell, (path.read_bytes(), cell.spec))
+        for path in checkpoints
+        for cell in table
+    ]
+    bar = Progress(len(jobs), "select", unit="cell", stream=progress)
+
+    def done(job: Job, outcome: Outcome) -> None:
+        shown = f"{outcome.value:.3f}" if outcome.ok else f"failed ({outcome.error})"
+        bar.note(f"  {job.name}: {shown}")
+
+    outcomes = run_jobs(jobs, sweep or SweepOptions(ray=False), bar, done)
     bar.close()
-    return candidates
+    failures = {j.name: o.error for j, o in zip(jobs, outcomes, strict=True) if o.error}
+    if failures:
+        raise SweepError(failures, len(jobs))
+    rates = iter(outcomes)
+    return [
+        Candidate(path, {cell.label: next(rates).value for cell in table}) for path in checkpoints
+    ]
 
 
 def best(candidates: list[Candidate]) -> Candidate:
@@ -92,12 +110,14 @@ def select_checkpoint(
     episodes: int = 30,
     seed: int = VALIDATION_SEED,
     progress: TextIO | None = None,
+    sweep: SweepOptions | None = None,
 ) -> tuple[Candidate, str]:
     """Score ``checkpoints`` on validation episodes, write the best to ``output`` (its
-    metrics extended with the selection) and return it with the Markdown table."""
+    metrics extended with the selection) and return it with the Markdown table; ``sweep``:
+    where the (candidate, cell) evaluations run (default: sequentially in this process)."""
     from manigraph_planner.gnn import load_checkpoint, save_checkpoint
 
-    candidates = score(checkpoints, validation_cells(episodes, seed), progress)
+    candidates = score(checkpoints, validation_cells(episodes, seed), progress, sweep)
     chosen = best(candidates)
     net, info = load_checkpoint(chosen.path)
     selection = {
