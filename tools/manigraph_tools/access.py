@@ -10,16 +10,29 @@ secrets, and what must be protected is who can *move* the robot or the world.
 ``{identity}`` in a key expression stands for the identity itself, so each service may only
 announce its own liveliness token and publish its own status.
 
+**Cells** (docs/scaling.md). The bare identities above act in the default cell only. A
+process of robot cell ``cell-1`` presents ``<service>.<cell>``, e.g. ``sim.cell-1``: the same
+rows, on the cell's keys (``manigraph/cell-1/robot/command``) and nowhere else, so cell A's
+identities can neither move cell B's robot nor reset its world. A process serving several
+cells (one planner for many) presents ``<service>.<label>`` and the certificate set's
+``cells.json`` names its cells (:func:`write_cell_identities`). Routers (``router``,
+``router.<site>``) relay: what another site's router forwards was checked at that router's
+own ingress.
+
 ``manigraph certs --policy`` prints the table; ``docs/security.md`` holds a copy, kept from
 drifting by a test.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import json
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 from manigraph_shared.bus import ALIVE_PREFIX
+from manigraph_shared.cells import cell_key, check_cell
+from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import (
     Action,
     CameraInfo,
@@ -52,6 +65,14 @@ READ = ("declare_subscriber", "liveliness_query", "declare_liveliness_subscriber
 EVERY_MESSAGE = PUBLISH + SERVE + QUERY + ANNOUNCE + READ
 
 SERVICES = ("sim", "perception", "planner", "skills", "recorder", "demo-ui")
+ROUTER = "router"
+#: Between a service and its cell (or its label) in a certificate's CN: ``sim.cell-1``.
+CELL_SEPARATOR = "."
+#: The identities each cell gets from ``manigraph certs --cells`` (the router relays, the
+#: viewer only reads: neither needs one per cell).
+CELL_SERVICES = ("sim", "perception", "planner", "skills", "recorder", "client", "demo-ui")
+#: The file in a certificate directory that names each cell identity's cells.
+CELLS_FILE = "cells.json"
 
 
 @dataclass(frozen=True)
@@ -111,6 +132,12 @@ GRANTS: tuple[Grant, ...] = (
         "each service its own heartbeat",
     ),
     Grant(SERVICES, ANNOUNCE, (f"{ALIVE_PREFIX}/{{identity}}",), "each service its own token"),
+    Grant(
+        (ROUTER,),
+        EVERY_MESSAGE,
+        (f"{PREFIX}/**",),
+        "another site's router relays what its own clients were granted",
+    ),
     Grant(IDENTITIES, READ, (f"{PREFIX}/**",), "every identity may read"),
 )
 
@@ -131,11 +158,75 @@ def policy_table(grants: Sequence[Grant] = GRANTS) -> str:
     return "\n".join(lines)
 
 
-def access_control(grants: Sequence[Grant] = GRANTS) -> dict[str, object]:
-    """Zenoh's ``access_control`` configuration for the router: deny unless granted."""
+def service_of(identity: str) -> str:
+    """The service part of an identity: ``sim.cell-1`` -> ``sim``; ``planner`` -> ``planner``."""
+    return identity.partition(CELL_SEPARATOR)[0]
+
+
+def cell_identities(cells: Iterable[str]) -> dict[str, tuple[str, ...]]:
+    """Every :data:`CELL_SERVICES` identity of each cell: ``{"sim.cell-1": ("cell-1",), ...}``."""
+    return {
+        f"{service}{CELL_SEPARATOR}{check_cell(cell)}": (cell,)
+        for cell in cells
+        for service in CELL_SERVICES
+    }
+
+
+def check_cell_identities(
+    identities: Mapping[str, Sequence[str]],
+) -> dict[str, tuple[str, ...]]:
+    """``identities`` (CN -> its cells) if each names a known service and real cells, else a
+    ``ConfigError`` naming the identity. Routers may have no cells: they relay every cell."""
+    checked: dict[str, tuple[str, ...]] = {}
+    for identity, cells in identities.items():
+        service, sep, label = identity.partition(CELL_SEPARATOR)
+        known = (*CELL_SERVICES, ROUTER, "view")
+        if not sep or not label or service not in known:
+            raise ConfigError(
+                "identity",
+                f"'{identity}' is not <service>{CELL_SEPARATOR}<cell or label> with a service "
+                f"of {', '.join(known)}",
+            )
+        if service != ROUTER and not cells:
+            raise ConfigError("identity", f"'{identity}' serves no cell")
+        checked[identity] = tuple(check_cell(cell) for cell in cells)
+    return checked
+
+
+def write_cell_identities(directory: Path, identities: Mapping[str, Sequence[str]]) -> Path:
+    """Write ``cells.json`` (CN -> its cells) into a certificate directory."""
+    path = directory / CELLS_FILE
+    checked = check_cell_identities(identities)
+    path.write_text(json.dumps({"identities": {k: list(v) for k, v in checked.items()}}, indent=2))
+    return path
+
+
+def read_cell_identities(directory: Path | None) -> dict[str, tuple[str, ...]]:
+    """The cell identities of a certificate directory (none where it has no ``cells.json``)."""
+    if directory is None or not (directory / CELLS_FILE).is_file():
+        return {}
+    path = directory / CELLS_FILE
+    try:
+        data = json.loads(path.read_text())
+        identities = data["identities"]
+        return check_cell_identities({str(k): [str(c) for c in v] for k, v in identities.items()})
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise ConfigError("tls_dir", f"{path}: not a cells file ({exc})") from None
+
+
+def access_control(
+    grants: Sequence[Grant] = GRANTS, cells: Mapping[str, Sequence[str]] | None = None
+) -> dict[str, object]:
+    """Zenoh's ``access_control`` configuration for the router: deny unless granted.
+
+    ``cells`` maps each cell identity (``sim.cell-1``, ``planner.pool``) to the cells it
+    serves: it is granted its service's rows on those cells' keys only.
+    """
+    in_cells = check_cell_identities(cells or {})
     rules: list[dict[str, object]] = []
     policies: list[dict[str, object]] = []
-    identities = sorted({name for grant in grants for name in grant.identities})
+    bare = {name for grant in grants for name in grant.identities}
+    identities = sorted(bare | set(in_cells))
     for index, grant in enumerate(grants):
         expanded = any("{identity}" in key for key in grant.key_exprs)
         for identity in grant.identities if expanded else ("",):
@@ -150,7 +241,16 @@ def access_control(grants: Sequence[Grant] = GRANTS) -> dict[str, object]:
                 }
             )
             subjects = [identity] if identity else list(grant.identities)
+            if grant.messages == READ:  # reading is open to every identity
+                subjects += list(in_cells)
+            elif ROUTER in grant.identities:  # every site's router relays
+                subjects += [name for name in in_cells if service_of(name) == ROUTER]
             policies.append({"rules": [rule_id], "subjects": subjects})
+        if grant.messages == READ or ROUTER in grant.identities:
+            continue
+        rules_and_policies = _cell_rules(index, grant, in_cells)
+        rules += [rule for rule, _ in rules_and_policies]
+        policies += [policy for _, policy in rules_and_policies]
     rules.append(
         {
             "id": "forward",
@@ -168,3 +268,35 @@ def access_control(grants: Sequence[Grant] = GRANTS) -> dict[str, object]:
         "subjects": [{"id": name, "cert_common_names": [name]} for name in identities],
         "policies": policies,
     }
+
+
+def _cell_rules(
+    index: int, grant: Grant, in_cells: Mapping[str, tuple[str, ...]]
+) -> list[tuple[dict[str, object], dict[str, object]]]:
+    """A grant's rows for the cell identities of its services: one rule per (cell, service
+    where the key names it), each on that cell's keys only."""
+    out: list[tuple[dict[str, object], dict[str, object]]] = []
+    per_rule: dict[tuple[str, str], list[str]] = {}
+    expanded = any("{identity}" in key for key in grant.key_exprs)
+    for identity, cells in in_cells.items():
+        service = service_of(identity)
+        if service not in grant.identities:
+            continue
+        for cell in cells:
+            per_rule.setdefault((cell, service if expanded else ""), []).append(identity)
+    for (cell, service), subjects in per_rule.items():
+        rule_id = f"grant{index}@{cell}" + (f"-{service}" if service else "")
+        keys = [cell_key(key.replace("{identity}", service), cell) for key in grant.key_exprs]
+        out.append(
+            (
+                {
+                    "id": rule_id,
+                    "messages": list(grant.messages),
+                    "flows": ["ingress"],
+                    "permission": "allow",
+                    "key_exprs": keys,
+                },
+                {"rules": [rule_id], "subjects": sorted(subjects)},
+            )
+        )
+    return out

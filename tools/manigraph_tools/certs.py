@@ -86,8 +86,11 @@ def make_certificates(
     if days < 1:
         raise ConfigError("days", f"{days} must be >= 1")
     for identity in identities:
-        if not identity or not identity.replace("-", "").replace("_", "").isalnum():
-            raise ConfigError("identity", f"'{identity}' must be letters, digits, '-' or '_'")
+        plain = identity.replace("-", "").replace("_", "").replace(".", "")
+        if not identity or not plain.isalnum() or identity[0] == "." or identity[-1] == ".":
+            raise ConfigError(
+                "identity", f"'{identity}' must be letters, digits, '-', '_' or '.' inside"
+            )
     wanted = CertificateSet(directory, tuple(dict.fromkeys(identities)))
     if not force:
         for path in wanted.files():

@@ -13,7 +13,7 @@ import threading
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.health import HealthFile
-from manigraph_tools.access import access_control
+from manigraph_tools.access import access_control, read_cell_identities
 
 log = logging.getLogger("manigraph.router")
 
@@ -22,15 +22,21 @@ def run_router(config: BusConfig) -> int:
     stop = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    overrides = {"access_control": access_control()} if config.tls else {}
+    # The certificate set's cells.json (if any) names each cell identity's cells.
+    cells = read_cell_identities(config.tls_dir) if config.tls else {}
+    overrides = {"access_control": access_control(cells=cells)} if config.tls else {}
     health = HealthFile.from_environment()
     health.clear()  # a killed predecessor's file says nothing about this router
     with Bus.open(config, overrides) as bus:
         bus.declare_alive("router")
         log.info("zenoh router listening on %s", ",".join(config.listen))
+        if config.connect:
+            log.info("linking to the router(s) at %s", ",".join(config.connect))
         if config.tls:
             log.info(
-                "mutual TLS as %s; access control on (deny unless granted)", config.tls_identity
+                "mutual TLS as %s; access control on (deny unless granted; %d cell identities)",
+                config.tls_identity,
+                len(cells),
             )
         else:
             log.warning("plain TCP: no authentication, no access control (development only)")

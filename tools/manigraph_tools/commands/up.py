@@ -25,8 +25,9 @@ from manigraph_shared.manifest import driver_for_world, load_manifests
 from manigraph_shared.options import option_argv
 from manigraph_shared.preflight import vulkan_problem
 from manigraph_shared.registry import Registry
+from manigraph_tools.access import CELL_SEPARATOR, cell_identities, write_cell_identities
 from manigraph_tools.cell_episodes import run_cells
-from manigraph_tools.certs import make_certificates
+from manigraph_tools.certs import IDENTITIES, make_certificates
 from manigraph_tools.commands.common import emit_json
 from manigraph_tools.commands.run import episode_arguments, plan_from_args
 from manigraph_tools.episodes import EpisodePlan, run_episodes
@@ -193,6 +194,23 @@ def _service(process: str) -> str:
     return process.partition(CELL_MARK)[0]
 
 
+#: The certificate CN of ``up``'s one planner for every cell (granted each of them).
+SHARED_PLANNER = f"planner{CELL_SEPARATOR}shared"
+
+
+def _identity(process: str) -> str:
+    """The TLS identity of a process: ``sim@cell-1`` presents ``sim.cell-1``."""
+    service, _, cell = process.partition(CELL_MARK)
+    return f"{service}{CELL_SEPARATOR}{cell}" if cell else service
+
+
+def _client_identity(client: BusConfig, cell: str | None) -> str | None:
+    """The episode client of ``cell``: ``client.cell-1`` (granted that cell's resets only)."""
+    if client.tls_identity is None or cell is None:
+        return client.tls_identity
+    return f"{client.tls_identity}{CELL_SEPARATOR}{cell}"
+
+
 def _in(process: ProcessSpec, cell: str | None) -> bool:
     """Whether ``process`` belongs to ``cell`` (the router and recorder: the default cell)."""
     _, _, its_cell = process.name.partition(CELL_MARK)
@@ -246,9 +264,6 @@ def _up_run(args: argparse.Namespace) -> int:
         raise ConfigError("cells", f"one cell only with --policy {HUMAN} or --scene-source camera")
     if args.planner_per_cell and args.cells is None:
         raise ConfigError("planner-per-cell", "only with --cells")
-    if args.cells is not None and args.secure:
-        # The router's grants name the default cell's keys; per-cell identities are to come.
-        raise ConfigError("cells", "--secure has no per-cell access control yet: one cell only")
     # The options first: a run refused for them names them, whatever else is on the port.
     _refuse_busy_port(args.port)
     tls_dir = Path(tempfile.mkdtemp(prefix="manigraph-certs-")) if args.secure else None
@@ -260,24 +275,34 @@ def _up_run(args: argparse.Namespace) -> int:
         "MANIGRAPH_TLS_DIR": str(tls_dir or ""),  # plain TCP is chosen, not inherited
         "MANIGRAPH_TLS_IDENTITY": "",
     }
+    cells: list[str | None] = [None] if args.cells is None else list(cell_names(args.cells))
+    # One planner process for every cell (one torch, one copy of the policy), unless asked.
+    shared_planner = args.cells is not None and not args.planner_per_cell
     if tls_dir is not None:
-        make_certificates(tls_dir, force=True)
+        # Each cell's processes present <service>.<cell>, granted that cell's keys only; the
+        # shared planner presents planner.shared, granted every cell (docs/security.md).
+        in_cells = cell_identities(str(cell) for cell in cells if cell)
+        if shared_planner:
+            in_cells[SHARED_PLANNER] = tuple(str(cell) for cell in cells)
+        make_certificates(tls_dir, [*IDENTITIES, *in_cells], force=True)
+        if in_cells:
+            write_cell_identities(tls_dir, in_cells)
 
     def spec(name: str, argv: list[str], extra: dict[str, str] | None = None) -> ProcessSpec:
-        identity = {"MANIGRAPH_TLS_IDENTITY": _service(name)} if tls_dir else {}
+        identity = {"MANIGRAPH_TLS_IDENTITY": _identity(name)} if tls_dir else {}
         return ProcessSpec(name, argv, {**bus_env, **identity, **(extra or {})})
 
     specs = [spec("router", ["router", "--listen", endpoint])]
     if args.record:
         specs.append(spec("recorder", ["record", "--output", str(args.record)]))
-    cells: list[str | None] = [None] if args.cells is None else list(cell_names(args.cells))
-    # One planner process for every cell (one torch, one copy of the policy), unless asked.
-    shared_planner = args.cells is not None and not args.planner_per_cell
     for cell in cells:
         specs += _cell_specs(args, plan, sim_options, human, cell, spec, not shared_planner)
     if shared_planner:
         served = ",".join(str(cell) for cell in cells)
-        specs.append(spec("planner", [*_planner_argv(args, plan), "--cells", served]))
+        planner = spec("planner", [*_planner_argv(args, plan), "--cells", served])
+        if tls_dir is not None:
+            planner.env["MANIGRAPH_TLS_IDENTITY"] = SHARED_PLANNER
+        specs.append(planner)
     supervisor = Supervisor(args.log_dir)
     summary: dict[str, object] | None = None
     client = BusConfig(
@@ -294,7 +319,12 @@ def _up_run(args: argparse.Namespace) -> int:
         supervisor.watch()  # a dead service is restarted; a dead router stops the stack
         with contextlib.ExitStack() as stack:
             buses = {
-                cell: stack.enter_context(Bus.open(replace(client, cell=cell))) for cell in cells
+                cell: stack.enter_context(
+                    Bus.open(
+                        replace(client, cell=cell, tls_identity=_client_identity(client, cell))
+                    )
+                )
+                for cell in cells
             }
             # Services import torch and SAPIEN: 40-90 s each at load 15+ on two cores.
             for cell, bus in buses.items():
