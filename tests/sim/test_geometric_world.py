@@ -103,6 +103,57 @@ def test_a_block_overhanging_a_single_block_slides_off_to_the_table() -> None:
     assert world.support_extent(rest, SIZE, ignore="b") is None
 
 
+def test_a_block_at_a_top_goal_on_a_stray_block_does_not_fill_it() -> None:
+    """A 3-pyramid with a block dropped on the table between its two bottom goals (in
+    neither): a block set on the top goal stands there, centred on that stray block, but the
+    goals under it are free, so the top goal is not filled (and the pyramid cannot be
+    finished until both blocks are moved)."""
+    from manigraph_sim.tasks.pyramid import pyramid_goals
+
+    goals = pyramid_goals(np.array([0.5, 0.0, 0.0]), 3)
+    top = goals[2]
+    world = GeometricWorld([block("stray", 0.5, 0.0, 0), block("spare", 0.35, -0.2, 0)], goals)
+    world.pick("spare")
+    rest = world.place("spare", top.position)
+    assert rest == pytest.approx(top.position)  # it stands in the top goal ...
+    assert world.occupancy() == {}  # ... which is not filled while the goals under it are free
+    assert world.goals_filled() == 0
+    assert world.goal_supports()[top.id] == ["goal_0", "goal_1"]
+
+
+def test_a_stack_goal_over_a_free_goal_is_not_filled() -> None:
+    """A block 12 mm off the lowest goal (outside the tolerance) holds one centred on the goal
+    above it: that goal is filled only once the one under it is."""
+    world = GeometricWorld(
+        [block("low", 0.4 + 0.012, 0.2, 0), block("high", 0.4, 0.2, 1)],
+        [goal("g0", 0.4, 0.2, 0), goal("g1", 0.4, 0.2, 1)],
+    )
+    assert world.occupancy() == {}
+    world.bodies["low"].position[0] = 0.4 + 0.009
+    assert world.occupancy() == {"g0": "low", "g1": "high"}
+    assert world.goal_supports() == {"g0": [], "g1": ["g0"]}
+
+
+@pytest.mark.parametrize(
+    ("task", "params", "supported"),
+    [
+        ("stack", TaskParams(blocks=5), [1, 1, 1, 1]),
+        ("multistack", TaskParams(blocks=3, stacks=3), [1, 1] * 3),
+        ("pyramid", TaskParams(blocks=6), [2, 2, 2]),
+        ("pyramid", TaskParams(blocks=10), [2] * 6),
+        ("box-rearrangement", TaskParams(blocks=4), []),
+        ("box-pack", TaskParams(blocks=3), []),
+    ],
+)
+def test_goal_supports_of_the_tasks(task: str, params: TaskParams, supported: list[int]) -> None:
+    """Every goal off the table stands on the goals under it (one in a stack, two in a
+    pyramid); the box tasks' goals stand on a box floor, a rim or the table."""
+    layout = get_task(task, params).layout(np.random.default_rng(3))
+    world = GeometricWorld(layout.bodies, layout.goals, containers=layout.containers)
+    counts = [len(under) for under in world.goal_supports().values() if under]
+    assert counts == supported
+
+
 def test_gripper_holds_one_object_at_a_time() -> None:
     world = GeometricWorld([block("a", 0.5, 0, 0), block("c", 0.6, 0, 0)], [])
     world.pick("a")

@@ -2,10 +2,13 @@
 
 Bodies are axis-aligned boxes. A body rests on the highest body under its footprint, or on the
 table; picking a body that has another body on top of it fails; a body released above a goal
-falls until it rests on something, so a goal is filled only when what is below it is there.
-A body whose centre is not over what it lands on tips off over the edge it overhangs and
-falls again (a block set on a pyramid's top goal with one of the two blocks under it
-missing ends beside the other, one level lower), as it would on a real table.
+falls until it rests on something. A body whose centre is not over what it lands on tips off
+over the edge it overhangs and falls again (a block set on a pyramid's top goal with one of
+the two blocks under it missing ends beside the other, one level lower), as it would on a
+real table. A goal is filled by a body of its category resting within the tolerance, and
+only while every goal under it is filled: a block that stands at a pyramid's top goal on a
+stray block (one that is in no goal) does not fill it, since the pyramid under it is not
+there and cannot be finished with the block where it is.
 Containers (open-top boxes) are static: a body that fits inside rests on the floor, a wider
 one (a cover) rests on the rim and closes the box; what is inside a closed box can be hidden.
 """
@@ -158,10 +161,33 @@ class GeometricWorld:
             box.holds_point(point) and box.id not in self.revealed for box in self.containers
         )
 
-    def occupancy(self) -> dict[str, str]:
-        """Goal id -> id of the resting body of its category within ``goal_tolerance``."""
-        bodies = self.resting()
+    def goal_supports(self) -> dict[str, list[str]]:
+        """Goal id -> the goals its object stands on: goals of its category one object
+        height lower whose footprints overlap its own (a stack's goal: the one under it; a
+        pyramid's: the two under it; a goal on the table or a box floor: none). A goal's
+        footprint is that of the category's objects."""
+        sizes = {body.category: body.size for body in self.bodies.values()}
         goals = list(self.goals.values())
+        supports: dict[str, list[str]] = {goal.id: [] for goal in goals}
+        for goal in goals:
+            size = sizes.get(goal.category)
+            if size is None:
+                continue
+            for other in goals:
+                offset = goal.position - other.position
+                if (
+                    other.category == goal.category
+                    and abs(offset[2] - size[2]) <= CONTACT_MARGIN
+                    and bool(np.all(np.abs(offset[:2]) < size[:2] - CONTACT_MARGIN))
+                ):
+                    supports[goal.id].append(other.id)
+        return supports
+
+    def occupancy(self) -> dict[str, str]:
+        """Goal id -> id of the resting body of its category within ``goal_tolerance``, for
+        each goal whose supporting goals (``goal_supports``) are all filled."""
+        bodies = self.resting()
+        goals = sorted(self.goals.values(), key=lambda goal: float(goal.position[2]))
         if not bodies or not goals:
             return {}
         body_xyz = np.array([b.position for b in bodies])
@@ -169,12 +195,15 @@ class GeometricWorld:
         distance = np.linalg.norm(goal_xyz[:, None, :] - body_xyz[None, :, :], axis=-1)
         same = np.array([[g.category == b.category for b in bodies] for g in goals])
         distance[~same] = np.inf
-        filled = {}
-        for row, goal in enumerate(goals):
+        supports = self.goal_supports()
+        filled: dict[str, str] = {}
+        for row, goal in enumerate(goals):  # lowest first: a goal's supports come before it
             column = int(np.argmin(distance[row]))
-            if distance[row, column] <= self.goal_tolerance:
+            if distance[row, column] <= self.goal_tolerance and all(
+                below in filled for below in supports[goal.id]
+            ):
                 filled[goal.id] = bodies[column].id
-        return filled
+        return {goal_id: filled[goal_id] for goal_id in self.goals if goal_id in filled}
 
     def goals_filled(self) -> int:
         return len(self.occupancy())
