@@ -21,7 +21,14 @@ from pathlib import Path
 from typing import TextIO
 
 from manigraph_lab.suite import Cell, cells, eval_cell
-from manigraph_lab.sweep import Job, Outcome, SweepError, SweepOptions, run_jobs
+from manigraph_lab.sweep import (
+    Job,
+    Outcome,
+    SweepError,
+    SweepOptions,
+    check_reachable,
+    run_jobs,
+)
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.progress import Progress
 
@@ -58,6 +65,8 @@ def score(
         ConfigError: a checkpoint is listed twice.
         SweepError: some cells failed (each named); the scored ones were printed.
     """
+    sweep = sweep or SweepOptions(ray=False)
+    check_reachable(sweep)
     repeated = sorted({str(p) for p in checkpoints if checkpoints.count(p) > 1})
     if repeated:
         raise ConfigError("checkpoints", f"listed more than once: {', '.join(repeated)}")
@@ -72,7 +81,7 @@ def score(
         shown = f"{outcome.value:.3f}" if outcome.ok else f"failed ({outcome.error})"
         bar.note(f"  {job.name}: {shown}")
 
-    outcomes = run_jobs(jobs, sweep or SweepOptions(ray=False), bar, done)
+    outcomes = run_jobs(jobs, sweep, bar, done)
     bar.close()
     failures = {j.name: o.error for j, o in zip(jobs, outcomes, strict=True) if o.error}
     if failures:

@@ -25,7 +25,15 @@ from typing import TextIO
 
 from manigraph_lab.demos import DemoProtocol, record_demos
 from manigraph_lab.evaluate import EvalSpec, success_rate
-from manigraph_lab.sweep import Job, Needs, Outcome, SweepError, SweepOptions, run_jobs
+from manigraph_lab.sweep import (
+    Job,
+    Needs,
+    Outcome,
+    SweepError,
+    SweepOptions,
+    check_reachable,
+    run_jobs,
+)
 from manigraph_planner.policies import load_policy
 from manigraph_shared.progress import Progress
 
@@ -152,6 +160,7 @@ def run_suite(
             cell is null in ``suite.json`` and left out of the table's mean).
     """
     sweep = sweep or SweepOptions(ray=False)
+    check_reachable(sweep)  # before the demonstrations, which take minutes
     out.mkdir(parents=True, exist_ok=True)
     demos = out / "demos.mcap"
     if not demos.exists():

@@ -159,6 +159,12 @@ def _check_address_syntax(address: str) -> None:
         )
 
 
+def check_reachable(options: SweepOptions) -> None:
+    """Refuse ``options.ray_address`` before a sweep spends time on anything else."""
+    if options.ray and options.ray_address is not None:
+        _probe(options.ray_address)
+
+
 def _probe(address: str) -> None:
     """Refuse an address where nothing answers, in seconds rather than after Ray's retries."""
     if address == "auto":
