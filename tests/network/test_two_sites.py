@@ -10,13 +10,11 @@ cell's identities. Every wait is bounded; the namespaces go in the fixture's tea
 from __future__ import annotations
 
 import json
-import signal
 import statistics
 import subprocess
 import time
 from collections import Counter
 from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,7 +22,15 @@ import pytest
 
 from manigraph_tools.access import cell_identities, write_cell_identities
 from manigraph_tools.certs import IDENTITIES, make_certificates
-from manigraph_tools.netlab import MANIGRAPH, PROBE, Host, Sites, TwoHosts, netns_problem
+from manigraph_tools.netlab import (
+    MANIGRAPH,
+    PROBE,
+    Host,
+    Sites,
+    TwoHosts,
+    decision_latencies_ms,
+    netns_problem,
+)
 
 pytestmark = pytest.mark.integration
 CUT_SECONDS = 4.0
@@ -68,43 +74,6 @@ def network(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Network]:
         yield Network(hosts, sites, tmp)
 
 
-@contextmanager
-def listening(
-    network: Network, name: str, cell: str = "cell-1"
-) -> Iterator[list[dict[str, object]]]:
-    """Every Scene, Action and RobotCommand of ``cell`` seen at site a while inside."""
-    out = network.tmp / f"{name}.json"
-    ready = Path(f"{out}.ready")
-    ready.unlink(missing_ok=True)
-    host = network.hosts.a
-    process = host.start(
-        [*PROBE, "listen", "--seconds", "170", "--out", str(out)],
-        network.sites.env(host, f"recorder.{cell}", cell), network.tmp / f"{name}.log",
-    )  # fmt: skip
-    deadline = time.monotonic() + 30
-    while not ready.exists():
-        assert process.poll() is None and time.monotonic() < deadline, network.sites.log(name)
-        time.sleep(0.1)
-    time.sleep(0.3)  # its subscriptions reach the router
-    events: list[dict[str, object]] = []
-    try:
-        yield events
-    finally:
-        process.send_signal(signal.SIGTERM)
-        process.wait(timeout=15)
-        events += json.loads(out.read_text())
-
-
-def decision_latencies_ms(events: list[dict[str, object]]) -> list[float]:
-    """Scene stamp -> its Action's arrival at site a, per decision."""
-    stamps = {(e["episode"], e["sequence"]): e["stamp"] for e in events if e["kind"] == "scene"}
-    return [
-        (float(e["at"]) - float(stamps[(e["episode"], e["sequence"])])) * 1000  # type: ignore[arg-type]
-        for e in events
-        if e["kind"] == "action" and (e["episode"], e["sequence"]) in stamps
-    ]
-
-
 def summary_of(result: subprocess.CompletedProcess[str]) -> dict[str, object]:
     assert result.stdout.strip(), f"no JSON printed:\n{result.stderr[-3000:]}"
     summary: dict[str, object] = json.loads(result.stdout.strip().splitlines()[-1])
@@ -113,7 +82,7 @@ def summary_of(result: subprocess.CompletedProcess[str]) -> dict[str, object]:
 
 
 def test_episodes_succeed_across_the_link(network: Network) -> None:
-    with listening(network, "episodes") as events:
+    with network.sites.listening("episodes") as events:
         result = network.sites.run("cell-1", "--blocks", "3", "--episodes", "3", "--json")
     summary = summary_of(result)
     assert result.returncode == 0 and summary["success_rate"] == 1.0
@@ -128,7 +97,7 @@ def test_episodes_succeed_across_the_link(network: Network) -> None:
 def test_a_link_cut_loses_no_decision_and_moves_nothing_twice(network: Network) -> None:
     sites, hosts = network.sites, network.hosts
     args = ["run", "--blocks", "3", "--episodes", "30", "--stall-timeout", "20", "--json"]
-    with listening(network, "cut") as events:
+    with network.sites.listening("cut") as events:
         run = hosts.a.start(
             [*MANIGRAPH, *args], sites.env(hosts.a, "client.cell-1", "cell-1"),
             network.tmp / "cut-run.log",
@@ -169,7 +138,7 @@ def test_each_router_refuses_another_cells_commands(network: Network) -> None:
     site's router. cell-1's own skills, from the far site, get through (the link relays)."""
     sites, hosts = network.sites, network.hosts
     copies = 5
-    with listening(network, "acl") as events:
+    with network.sites.listening("acl") as events:
         for host, forger, tag in [
             (hosts.a, "skills.cell-2", "forged-a"),
             (hosts.b, "skills.cell-2", "forged-b"),

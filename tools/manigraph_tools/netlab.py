@@ -15,17 +15,27 @@ Cutting the link (``ip link set DEV down``) cuts it either way.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
-__all__ = ["Host", "Sites", "TwoHosts", "loopback_hosts", "netns_problem"]
+__all__ = [
+    "Host",
+    "Sites",
+    "TwoHosts",
+    "decision_latencies_ms",
+    "loopback_hosts",
+    "netns_problem",
+]
 
 
 def _ip(*args: str, check: bool = True) -> subprocess.CompletedProcess[str]:
@@ -262,3 +272,39 @@ class Sites:
     def log(self, name: str) -> str:
         path = self.log_dir / f"{name}.log"
         return path.read_text(errors="replace") if path.exists() else ""
+
+    @contextmanager
+    def listening(self, name: str, cell: str = "cell-1") -> Iterator[list[dict[str, object]]]:
+        """Every Scene, Action and RobotCommand of ``cell`` seen at site a while inside (the
+        list is filled when the block ends)."""
+        out = self.log_dir / f"{name}.json"
+        ready = Path(f"{out}.ready")
+        ready.unlink(missing_ok=True)
+        process = self.a.start(
+            [*PROBE, "listen", "--seconds", "600", "--out", str(out)],
+            self.env(self.a, f"recorder.{cell}", cell), self.log_dir / f"{name}.log",
+        )  # fmt: skip
+        deadline = time.monotonic() + 30
+        while not ready.exists():
+            if process.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError(f"the listener never started: {self.log(name)[-2000:]}")
+            time.sleep(0.1)
+        time.sleep(0.3)  # its subscriptions reach the router
+        events: list[dict[str, object]] = []
+        try:
+            yield events
+        finally:
+            process.send_signal(signal.SIGTERM)
+            process.wait(timeout=15)
+            events += json.loads(out.read_text())
+
+
+def decision_latencies_ms(events: list[dict[str, object]]) -> list[float]:
+    """Scene stamp (the sim's clock) -> its Action's arrival at site a, per decision: both
+    ends on this machine's clock."""
+    stamps = {(e["episode"], e["sequence"]): e["stamp"] for e in events if e["kind"] == "scene"}
+    return [
+        (float(str(e["at"])) - float(str(stamps[(e["episode"], e["sequence"])]))) * 1000
+        for e in events
+        if e["kind"] == "action" and (e["episode"], e["sequence"]) in stamps
+    ]
