@@ -54,6 +54,7 @@ bench: install  ## speed figures (not tests): medians and ratios
 	$(RUN) python bench/bench_physics.py
 	$(RUN) python bench/bench_estop.py --busy 20
 	$(RUN) python bench/bench_cells.py
+	$(RUN) python bench/bench_ray_suite.py
 	$(RUN) python bench/bench_training.py --device cuda
 
 soak: install  ## reliability soak (~30 min): 100k fuzzed payloads per key, floods, explain bomb, then 3 episodes
