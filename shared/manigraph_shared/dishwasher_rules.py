@@ -1,6 +1,8 @@
 """The dishwasher task's loading rules (docs/dishwasher.md), declared once: the geometric
-world refuses an action with them, and the skills check them on the ``Scene`` for a robot
-whose world does not refuse anything by itself (the physics world, a real dishwasher).
+world refuses an action with them, and the skills check them on the ``Scene``
+(:func:`check_dish_move`) for a robot whose world does not refuse anything by itself
+(``RobotDriver.checks_dish_rules``: the physics world, a real dishwasher), the state read off
+the scene's racks and slots.
 
 Each check raises a ``SkillError`` whose reason names the rule.
 """
@@ -10,10 +12,16 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Final
 
+import numpy as np
+
 from manigraph_shared.errors import SkillError
+from manigraph_shared.messages import Scene, SceneGoal, SceneObject
 
 TOP_RACK: Final = "rack_top"
 BOTTOM_RACK: Final = "rack_bottom"
+#: A dish this close to a slot's position stands in it, metres (the physics world's test
+#: and the skills' reading of a ``Scene``).
+SLOT_FIT: Final = 0.02
 
 
 def check_rack_usable(rack_id: str, open_racks: Mapping[str, bool]) -> None:
@@ -35,3 +43,37 @@ def check_slot(
         raise SkillError("slot_taken", f"{slot_id} holds {occupant}")
     if slot_kind != dish_kind:
         raise SkillError("wrong_slot", f"{slot_id} takes a {slot_kind}, not a {dish_kind}")
+
+
+def _distance(a: SceneObject | SceneGoal, b: SceneObject | SceneGoal) -> float:
+    return float(np.linalg.norm(np.subtract(a.position.as_tuple(), b.position.as_tuple())))
+
+
+def slot_of(scene: Scene, dish: SceneObject) -> SceneGoal | None:
+    """The slot ``dish`` stands in, if any."""
+    if not dish.filled:
+        return None
+    slots = [g for g in scene.goals if g.rack is not None and _distance(g, dish) <= SLOT_FIT]
+    return min(slots, key=lambda g: _distance(g, dish), default=None)
+
+
+def occupant(scene: Scene, slot: SceneGoal) -> str | None:
+    """The dish standing in ``slot``, if any."""
+    if not slot.filled:
+        return None
+    dishes = [o for o in scene.objects if o.filled and _distance(o, slot) <= SLOT_FIT]
+    return min(dishes, key=lambda o: _distance(o, slot)).id if dishes else "another dish"
+
+
+def check_dish_move(scene: Scene, dish: SceneObject, goal: SceneGoal) -> None:
+    """Raise ``SkillError`` naming the rule if moving ``dish`` to ``goal`` breaks one, in the
+    geometric world's order: taking it out of its rack, putting it into the goal's rack, the
+    goal slot taken, the goal slot of another kind."""
+    open_racks = {rack.id: rack.open for rack in scene.racks}
+    here = slot_of(scene, dish)
+    if here is not None and here.rack is not None:
+        check_rack_usable(here.rack, open_racks)
+    if goal.rack is None:
+        return
+    check_rack_usable(goal.rack, open_racks)
+    check_slot(goal.id, goal.category.value, dish.id, dish.category.value, occupant(scene, goal))

@@ -26,8 +26,8 @@ from manigraph_shared.orientations import ORIENTATIONS, UPSIDE_DOWN, up_axis_ori
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_sim.physics.dishwasher import PHYSICAL_DISH_SIZE, RAIL, physical_counter_x
+from manigraph_skills.dishwasher.turn_over import quaternion_of, rotation_of
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
-from manigraph_skills.turn_over import quaternion_of, rotation_of
 
 #: Seed 8, 10 dishes: bowl_3 lies upside down and plate_3 stands on its rim (x >= 0.3 m), so
 #: both can be loaded by top-down grasps. (Found by listing layouts; no outcome is tuned.)

@@ -20,6 +20,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.orientations import ORIENTATIONS, UPRIGHT
 from manigraph_shared.panda import FINGER_OPEN
+from manigraph_skills.dishwasher.turn_over import rotation_of
 from manigraph_skills.drivers.base import Motion
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.grasp_choice import (
@@ -32,7 +33,6 @@ from manigraph_skills.grasp_choice import (
 from manigraph_skills.motion import HOME_Q, GraspPlanner, PandaModel
 from manigraph_skills.motion.collision import ArmCollisionModel
 from manigraph_skills.obstacles import Obstacle
-from manigraph_skills.turn_over import rotation_of
 
 PLATE = Vector3(x=0.064, y=0.064, z=0.015)
 BOWL = Vector3(x=0.05, y=0.05, z=0.035)

@@ -8,7 +8,7 @@ import pytest
 from arm_helpers import PerfectArm
 
 from manigraph_shared.errors import SkillError
-from manigraph_skills.drivers.dish_turning import _clear_let_go
+from manigraph_skills.dishwasher.panda_turn_over import _clear_let_go
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.motion import HOME_Q
 from manigraph_skills.motion.model import top_down

@@ -1,4 +1,4 @@
-"""Moving a dish to a free counter cell to turn it over there (``dish_turning``): when it
+"""Moving a dish to a free counter cell to turn it over there (``panda_turn_over``): when it
 cannot be taken or set down turned where it lies (a neighbour, a pulled-out rack's floor)."""
 
 from __future__ import annotations
@@ -9,15 +9,15 @@ from arm_helpers import PerfectArm, trajectory_of
 
 from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, SceneRack, Vector3
 from manigraph_shared.orientations import ORIENTATIONS
-from manigraph_skills.drivers.dish_turning import (
+from manigraph_skills.dishwasher.panda_turn_over import (
     SPARE_Y,
     SPOT_FREE,
     free_cells,
     move_dish,
     set_down_spots,
 )
+from manigraph_skills.dishwasher.turn_over import rotation_of, up_index
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
-from manigraph_skills.turn_over import rotation_of, up_index
 
 #: A bowl (5 cm across, 3.5 cm deep) lying upside down.
 SIZE = Vector3(x=0.05, y=0.05, z=0.035)

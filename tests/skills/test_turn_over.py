@@ -1,4 +1,4 @@
-"""Which tilts turn a dish over (``manigraph_skills.turn_over``): pure geometry."""
+"""Which tilts turn a dish over (``manigraph_skills.dishwasher.turn_over``): pure geometry."""
 
 from __future__ import annotations
 
@@ -14,8 +14,7 @@ from manigraph_shared.orientations import (
     postures_like,
     up_axis_orientation,
 )
-from manigraph_skills.drivers.panda_motion import PandaMotionDriver
-from manigraph_skills.turn_over import (
+from manigraph_skills.dishwasher.turn_over import (
     next_tilts,
     quaternion_of,
     rotation_of,
@@ -23,6 +22,7 @@ from manigraph_skills.turn_over import (
     top_down_rotation,
     up_index,
 )
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
 BOWL = np.array([0.05, 0.05, 0.035])
 PLATE = np.array([0.064, 0.064, 0.015])

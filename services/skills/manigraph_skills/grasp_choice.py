@@ -36,9 +36,9 @@ from manigraph_shared.panda import (
     FINGER_OPEN,
     FINGER_REACH,
 )
+from manigraph_skills.dishwasher.turn_over import HORIZONTAL, rotation_of
 from manigraph_skills.drivers.base import Grasp
 from manigraph_skills.obstacles import scene_obstacles
-from manigraph_skills.turn_over import HORIZONTAL, rotation_of
 
 #: Added to the fingers' reach before an axis counts as free, metres.
 MARGIN = 0.005

@@ -7,11 +7,11 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from manigraph_shared.dishwasher_rules import check_dish_move
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus, TrayAction
 from manigraph_shared.orientations import orientation
 from manigraph_shared.workspace import Workspace
-from manigraph_skills.dish_rules import check_dish_move
 from manigraph_skills.drivers.base import Motion, RobotDriver, TrayToggle
 from manigraph_skills.grasp_choice import choose_grasps
 

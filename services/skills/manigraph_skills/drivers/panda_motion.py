@@ -14,7 +14,7 @@ Checks, each reported as a ``SkillError`` reason:
 * ``placement_missed``: after release the object's centre is more than
   ``placement_tolerance`` from the target (when the transport can observe objects);
 * ``orientation_unreachable``: a placement asks for another up axis than the object has and
-  the fingers span it across no axis that would tilt it there (``dish_turning``: the
+  the fingers span it across no axis that would tilt it there (``panda_turn_over``: the
   turn-over manoeuvre tilts it on the counter first, then the top-down grasp places it);
 * ``handle_missed``: the fingers closed on nothing at a rack's handle; ``rack_stuck``: after a
   toggle the scene still shows the rack where it was;
@@ -44,6 +44,7 @@ from manigraph_shared.messages import (
     SceneObject,
 )
 from manigraph_shared.orientations import postures_like, up_axis_orientation
+from manigraph_skills.dishwasher.panda_turn_over import turn_dish
 from manigraph_skills.drivers.base import (
     PLANNING_FAILURES,
     Grasp,
@@ -51,7 +52,6 @@ from manigraph_skills.drivers.base import (
     RobotDriver,
     TrayToggle,
 )
-from manigraph_skills.drivers.dish_turning import turn_dish
 from manigraph_skills.drivers.joint_transport import JointTransport
 from manigraph_skills.drivers.registry import MotionOptions
 from manigraph_skills.drivers.replanning import Replanner
@@ -203,7 +203,7 @@ class PandaMotionDriver(RobotDriver):
     def turn_over(
         self, decision_id: str, item: SceneObject, target: Quaternion, scene: Scene
     ) -> SceneObject:
-        """Tilt ``item`` on the counter until it stands as ``target`` asks (``dish_turning``):
+        """Tilt ``item`` on the counter until it stands as ``target`` asks (``panda_turn_over``):
         its up axis ``target``'s, or for a plate on its rim any edge down
         (``orientations.postures_like``); the object as it then lies."""
         wanted = postures_like(item.category.value, up_axis_orientation(target))

@@ -1,5 +1,5 @@
 """The Panda drivers' turn-over manoeuvre: tilt a dish on the counter until its up axis is
-the one its placement asks for (``manigraph_skills.turn_over`` says which tilts;
+the one its placement asks for (``turn_over`` says which tilts;
 ``motion.tilt`` plans them), Pinocchio-planned and arm-collision-checked like every motion.
 
 Each tilt: the usual top-down pick, with the fingers closing along the axis the dish turns
@@ -26,14 +26,7 @@ from manigraph_shared.grasp_points import RACK_GRIP_OFFSET
 from manigraph_shared.messages import Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATION_NAMES
 from manigraph_shared.panda import FINGER_BELOW_TCP
-from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp, Motion
-from manigraph_skills.grasp_choice import dish_grasp_height, dish_opening, room
-from manigraph_skills.motion.collision import Contact, refusal
-from manigraph_skills.motion.plan import UP, GraspPlanner
-from manigraph_skills.motion.tilt import let_go_sideways, set_down_sideways
-from manigraph_skills.motion.trajectory import JointTrajectory
-from manigraph_skills.obstacles import Obstacle, scene_obstacles
-from manigraph_skills.turn_over import (
+from manigraph_skills.dishwasher.turn_over import (
     next_tilts,
     quaternion_of,
     rotation_of,
@@ -41,6 +34,13 @@ from manigraph_skills.turn_over import (
     top_down_rotation,
     up_index,
 )
+from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp, Motion
+from manigraph_skills.grasp_choice import dish_grasp_height, dish_opening, room
+from manigraph_skills.motion.collision import Contact, refusal
+from manigraph_skills.motion.plan import UP, GraspPlanner
+from manigraph_skills.motion.tilt import let_go_sideways, set_down_sideways
+from manigraph_skills.motion.trajectory import JointTrajectory
+from manigraph_skills.obstacles import Obstacle, scene_obstacles
 
 if TYPE_CHECKING:
     from manigraph_skills.drivers.panda_motion import PandaMotionDriver
