@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import TextIO
 
 from manigraph_lab.episode_loop import run_episode
-from manigraph_planner.policies.base import Policy
+from manigraph_planner.policies.base import Policy, expert_for
 from manigraph_shared.demonstrations import DemonstrationLog
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.progress import Progress
@@ -48,17 +48,20 @@ class DemoProtocol:
 
 
 def record_demos(
-    expert: Policy, protocol: DemoProtocol, path: Path, progress: TextIO | None = None
+    expert: Policy | None, protocol: DemoProtocol, path: Path, progress: TextIO | None = None
 ) -> dict[str, object]:
-    """Record ``protocol``'s episodes to ``path``; ``progress``: stream for a bar (drawn on a
-    terminal only) and for a note on each episode the expert failed."""
+    """Record ``protocol``'s episodes to ``path``; ``expert``: who decides, None: each task's
+    registered expert (``manigraph_planner.policies.expert_for``); ``progress``: stream for a
+    bar (drawn on a terminal only) and for a note on each episode the expert failed."""
     log = DemonstrationLog(path)
     steps = successes = 0
     requests = protocol.requests()
     bar = Progress(len(requests), "demos", unit="episode", stream=progress)
+    tasks = {request.task for request in requests}
+    experts = {task: expert if expert is not None else expert_for(task) for task in tasks}
     try:
         for request in requests:
-            record = run_episode(expert, request)
+            record = run_episode(experts[request.task], request)
             bar.update()
             if not record.success:
                 bar.note(f"  skipped {request.episode_id}: the expert failed")
