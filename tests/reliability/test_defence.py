@@ -172,7 +172,8 @@ def test_a_scene_that_overtakes_its_episodes_start_is_decided_on(running_stack: 
         bus.publish(ahead)
         time.sleep(0.5)  # the planner has refused it: "first" is still running
         now = time.time()
-        bus.publish(first.model_copy(update={"phase": EpisodePhase.END, "stamp": now}))
+        ended = {"phase": EpisodePhase.END, "success": False, "stamp": now}
+        bus.publish(first.model_copy(update=ended))
         bus.publish(first.model_copy(update={"episode_id": "next", "stamp": now}))
         decided = actions.wait(lambda a: a.episode_id == "next", timeout=10.0)
         assert (decided.decision_id, decided.scene_sequence) == ("next:0", 1)

@@ -3,11 +3,11 @@ message declarations, and the flow diagram from the services' manifests."""
 
 from __future__ import annotations
 
+import types
 import typing
 from enum import Enum
 
-from pydantic import BaseModel
-from pydantic.fields import FieldInfo
+import msgspec
 
 from manigraph_shared.manifest import load_manifests, mermaid_flow
 from manigraph_shared.messages import Delivery, Message
@@ -50,20 +50,39 @@ def field_tables() -> str:
     return "\n".join(parts)
 
 
-def _fields(model: type[BaseModel], prefix: str = "") -> str:
-    lines = ["| field | type | meaning |", "|---|---|---|"] if not prefix else []
-    for name, info in model.model_fields.items():
-        lines.append(f"| `{prefix}{name}` | {_type_name(info)} | {_describe(info)} |")
-    return "\n".join(lines) + ("\n" if not prefix else "")
+def _fields(model: type[Message]) -> str:
+    lines = ["| field | type | meaning |", "|---|---|---|"]
+    hints = typing.get_type_hints(model, include_extras=True)
+    for info in msgspec.structs.fields(model):
+        kind, metas = _unwrap(hints[info.name])
+        lines.append(f"| `{info.name}` | {_type_name(kind)} | {_describe(metas)} |")
+    return "\n".join(lines) + "\n"
 
 
-def _type_name(info: FieldInfo) -> str:
-    annotation = info.annotation
+def _unwrap(annotation: object) -> tuple[object, list[msgspec.Meta]]:
+    """The plain type of a field and every ``Meta`` declared on it, outermost last: those on
+    the type itself, then those on a union's members (``Annotated[float, Meta(ge=0)] | None``)."""
+    metas: list[msgspec.Meta] = []
+    if typing.get_origin(annotation) is typing.Annotated:
+        annotation, *extras = typing.get_args(annotation)
+        metas = [extra for extra in extras if isinstance(extra, msgspec.Meta)]
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
+        members = []
+        for member in typing.get_args(annotation):
+            plain, inner = _unwrap(member)
+            members.append(plain)
+            metas = inner + metas
+        annotation = typing.Union[tuple(members)]  # noqa: UP007  (built from parts)
+    return annotation, metas
+
+
+def _type_name(annotation: object) -> str:
     origin = typing.get_origin(annotation)
     if origin is list:
         (inner,) = typing.get_args(annotation)
-        return f"list[{inner.__name__}]"
-    if origin in (typing.Union, __import__("types").UnionType):
+        inner, _ = _unwrap(inner)
+        return f"list[{getattr(inner, '__name__', inner)}]"
+    if origin in (typing.Union, types.UnionType):
         return " \\| ".join(_plain(arg) for arg in typing.get_args(annotation))
     return _plain(annotation)
 
@@ -76,11 +95,11 @@ def _plain(annotation: object) -> str:
     return getattr(annotation, "__name__", str(annotation))
 
 
-def _describe(info: FieldInfo) -> str:
-    text = info.description or ""
-    for item in info.metadata:
+def _describe(metas: list[msgspec.Meta]) -> str:
+    text = next((m.description for m in reversed(metas) if m.description), "") or ""
+    for meta in metas:
         for bound in ("ge", "le", "max_length"):
-            value = getattr(item, bound, None)
+            value = getattr(meta, bound, None)
             if value is not None:
                 text += f" ({bound} {value})"
     return text.strip()

@@ -183,10 +183,7 @@ def read_task_file(path: Path | None) -> str | None:
 
 def _task_file_limit() -> int:
     """``EpisodeRequest.task_file``'s max_length, from the contract itself."""
-    for constraint in EpisodeRequest.model_fields["task_file"].metadata:
-        if hasattr(constraint, "max_length"):
-            return int(constraint.max_length)
-    raise AssertionError("EpisodeRequest.task_file lost its max_length")
+    return EpisodeRequest.max_length("task_file")
 
 
 def _size(plan: EpisodePlan) -> dict[str, object]:

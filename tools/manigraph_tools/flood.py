@@ -13,7 +13,16 @@ from pathlib import Path
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import MessageError
-from manigraph_shared.messages import Delivery, Message, Scene, SceneGoal, SceneObject, Vector3
+from manigraph_shared.messages import (
+    Delivery,
+    GoalCategory,
+    Message,
+    ObjectCategory,
+    Scene,
+    SceneGoal,
+    SceneObject,
+    Vector3,
+)
 from manigraph_tools.fuzzing import message_types
 from manigraph_tools.mutation_fuzzer import Mutator, seed_objects
 
@@ -87,14 +96,16 @@ def flood_scene(sequence: int, blocks: int = 4) -> Scene:
         objects=[
             SceneObject(
                 id=f"block_{i}",
-                category="block",
+                category=ObjectCategory.BLOCK,
                 position=Vector3(x=0.5, y=-0.2 + 0.05 * i, z=0.02),
                 size=Vector3(x=0.04, y=0.04, z=0.04),
             )
             for i in range(blocks)
         ],
         goals=[
-            SceneGoal(id=f"goal_{i}", category="block", position=Vector3(x=0.4, y=0.2, z=0.02))
+            SceneGoal(
+                id=f"goal_{i}", category=GoalCategory.BLOCK, position=Vector3(x=0.4, y=0.2, z=0.02)
+            )
             for i in range(blocks)
         ],
     )

@@ -9,9 +9,7 @@ import time
 import tomllib
 from pathlib import Path
 
-from pydantic import ValidationError
-
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.errors import ConfigError, MessageError
 from manigraph_shared.messages import TaskLayout
 
 
@@ -67,7 +65,6 @@ def load_layout(path: str | Path, episode_id: str = "live") -> TaskLayout:
                 "partially_observable": data.get("partially_observable", False),
             }
         )
-    except ValidationError as exc:
-        error = exc.errors(include_url=False)[0]
-        field = ".".join(str(part) for part in error["loc"])
-        raise ConfigError(f"layout.{field}", error["msg"].removeprefix("Value error, ")) from None
+    except MessageError as exc:
+        field, why = exc.problems[0]
+        raise ConfigError(f"layout.{field}", why) from None

@@ -1,6 +1,6 @@
 """The one place a message type becomes wire format, validation, MCAP schema and docs.
 
-A message type is a pydantic model that subclasses :class:`Message` and declares, beside its
+A message type is a msgspec struct that subclasses :class:`Message` and declares, beside its
 fields, the key expression it travels on and how it may be delivered. From that single
 declaration come:
 
@@ -14,13 +14,14 @@ Decoding never raises anything but :class:`~manigraph_shared.errors.MessageError
 
 from __future__ import annotations
 
-import json
 import math
 import re
-from enum import StrEnum
+from collections.abc import Mapping
+from enum import Enum, StrEnum
 from typing import Annotated, Any, ClassVar, Self
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+import msgspec
+from msgspec import Meta
 
 from manigraph_shared.errors import MessageError
 
@@ -31,10 +32,11 @@ PREFIX = "manigraph"
 
 Identifier = Annotated[
     str,
-    Field(pattern=r"^[A-Za-z0-9_.:\-]{1,64}$", description="identifier, 1-64 of [A-Za-z0-9_.:-]"),
+    Meta(pattern=r"^[A-Za-z0-9_.:\-]{1,64}$", description="identifier, 1-64 of [A-Za-z0-9_.:-]"),
 ]
-Stamp = Annotated[float, Field(ge=0.0, description="seconds since the Unix epoch")]
-Metres = Annotated[float, Field(ge=-100.0, le=100.0, description="metres")]
+Stamp = Annotated[float, Meta(ge=0.0, description="seconds since the Unix epoch")]
+Metres = Annotated[float, Meta(ge=-100.0, le=100.0, description="metres")]
+Unit = Annotated[float, Meta(ge=-1.0, le=1.0)]
 
 
 class Delivery(StrEnum):
@@ -48,13 +50,115 @@ class Delivery(StrEnum):
     QUERY = "query"
 
 
-class Struct(BaseModel):
-    """A nested value inside a message: strict, immutable, finite."""
+class Struct(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """A nested value inside a message: strict, immutable, finite. Subclasses repeat
+    ``frozen=True, kw_only=True`` (msgspec applies ``kw_only`` to a class's own fields).
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+    A msgspec struct: decoding validates types, bounds, patterns and lengths in C, and
+    ``_check`` (a subclass's cross-field rules, raising ``ValueError("field: why")``) runs on
+    every decoded or constructed value. Enum fields given as their plain values are turned
+    into the enum on construction, as decoding does.
+    """
+
+    def __post_init__(self) -> None:
+        for name, kind in _enum_fields(type(self)):
+            value = getattr(self, name)
+            if value is not None and value.__class__ is not kind:
+                msgspec.structs.force_setattr(self, name, kind(value))
+        self._check()
+
+    def _check(self) -> None:
+        """Cross-field rules; raise ``ValueError("field: why")``."""
+
+    def model_copy(self, *, update: Mapping[str, Any] | None = None) -> Self:
+        """A copy with ``update``'s fields replaced (checked as on construction)."""
+        return msgspec.structs.replace(self, **(update or {}))
+
+    def model_dump(
+        self, mode: str = "json", exclude: set[str] | frozenset[str] = frozenset()
+    ) -> dict[str, Any]:
+        """The value as JSON-able builtins (enums as their values, bytes as base64), less the
+        top-level fields in ``exclude``."""
+        del mode  # one form: what the wire carries
+        data: dict[str, Any] = msgspec.to_builtins(self, enc_hook=_builtin)
+        for name in exclude:
+            data.pop(name, None)
+        return data
+
+    def model_dump_json(self) -> str:
+        """The value as JSON text, as the wire carries it."""
+        return _ENCODER.encode(self).decode()
+
+    @classmethod
+    def model_validate(cls, data: object) -> Self:
+        """``data`` (JSON-like builtins) as this type, or :class:`MessageError`."""
+        try:
+            return msgspec.convert(data, cls, strict=False)
+        except msgspec.ValidationError as exc:
+            raise MessageError(_type_name(cls), "", [_problem(str(exc))]) from None
+
+    @classmethod
+    def max_length(cls, field: str) -> int:
+        """The declared ``max_length`` of ``field`` (for checks before a message is built)."""
+        info = next(f for f in msgspec.inspect.type_info(cls).fields if f.name == field)  # type: ignore[attr-defined]
+        kind = info.type
+        while True:
+            if getattr(kind, "max_length", None) is not None:
+                return int(kind.max_length)
+            inner = getattr(kind, "type", None) or next(
+                (t for t in getattr(kind, "types", ()) if getattr(t, "max_length", None)), None
+            )
+            if inner is None:
+                raise KeyError(f"{cls.__name__}.{field} declares no max_length")
+            kind = inner
+
+    @classmethod
+    def model_json_schema(cls) -> dict[str, Any]:
+        """JSON Schema of this type, nested types under ``$defs``."""
+        schema = msgspec.json.schema(cls)
+        defs: dict[str, Any] = schema.get("$defs", {})
+        top = defs.pop(cls.__name__)
+        return {**top, "$defs": defs} if defs else top
 
 
-class Vector3(Struct):
+_ENUM_FIELDS: dict[type, tuple[tuple[str, type[Enum]], ...]] = {}
+
+
+def _enum_fields(cls: type) -> tuple[tuple[str, type[Enum]], ...]:
+    cached = _ENUM_FIELDS.get(cls)
+    if cached is None:
+        found = []
+        for info in msgspec.structs.fields(cls):
+            kind = _enum_in(info.type)
+            if kind is not None:
+                found.append((info.name, kind))
+        cached = _ENUM_FIELDS[cls] = tuple(found)
+    return cached
+
+
+def _enum_in(annotation: object) -> type[Enum] | None:
+    """The enum an annotation is (or is optionally): ``Kind`` or ``Kind | None``."""
+    import typing
+
+    if isinstance(annotation, type) and issubclass(annotation, Enum):
+        return annotation
+    args = [a for a in typing.get_args(annotation) if a is not type(None)]
+    union = typing.get_origin(annotation) in (typing.Union, __import__("types").UnionType)
+    return _enum_in(args[0]) if union and len(args) == 1 else None
+
+
+def _builtin(value: object) -> object:
+    """numpy scalars and arrays (sims compute with numpy) as the builtins they hold."""
+    tolist = getattr(value, "tolist", None)
+    if tolist is not None:
+        return tolist()
+    raise NotImplementedError(f"cannot encode a {type(value).__name__}")
+
+
+_ENCODER = msgspec.json.Encoder(enc_hook=_builtin)
+
+
+class Vector3(Struct, frozen=True, kw_only=True):
     """A position in metres."""
 
     x: Metres
@@ -65,23 +169,21 @@ class Vector3(Struct):
         return (self.x, self.y, self.z)
 
 
-class Quaternion(Struct):
+class Quaternion(Struct, frozen=True, kw_only=True):
     """A unit quaternion (x, y, z, w); identity by default."""
 
-    x: float = Field(0.0, ge=-1.0, le=1.0)
-    y: float = Field(0.0, ge=-1.0, le=1.0)
-    z: float = Field(0.0, ge=-1.0, le=1.0)
-    w: float = Field(1.0, ge=-1.0, le=1.0)
+    x: Unit = 0.0
+    y: Unit = 0.0
+    z: Unit = 0.0
+    w: Unit = 1.0
 
-    @model_validator(mode="after")
-    def _unit_norm(self) -> Self:
+    def _check(self) -> None:
         norm = math.sqrt(self.x**2 + self.y**2 + self.z**2 + self.w**2)
         if abs(norm - 1.0) > 1e-3:
             raise ValueError(f"not a unit quaternion (norm {norm:.4f})")
-        return self
 
 
-class Message(Struct):
+class Message(Struct, frozen=True, kw_only=True):
     """Base of every type that travels on the bus.
 
     Subclasses set ``key`` (may hold ``{field}`` placeholders filled from the instance, e.g.
@@ -92,17 +194,18 @@ class Message(Struct):
     delivery: ClassVar[Delivery]
     publisher: ClassVar[str]
     registry: ClassVar[dict[str, type[Message]]] = {}
+    _decoder: ClassVar[msgspec.json.Decoder[Any] | None] = None
 
-    @classmethod
-    def __pydantic_init_subclass__(cls, **kwargs: Any) -> None:
-        super().__pydantic_init_subclass__(**kwargs)
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._decoder = None
         if "key" in cls.__dict__:
             Message.registry[cls.type_name()] = cls
 
     # --- identity ---------------------------------------------------------------------------
     @classmethod
     def type_name(cls) -> str:
-        return f"{PREFIX}.{cls.__name__}"
+        return _type_name(cls)
 
     @classmethod
     def key_pattern(cls) -> str:
@@ -115,7 +218,7 @@ class Message(Struct):
 
     # --- wire format ------------------------------------------------------------------------
     def encode(self) -> bytes:
-        return self.model_dump_json().encode()
+        return _ENCODER.encode(self)
 
     @classmethod
     def decode(cls, payload: bytes | bytearray | memoryview, key: str = "") -> Self:
@@ -127,34 +230,114 @@ class Message(Struct):
                 key,
                 [("<payload>", f"{size} bytes exceeds the {MAX_PAYLOAD_BYTES}-byte limit")],
             )
+        decoder = cls._decoder
+        if decoder is None:
+            decoder = cls._decoder = msgspec.json.Decoder(cls)
         try:
-            return cls.model_validate_json(bytes(payload))
-        except ValidationError as exc:
-            raise MessageError(cls.type_name(), key, _problems(exc)) from None
+            return decoder.decode(payload)
+        except (msgspec.DecodeError, ValueError) as exc:  # ValueError: bytes that are not UTF-8
+            raise MessageError(cls.type_name(), key, _problems(cls, payload, exc)) from None
 
     @classmethod
     def mcap_schema(cls) -> bytes:
         schema = cls.model_json_schema()
         schema["title"] = cls.type_name()
-        return json.dumps(schema, separators=(",", ":")).encode()
+        return msgspec.json.encode(schema)
+
+
+def _type_name(cls: type) -> str:
+    return f"{PREFIX}.{cls.__name__}"
 
 
 def _placeholders(key: str) -> list[str]:
     return re.findall(r"\{([a-z_]+)\}", key)
 
 
-def _problems(exc: ValidationError) -> list[tuple[str, str]]:
-    problems = []
-    for error in exc.errors(include_url=False):
-        field = ".".join(str(part) for part in error["loc"])
-        message = error["msg"]
-        # Model-level checks say "field: why"; give them the field they are about.
-        named = re.match(r"Value error, ([a-z_.]+): (.*)", message)
-        if named:
-            field = ".".join(part for part in (field, named.group(1)) if part)
-            message = named.group(2)
-        problems.append((field or "<payload>", message))
-    return problems
+_AT = re.compile(r"^(?P<message>.*?)(?: - at `\$(?P<path>[^`]*)`)?$", re.DOTALL)
+_NAMED = re.compile(r"^(?P<field>[a-z_.]+): (?P<message>.*)$", re.DOTALL)
+_KEY_IN_MESSAGE = re.compile(r"(?:missing required|unknown) field `(?P<field>[^`]+)`")
+
+
+def _problem(text: str) -> tuple[str, str]:
+    """msgspec's ``why - at `$.a[0].b``` as ``("a.0.b", why)``; a check's ``"field: why"``
+    gets its field appended to the path, a missing or unknown field its name."""
+    match = _AT.match(text)
+    message = match.group("message") if match else text
+    path = (match.group("path") or "") if match else ""
+    parts = [p for p in re.split(r"[.\[\]]+", path) if p]
+    named = _NAMED.match(message)
+    if named:
+        parts.append(named.group("field"))
+        message = named.group("message")
+    else:
+        keyed = _KEY_IN_MESSAGE.search(message)
+        if keyed:
+            parts.append(keyed.group("field"))
+    return (".".join(parts) or "<payload>", message)
+
+
+def _non_finite(payload: bytes | bytearray | memoryview) -> list[tuple[str, str]]:
+    """Where JSON that is valid but for NaN or Infinity has them (JavaScript writes them)."""
+    import json
+
+    try:
+        data = json.loads(bytes(payload))
+    except (ValueError, RecursionError):
+        return []
+    found: list[tuple[str, str]] = []
+
+    def walk(value: object, path: str) -> None:
+        if isinstance(value, float) and not math.isfinite(value):
+            found.append((path.lstrip(".") or "<payload>", f"{value} is not a finite number"))
+        elif isinstance(value, dict):
+            for name, item in value.items():
+                walk(item, f"{path}.{name}")
+        elif isinstance(value, list):
+            for index, item in enumerate(value):
+                walk(item, f"{path}.{index}")
+
+    try:
+        walk(data, "")
+    except RecursionError:
+        return []
+    return found
+
+
+def _problems(
+    cls: type[Struct], payload: bytes | bytearray | memoryview, exc: Exception
+) -> list[tuple[str, str]]:
+    """Every problem of a refused payload, by field (the fast decoder stops at the first).
+
+    Only refused payloads come here: the payload is parsed without a type, then each field is
+    checked on its own, so a payload of the wrong type names all it lacks and all it has
+    extra, as a person fixing it needs."""
+    if not isinstance(exc, msgspec.ValidationError):  # not JSON (a ValidationError is a
+        return _non_finite(payload) or [("<payload>", str(exc))]  # DecodeError too)
+    first = [_problem(str(exc))]
+    try:
+        data = msgspec.json.decode(payload)
+    except (msgspec.DecodeError, ValueError, RecursionError):  # ValueError: not UTF-8
+        return first
+    if not isinstance(data, dict):
+        return first
+    problems: list[tuple[str, str]] = []
+    declared = {info.encode_name: info for info in msgspec.structs.fields(cls)}
+    for name in data:
+        if name not in declared:
+            problems.append((name, "not a field of this message"))
+    for name, info in declared.items():
+        if name not in data:
+            if info.required:
+                problems.append((name, "missing"))
+            continue
+        try:
+            msgspec.convert(data[name], info.type, strict=False)
+        except msgspec.ValidationError as field_exc:
+            field, message = _problem(str(field_exc))
+            problems.append((name if field == "<payload>" else f"{name}.{field}", message))
+        except RecursionError:
+            problems.append((name, "nested too deeply"))
+    return problems or first
 
 
 def key_matches(pattern: str, key: str) -> bool:

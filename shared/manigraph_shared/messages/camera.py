@@ -9,9 +9,10 @@ Images travel encoded (JPEG or PNG bytes, base64 in the JSON), so a 640 x 480 fr
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import Annotated, ClassVar, Self
+from typing import Annotated, ClassVar
 
-from pydantic import ConfigDict, Field, model_validator
+import msgspec
+from msgspec import Meta
 
 from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp, Struct
 
@@ -19,7 +20,7 @@ from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp,
 #: base64's 4/3).
 MAX_IMAGE_BYTES = 700_000
 
-Pixels = Annotated[float, Field(ge=-1e5, le=1e5, description="pixels")]
+Pixels = Annotated[float, Meta(ge=-1e5, le=1e5, description="pixels")]
 
 
 class ImageFormat(StrEnum):
@@ -27,22 +28,23 @@ class ImageFormat(StrEnum):
     PNG = "png"
 
 
-class CompressedImage(Message):
+class CompressedImage(Message, frozen=True, kw_only=True):
     """One encoded camera frame."""
 
     key: ClassVar[str] = "manigraph/camera/{camera}/image"
     delivery: ClassVar[Delivery] = Delivery.LATEST
     publisher: ClassVar[str] = "sim (--camera) or a camera driver"
-    model_config = ConfigDict(ser_json_bytes="base64", val_json_bytes="base64")
 
-    camera: Identifier = Field(description="camera name (also its optical frame id)")
-    stamp: Stamp = Field(description="when the frame was exposed")
-    sequence: int = Field(ge=0, description="increases by one per frame")
+    camera: Annotated[Identifier, Meta(description="camera name (also its optical frame id)")]
+    stamp: Annotated[Stamp, Meta(description="when the frame was exposed")]
+    sequence: Annotated[int, Meta(ge=0, description="increases by one per frame")]
     format: ImageFormat
-    data: bytes = Field(max_length=MAX_IMAGE_BYTES, description="encoded image, base64 in JSON")
+    data: Annotated[
+        bytes, Meta(max_length=MAX_IMAGE_BYTES, description="encoded image, base64 in JSON")
+    ]
 
 
-class CameraInfo(Message):
+class CameraInfo(Message, frozen=True, kw_only=True):
     """A camera's intrinsics: pinhole matrix and distortion, OpenCV conventions."""
 
     key: ClassVar[str] = "manigraph/camera/{camera}/info"
@@ -51,36 +53,41 @@ class CameraInfo(Message):
 
     camera: Identifier
     stamp: Stamp
-    width: int = Field(ge=1, le=8192, description="pixels")
-    height: int = Field(ge=1, le=8192, description="pixels")
-    camera_matrix: list[Pixels] = Field(
-        min_length=9, max_length=9, description="K, row-major 3 x 3 (fx 0 cx; 0 fy cy; 0 0 1)"
-    )
-    distortion: list[float] = Field(
-        default_factory=lambda: [0.0] * 5,
-        max_length=14,
-        description="OpenCV distortion coefficients (k1 k2 p1 p2 k3 ...)",
-    )
+    width: Annotated[int, Meta(ge=1, le=8192, description="pixels")]
+    height: Annotated[int, Meta(ge=1, le=8192, description="pixels")]
+    camera_matrix: Annotated[
+        list[Pixels],
+        Meta(
+            min_length=9, max_length=9, description="K, row-major 3 x 3 (fx 0 cx; 0 fy cy; 0 0 1)"
+        ),
+    ]
+    distortion: Annotated[
+        list[float],
+        Meta(max_length=14, description="OpenCV distortion coefficients (k1 k2 p1 p2 k3 ...)"),
+    ] = msgspec.field(default_factory=lambda: [0.0] * 5)
 
-    @model_validator(mode="after")
-    def _pinhole(self) -> Self:
+    def _check(self) -> None:
         k = self.camera_matrix
         if k[0] <= 0 or k[4] <= 0 or k[8] != 1.0 or k[1] != 0 or k[3] != 0 or k[6:8] != [0, 0]:
             raise ValueError("camera_matrix: must be [fx 0 cx; 0 fy cy; 0 0 1], fx, fy > 0")
-        return self
 
 
-class DetectedMarker(Struct):
+class DetectedMarker(Struct, frozen=True, kw_only=True):
     """One square marker found in an image."""
 
-    id: int = Field(ge=0, le=4095, description="marker id in the dictionary")
-    corners: list[Pixels] = Field(
-        min_length=8, max_length=8, description="x, y of the 4 corners, clockwise from top-left"
-    )
-    object_id: str = Field("", max_length=64, description="object it belongs to ('' unknown)")
+    id: Annotated[int, Meta(ge=0, le=4095, description="marker id in the dictionary")]
+    corners: Annotated[
+        list[Pixels],
+        Meta(
+            min_length=8, max_length=8, description="x, y of the 4 corners, clockwise from top-left"
+        ),
+    ]
+    object_id: Annotated[
+        str, Meta(max_length=64, description="object it belongs to ('' unknown)")
+    ] = ""
 
 
-class MarkerDetections(Message):
+class MarkerDetections(Message, frozen=True, kw_only=True):
     """The markers perception found in one camera frame (for viewers and logs)."""
 
     key: ClassVar[str] = "manigraph/camera/{camera}/markers"
@@ -88,5 +95,5 @@ class MarkerDetections(Message):
     publisher: ClassVar[str] = "perception"
 
     camera: Identifier
-    stamp: Stamp = Field(description="stamp of the image they were found in")
-    markers: list[DetectedMarker] = Field(max_length=1024)
+    stamp: Annotated[Stamp, Meta(description="stamp of the image they were found in")]
+    markers: Annotated[list[DetectedMarker], Meta(max_length=1024)]

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import ClassVar, Literal, Self
+from typing import Annotated, ClassVar, Literal
 
-from pydantic import Field, model_validator
+from msgspec import Meta
 
 from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp
 
@@ -30,7 +30,11 @@ TRAY_RACKS: dict[TrayAction, str] = {
 }
 
 
-class Action(Message):
+#: Why a policy's first choice was passed over (``Action.recovery``).
+RecoveryReason = Literal["no_progress", "repeated_pair", "escalated", "exhausted"]
+
+
+class Action(Message, frozen=True, kw_only=True):
     """Move ``object_id`` to ``goal_id`` (PickAndPlace), or toggle a tray.
 
     A placement turns the object to ``orientation_index`` (``manigraph_shared.orientations``)
@@ -40,26 +44,32 @@ class Action(Message):
     delivery: ClassVar[Delivery] = Delivery.RELIABLE
     publisher: ClassVar[str] = "planner (or demo-ui while a person teaches)"
 
-    decision_id: Identifier = Field(description="`<episode>:<step>`, unique per decision")
+    decision_id: Annotated[Identifier, Meta(description="`<episode>:<step>`, unique per decision")]
     episode_id: Identifier
-    scene_sequence: int = Field(ge=0, description="sequence of the Scene this decision used")
+    scene_sequence: Annotated[
+        int, Meta(ge=0, description="sequence of the Scene this decision used")
+    ]
     object_id: Identifier
     goal_id: Identifier
-    orientation_index: int | None = Field(
-        None, ge=0, le=5, description="one of six discrete orientations (orientations.py)"
-    )
+    orientation_index: Annotated[
+        Annotated[int, Meta(ge=0, le=5)] | None,
+        Meta(description="one of six discrete orientations (orientations.py)"),
+    ] = None
     tray_action: TrayAction = TrayAction.NONE
-    policy: str = Field(max_length=128, description="name of the policy that decided")
+    policy: Annotated[str, Meta(max_length=128, description="name of the policy that decided")]
     stamp: Stamp
-    rank: int = Field(
-        0, ge=0, description="0: the policy's first choice; k: its k-th alternative (recovery)"
-    )
-    recovery: Literal["no_progress", "repeated_pair", "escalated", "exhausted"] | None = Field(
-        None,
-        description="why the first choice was passed over: the world did not change after it, "
-        "it repeated a pair with no goal filled since, its object or goal failed twice; "
-        "exhausted: every alternative failed, the first choice again",
-    )
+    rank: Annotated[
+        int,
+        Meta(ge=0, description="0: the policy's first choice; k: its k-th alternative (recovery)"),
+    ] = 0
+    recovery: Annotated[
+        RecoveryReason | None,
+        Meta(
+            description="why the first choice was passed over: the world did not change after it, "
+            "it repeated a pair with no goal filled since, its object or goal failed twice; "
+            "exhausted: every alternative failed, the first choice again"
+        ),
+    ] = None
 
 
 #: Failure reasons of a skill that refused its action before any motion, because the action
@@ -89,7 +99,7 @@ class SkillState(StrEnum):
         return self in (SkillState.SUCCEEDED, SkillState.FAILED)
 
 
-class SkillStatus(Message):
+class SkillStatus(Message, frozen=True, kw_only=True):
     """Progress of the skill executing one decision."""
 
     key: ClassVar[str] = "manigraph/skills/status"
@@ -97,16 +107,15 @@ class SkillStatus(Message):
     publisher: ClassVar[str] = "skills"
 
     decision_id: Identifier
-    skill: str = Field(max_length=64, description="e.g. pick_and_place")
+    skill: Annotated[str, Meta(max_length=64, description="e.g. pick_and_place")]
     state: SkillState
-    reason: str | None = Field(
-        None, max_length=64, description="machine-readable cause, required when failed"
-    )
-    detail: str = Field("", max_length=1024)
+    reason: Annotated[
+        Annotated[str, Meta(max_length=64)] | None,
+        Meta(description="machine-readable cause, required when failed"),
+    ] = None
+    detail: Annotated[str, Meta(max_length=1024)] = ""
     stamp: Stamp
 
-    @model_validator(mode="after")
-    def _failure_has_reason(self) -> Self:
+    def _check(self) -> None:
         if self.state is SkillState.FAILED and not self.reason:
             raise ValueError("reason: a failed status must say why")
-        return self

@@ -2,20 +2,20 @@
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
-from pydantic import Field
+from msgspec import Meta
 
 from manigraph_shared.messages.base import Delivery, Message, Stamp
 
 
-class EmergencyStop(Message):
+class EmergencyStop(Message, frozen=True, kw_only=True):
     """Engage (halt the robot, refuse new actions) or release the emergency stop."""
 
     key: ClassVar[str] = "manigraph/robot/estop"
     delivery: ClassVar[Delivery] = Delivery.RELIABLE
     publisher: ClassVar[str] = "any authorised client (`manigraph stop` / `resume`)"
 
-    engaged: bool = Field(description="true: stop now and stay stopped; false: resume")
-    reason: str = Field("", max_length=256, description="why, for the log")
+    engaged: Annotated[bool, Meta(description="true: stop now and stay stopped; false: resume")]
+    reason: Annotated[str, Meta(max_length=256, description="why, for the log")] = ""
     stamp: Stamp

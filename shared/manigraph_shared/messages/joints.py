@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import math
 from enum import StrEnum
-from typing import Annotated, ClassVar, Self
+from typing import Annotated, ClassVar
 
-from pydantic import Field, model_validator
+from msgspec import Meta
 
 from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp, Struct
 
@@ -22,7 +22,7 @@ MAX_POINTS = 4096
 #: checked against this bound by the messages' validators.
 MAX_RADIANS = 2 * math.pi
 FingerWidth = Annotated[
-    float, Field(ge=0.0, le=0.2, description="distance between the fingers, metres")
+    float, Meta(ge=0.0, le=0.2, description="distance between the fingers, metres")
 ]
 
 
@@ -31,25 +31,26 @@ class GripperTarget(StrEnum):
     CLOSED = "closed"
 
 
-class JointTrajectoryPoint(Struct):
+class JointTrajectoryPoint(Struct, frozen=True, kw_only=True):
     """Joint positions to reach at ``time_from_start``; the gripper is driven to ``gripper``
     while the arm moves towards this point, open as wide as ``opening`` (a dish between
     neighbours is taken with the fingers open little wider than it)."""
 
-    positions: list[float] = Field(max_length=MAX_JOINTS, description="radians, within +-2 pi")
+    positions: Annotated[
+        list[float], Meta(max_length=MAX_JOINTS, description="radians, within +-2 pi")
+    ]
     gripper: GripperTarget
-    opening: FingerWidth | None = Field(
-        None, description="distance between the open fingers, metres; None: fully open"
-    )
-    time_from_start: float = Field(ge=0.0, le=3600.0, description="seconds")
+    opening: Annotated[
+        FingerWidth | None,
+        Meta(description="distance between the open fingers, metres; None: fully open"),
+    ] = None
+    time_from_start: Annotated[float, Meta(ge=0.0, le=3600.0, description="seconds")]
 
-    @model_validator(mode="after")
-    def _bounded(self) -> Self:
+    def _check(self) -> None:
         _check_angles(self.positions)
-        return self
 
 
-class JointTrajectoryCommand(Message):
+class JointTrajectoryCommand(Message, frozen=True, kw_only=True):
     """A timed joint trajectory for the arm, with gripper targets, for one motion."""
 
     key: ClassVar[str] = "manigraph/robot/joint_trajectory"
@@ -58,14 +59,14 @@ class JointTrajectoryCommand(Message):
 
     command_id: Identifier
     decision_id: Identifier
-    joint_names: list[str] = Field(
-        min_length=1, max_length=MAX_JOINTS, description="order of every point's positions"
-    )
-    points: list[JointTrajectoryPoint] = Field(min_length=1, max_length=MAX_POINTS)
+    joint_names: Annotated[
+        list[str],
+        Meta(min_length=1, max_length=MAX_JOINTS, description="order of every point's positions"),
+    ]
+    points: Annotated[list[JointTrajectoryPoint], Meta(min_length=1, max_length=MAX_POINTS)]
     stamp: Stamp
 
-    @model_validator(mode="after")
-    def _consistent(self) -> Self:
+    def _check(self) -> None:
         _check_names(self.joint_names)
         for index, point in enumerate(self.points):
             if len(point.positions) != len(self.joint_names):
@@ -75,10 +76,9 @@ class JointTrajectoryCommand(Message):
                 )
             if index and point.time_from_start <= self.points[index - 1].time_from_start:
                 raise ValueError(f"points: time_from_start of point {index} must increase")
-        return self
 
 
-class JointTrajectoryResult(Message):
+class JointTrajectoryResult(Message, frozen=True, kw_only=True):
     """The robot's answer to one ``JointTrajectoryCommand``, with the state it ended in."""
 
     key: ClassVar[str] = "manigraph/robot/joint_trajectory_result"
@@ -87,37 +87,39 @@ class JointTrajectoryResult(Message):
 
     command_id: Identifier
     ok: bool
-    reason: str | None = Field(None, max_length=64, description="why it failed")
-    detail: str = Field("", max_length=1024)
-    positions: list[float] = Field(max_length=MAX_JOINTS, description="final arm joints, radians")
+    reason: Annotated[
+        Annotated[str, Meta(max_length=64)] | None, Meta(description="why it failed")
+    ] = None
+    detail: Annotated[str, Meta(max_length=1024)] = ""
+    positions: Annotated[
+        list[float], Meta(max_length=MAX_JOINTS, description="final arm joints, radians")
+    ]
     gripper_width: FingerWidth
     stamp: Stamp
 
-    @model_validator(mode="after")
-    def _bounded(self) -> Self:
+    def _check(self) -> None:
         _check_angles(self.positions)
-        return self
 
 
-class JointState(Message):
+class JointState(Message, frozen=True, kw_only=True):
     """The arm's joint positions and the gripper opening at one instant."""
 
     key: ClassVar[str] = "manigraph/robot/joint_state"
     delivery: ClassVar[Delivery] = Delivery.LATEST
     publisher: ClassVar[str] = "sim or robot driver"
 
-    joint_names: list[str] = Field(max_length=MAX_JOINTS, description="joint order")
-    positions: list[float] = Field(max_length=MAX_JOINTS, description="radians, within +-2 pi")
+    joint_names: Annotated[list[str], Meta(max_length=MAX_JOINTS, description="joint order")]
+    positions: Annotated[
+        list[float], Meta(max_length=MAX_JOINTS, description="radians, within +-2 pi")
+    ]
     gripper_width: FingerWidth
     stamp: Stamp
 
-    @model_validator(mode="after")
-    def _consistent(self) -> Self:
+    def _check(self) -> None:
         if len(self.positions) != len(self.joint_names):
             raise ValueError("positions: one value per joint name")
         _check_angles(self.positions)
         _check_names(self.joint_names)
-        return self
 
 
 def _check_angles(positions: list[float]) -> None:

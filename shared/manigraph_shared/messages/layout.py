@@ -8,41 +8,44 @@ file (``manigraph perception --layout FILE``).
 
 from __future__ import annotations
 
-from typing import ClassVar, Self
+from typing import Annotated, ClassVar
 
-from pydantic import Field, model_validator
+import msgspec
+from msgspec import Meta
 
 from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp, Struct, Vector3
 from manigraph_shared.messages.scene import MAX_ENTITIES, GoalCategory, ObjectCategory
 
 
-class LayoutObject(Struct):
+class LayoutObject(Struct, frozen=True, kw_only=True):
     """A movable object the episode starts with."""
 
     id: Identifier
     category: ObjectCategory
-    size: Vector3 = Field(description="full extents along the object's axes, metres")
-    position: Vector3 = Field(description="where it starts (centre, metres, robot base frame)")
+    size: Annotated[Vector3, Meta(description="full extents along the object's axes, metres")]
+    position: Annotated[
+        Vector3, Meta(description="where it starts (centre, metres, robot base frame)")
+    ]
 
 
-class LayoutGoal(Struct):
+class LayoutGoal(Struct, frozen=True, kw_only=True):
     """A place an object of ``category`` should end up."""
 
     id: Identifier
     category: GoalCategory
-    position: Vector3 = Field(description="where the object's centre should be, metres")
-    optional: bool = Field(False, description="may stay empty at the end (cover storage)")
+    position: Annotated[Vector3, Meta(description="where the object's centre should be, metres")]
+    optional: Annotated[bool, Meta(description="may stay empty at the end (cover storage)")] = False
 
 
-class LayoutContainer(Struct):
+class LayoutContainer(Struct, frozen=True, kw_only=True):
     """A static open-top box standing on the table (z = 0)."""
 
     id: Identifier
-    centre: Vector3 = Field(description="centre of its floor, metres")
-    inner: Vector3 = Field(description="inner width, depth and wall height, metres")
+    centre: Annotated[Vector3, Meta(description="centre of its floor, metres")]
+    inner: Annotated[Vector3, Meta(description="inner width, depth and wall height, metres")]
 
 
-class TaskLayout(Message):
+class TaskLayout(Message, frozen=True, kw_only=True):
     """The objects, goals and boxes of the running episode."""
 
     key: ClassVar[str] = "manigraph/world/layout"
@@ -51,15 +54,17 @@ class TaskLayout(Message):
 
     episode_id: Identifier
     stamp: Stamp
-    objects: list[LayoutObject] = Field(max_length=MAX_ENTITIES)
-    goals: list[LayoutGoal] = Field(min_length=1, max_length=MAX_ENTITIES)
-    containers: list[LayoutContainer] = Field(default_factory=list, max_length=16)
-    partially_observable: bool = Field(False, description="closed boxes hide what they hold")
+    objects: Annotated[list[LayoutObject], Meta(max_length=MAX_ENTITIES)]
+    goals: Annotated[list[LayoutGoal], Meta(min_length=1, max_length=MAX_ENTITIES)]
+    containers: Annotated[list[LayoutContainer], Meta(max_length=16)] = msgspec.field(
+        default_factory=list
+    )
+    partially_observable: Annotated[bool, Meta(description="closed boxes hide what they hold")] = (
+        False
+    )
 
-    @model_validator(mode="after")
-    def _unique_ids(self) -> Self:
+    def _check(self) -> None:
         names = [o.id for o in self.objects] + [g.id for g in self.goals]
         twice = sorted({n for n in names if names.count(n) > 1})
         if twice:
             raise ValueError(f"id: used twice: {', '.join(twice)}")
-        return self

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
-from pydantic import Field
+from msgspec import Meta
 
 from manigraph_shared.messages.base import (
     Delivery,
@@ -26,7 +26,7 @@ class GripperOp(StrEnum):
     TOGGLE_TRAY = "toggle_tray"
 
 
-class RobotCommand(Message):
+class RobotCommand(Message, frozen=True, kw_only=True):
     """One Cartesian gripper command for a robot driver (the geometric world's robot)."""
 
     key: ClassVar[str] = "manigraph/robot/command"
@@ -37,14 +37,14 @@ class RobotCommand(Message):
     decision_id: Identifier
     op: GripperOp
     object_id: Identifier
-    position: Vector3 = Field(description="grasp or release position of the object centre")
-    orientation: Quaternion = Field(
-        Quaternion(), description="the object's orientation at grasp or at release"
-    )
+    position: Annotated[Vector3, Meta(description="grasp or release position of the object centre")]
+    orientation: Annotated[
+        Quaternion, Meta(description="the object's orientation at grasp or at release")
+    ] = Quaternion()
     stamp: Stamp
 
 
-class RobotFeedback(Message):
+class RobotFeedback(Message, frozen=True, kw_only=True):
     """The driver's answer to one ``RobotCommand``."""
 
     key: ClassVar[str] = "manigraph/robot/feedback"
@@ -53,6 +53,8 @@ class RobotFeedback(Message):
 
     command_id: Identifier
     ok: bool
-    reason: str | None = Field(None, max_length=64, description="why it failed")
-    detail: str = Field("", max_length=1024)
+    reason: Annotated[
+        Annotated[str, Meta(max_length=64)] | None, Meta(description="why it failed")
+    ] = None
+    detail: Annotated[str, Meta(max_length=1024)] = ""
     stamp: Stamp

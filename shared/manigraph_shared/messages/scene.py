@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import ClassVar, Self
+from typing import Annotated, ClassVar
 
-from pydantic import Field, model_validator
+import msgspec
+from msgspec import Meta
 
 from manigraph_shared.messages.base import (
     Delivery,
@@ -40,55 +41,60 @@ class GoalCategory(StrEnum):
     BOWL = "bowl"
 
 
-class SceneObject(Struct):
+class SceneObject(Struct, frozen=True, kw_only=True):
     """A movable object."""
 
     id: Identifier
     category: ObjectCategory
-    position: Vector3 = Field(description="centre of the object, metres, in the scene frame")
+    position: Annotated[
+        Vector3, Meta(description="centre of the object, metres, in the scene frame")
+    ]
     orientation: Quaternion = Quaternion()
-    size: Vector3 = Field(description="full extents along the object's axes, metres")
-    filled: bool = Field(False, description="the object rests in a goal of its category")
-    visible: bool = Field(True, description="observed now (false: occluded or inside a box)")
+    size: Annotated[Vector3, Meta(description="full extents along the object's axes, metres")]
+    filled: Annotated[bool, Meta(description="the object rests in a goal of its category")] = False
+    visible: Annotated[bool, Meta(description="observed now (false: occluded or inside a box)")] = (
+        True
+    )
 
-    @model_validator(mode="after")
-    def _positive_size(self) -> Self:
+    def _check(self) -> None:
         if min(self.size.as_tuple()) <= 0.0 or max(self.size.as_tuple()) > 2.0:
             raise ValueError("size: every extent must be in (0, 2] metres")
-        return self
 
 
-class SceneGoal(Struct):
+class SceneGoal(Struct, frozen=True, kw_only=True):
     """A place an object of ``category`` should end up."""
 
     id: Identifier
     category: GoalCategory
-    position: Vector3 = Field(description="where the object's centre should be, metres")
+    position: Annotated[Vector3, Meta(description="where the object's centre should be, metres")]
     orientation: Quaternion = Quaternion()
-    filled: bool = Field(False, description="an object of the right category occupies it")
-    visible: bool = Field(True, description="observed now (false: inside a closed box)")
-    rack: Identifier | None = Field(None, description="the dishwasher rack holding this slot")
+    filled: Annotated[bool, Meta(description="an object of the right category occupies it")] = False
+    visible: Annotated[bool, Meta(description="observed now (false: inside a closed box)")] = True
+    rack: Annotated[
+        Identifier | None, Meta(description="the dishwasher rack holding this slot")
+    ] = None
 
 
-class SceneRack(Struct):
+class SceneRack(Struct, frozen=True, kw_only=True):
     """A dishwasher rack that slides out (open) and in along its rail."""
 
     id: Identifier
-    position: Vector3 = Field(description="centre of the rack's handle, metres")
-    open: bool = Field(description="pulled out: it can be loaded")
-    travel: float | None = Field(
-        None, ge=0.0, le=1.0, description="how far it is out, metres, where measured"
-    )
-    rail: float | None = Field(
-        None,
-        gt=0.0,
-        le=1.0,
-        description="how far it slides out all the way, metres, where the world says so "
-        "(None: grasp_points.RACK_TRAVEL)",
-    )
+    position: Annotated[Vector3, Meta(description="centre of the rack's handle, metres")]
+    open: Annotated[bool, Meta(description="pulled out: it can be loaded")]
+    travel: Annotated[
+        Annotated[float, Meta(ge=0.0, le=1.0)] | None,
+        Meta(description="how far it is out, metres, where measured"),
+    ] = None
+    rail: Annotated[
+        Annotated[float, Meta(gt=0.0, le=1.0)] | None,
+        Meta(
+            description="how far it slides out all the way, metres, where the world says so "
+            "(None: grasp_points.RACK_TRAVEL)"
+        ),
+    ] = None
 
 
-class Scene(Message):
+class Scene(Message, frozen=True, kw_only=True):
     """Poses of every object and goal at one instant."""
 
     key: ClassVar[str] = "manigraph/world/scene"
@@ -96,24 +102,23 @@ class Scene(Message):
     publisher: ClassVar[str] = "sim or perception"
 
     episode_id: Identifier
-    frame_id: str = Field("world", max_length=64, description="frame of every position")
+    frame_id: Annotated[str, Meta(max_length=64, description="frame of every position")] = "world"
     stamp: Stamp
-    sequence: int = Field(ge=0, description="increases by one per published scene")
-    objects: list[SceneObject] = Field(max_length=MAX_ENTITIES)
-    goals: list[SceneGoal] = Field(max_length=MAX_ENTITIES)
-    racks: list[SceneRack] = Field(
-        default_factory=list, max_length=8, description="dishwasher racks (dishwasher task)"
-    )
-    episode_ended: bool = Field(
-        False, description="the world ended this episode (sim only): planners stop deciding"
-    )
-    stale: bool = Field(
-        False,
-        description="perception saw nothing it could use lately: poses are the last known",
-    )
+    sequence: Annotated[int, Meta(ge=0, description="increases by one per published scene")]
+    objects: Annotated[list[SceneObject], Meta(max_length=MAX_ENTITIES)]
+    goals: Annotated[list[SceneGoal], Meta(max_length=MAX_ENTITIES)]
+    racks: Annotated[
+        list[SceneRack], Meta(max_length=8, description="dishwasher racks (dishwasher task)")
+    ] = msgspec.field(default_factory=list)
+    episode_ended: Annotated[
+        bool, Meta(description="the world ended this episode (sim only): planners stop deciding")
+    ] = False
+    stale: Annotated[
+        bool,
+        Meta(description="perception saw nothing it could use lately: poses are the last known"),
+    ] = False
 
-    @model_validator(mode="after")
-    def _unique_ids(self) -> Self:
+    def _check(self) -> None:
         seen: set[str] = set()
         entities: list[SceneObject | SceneGoal | SceneRack] = [
             *self.objects,
@@ -124,7 +129,6 @@ class Scene(Message):
             if entity.id in seen:
                 raise ValueError(f"id: '{entity.id}' is used twice")
             seen.add(entity.id)
-        return self
 
     def object(self, object_id: str) -> SceneObject:
         for item in self.objects:

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
-from pydantic import Field
+import msgspec
+from msgspec import Meta
 
 from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp
 
@@ -20,7 +21,7 @@ class ServiceState(StrEnum):
     STOPPING = "stopping"
 
 
-class ServiceStatus(Message):
+class ServiceStatus(Message, frozen=True, kw_only=True):
     """Heartbeat and error report of one service."""
 
     key: ClassVar[str] = "manigraph/status/{service}"
@@ -29,14 +30,18 @@ class ServiceStatus(Message):
 
     service: Identifier
     state: ServiceState
-    detail: str = Field("", max_length=2048, description="last error, or what it is doing")
-    messages_in: int = Field(0, ge=0)
-    messages_rejected: int = Field(
-        0, ge=0, description="every message refused: malformed, or valid but not acceptable"
+    detail: Annotated[str, Meta(max_length=2048, description="last error, or what it is doing")] = (
+        ""
     )
-    rejections: dict[str, int] = Field(
-        default_factory=dict,
-        max_length=MAX_REJECTION_KINDS,
-        description="refusals so far by `<Type>:<reason>`, e.g. `Scene:sequence_jump`",
-    )
+    messages_in: Annotated[int, Meta(ge=0)] = 0
+    messages_rejected: Annotated[
+        int, Meta(ge=0, description="every message refused: malformed, or valid but not acceptable")
+    ] = 0
+    rejections: Annotated[
+        dict[str, int],
+        Meta(
+            max_length=MAX_REJECTION_KINDS,
+            description="refusals so far by `<Type>:<reason>`, e.g. `Scene:sequence_jump`",
+        ),
+    ] = msgspec.field(default_factory=dict)
     stamp: Stamp

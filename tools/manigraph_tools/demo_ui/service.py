@@ -17,11 +17,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pydantic import ValidationError
-
 from manigraph_shared.bus import Bus
 from manigraph_shared.demonstrations import DemonstrationLog, stamp_times
-from manigraph_shared.errors import BusError, ConfigError, RequestRefused
+from manigraph_shared.errors import BusError, ConfigError, MessageError, RequestRefused
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodeRequest, Scene, SkillStatus
 from manigraph_shared.options import Interval, Options, option
 from manigraph_shared.scene_gate import SceneGate
@@ -158,20 +156,21 @@ class DemoUiService(Service):
         episode_id = f"demo-{int(time.time())}-{self._episodes}"
         task_file = self.task_file if values["task"] == "file" else None
         try:
-            request = EpisodeRequest(
-                episode_id=episode_id,
-                task=values["task"],
-                blocks=values["blocks"],
-                stacks=values["stacks"],
-                objects=values["objects"],
-                preference=values["preference"] or None,
-                seed=seed,
-                task_file=task_file,
+            request = EpisodeRequest.model_validate(
+                {
+                    "episode_id": episode_id,
+                    "task": values["task"],
+                    "blocks": values["blocks"],
+                    "stacks": values["stacks"],
+                    "objects": values["objects"],
+                    "preference": values["preference"] or None,
+                    "seed": seed,
+                    "task_file": task_file,
+                }
             )
-        except ValidationError as exc:
-            first = exc.errors()[0]
-            field = ".".join(str(part) for part in first["loc"])
-            raise BadRequest(f"{field}: {first['msg']}") from None
+        except MessageError as exc:
+            field, why = exc.problems[0]
+            raise BadRequest(f"{field}: {why}") from None
         if request.task == "file" and task_file is None:
             raise BadRequest("task: 'file' needs demo-ui --task-file")
         self.session.expect(request)

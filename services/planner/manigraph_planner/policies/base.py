@@ -6,10 +6,12 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.ids import derived_id
 from manigraph_shared.messages import Action, Scene, TrayAction
+from manigraph_shared.messages.decision import RecoveryReason
 from manigraph_shared.registry import Registry
 
 
@@ -48,7 +50,7 @@ class Decision:
             policy=policy,
             stamp=stamp,
             rank=rank,
-            recovery=recovery,
+            recovery=cast("RecoveryReason | None", recovery),  # one of its names, by construction
         )
 
 
