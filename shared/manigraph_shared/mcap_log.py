@@ -62,6 +62,7 @@ class McapLogWriter:
         self._schemas: dict[str, int] = {}
         self._last_flush = time.monotonic()
         self.messages_written = 0
+        self._unflushed = 0  # bytes of messages in the open chunk
 
     def add_channel(
         self,
@@ -95,6 +96,7 @@ class McapLogWriter:
             sequence=self.messages_written,
         )
         self.messages_written += 1
+        self._unflushed += len(data)
         self.maybe_flush()
 
     def maybe_flush(self) -> None:
@@ -106,11 +108,19 @@ class McapLogWriter:
         self._writer.flush()
         self._stream.flush()
         self._last_flush = time.monotonic()
+        self._unflushed = 0
 
     @property
     def bytes_written(self) -> int:
         """Bytes in the file so far (the open chunk not counted until flushed)."""
         return self._stream.tell()
+
+    @property
+    def size(self) -> int:
+        """Bytes in the file plus the messages of the open chunk: what the file will hold
+        once that chunk is flushed (rotation by size uses this, so a burst written between
+        two flushes cannot grow one file past its limit)."""
+        return self._stream.tell() + self._unflushed
 
     def close(self) -> None:
         self._writer.finish()

@@ -212,7 +212,7 @@ class Recorder(Service):
         return True
 
     def _maybe_rotate(self) -> None:
-        too_big = self._log.bytes_written >= self.max_bytes
+        too_big = self._log.size >= self.max_bytes
         if too_big or time.monotonic() - self._opened >= self.max_seconds:
             self._log.close()
             previous = self.path
