@@ -19,7 +19,7 @@ from pathlib import Path
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
-from manigraph_shared.messages import Action, RobotCommand, Scene, Vector3
+from manigraph_shared.messages import Action, GripperOp, RobotCommand, Scene, Vector3
 
 
 def alive(bus: Bus, need: set[str], timeout: float) -> int:
@@ -70,7 +70,7 @@ def forge(bus: Bus, count: int, tag: str) -> int:
             RobotCommand(
                 command_id=f"{tag}-{index}",
                 decision_id=f"{tag}:{index}",
-                op="place",
+                op=GripperOp.PLACE,
                 object_id=f"{tag}-object",  # no such object: a sim that gets it moves nothing
                 position=Vector3(x=0.5, y=0.0, z=0.02),
                 stamp=time.time(),
