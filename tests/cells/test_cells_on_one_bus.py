@@ -111,9 +111,3 @@ def test_up_can_still_start_a_planner_per_cell() -> None:
     assert "planner@cell-1" in result.stderr and "planner@cell-2" in result.stderr
     summary = json.loads(result.stdout.splitlines()[-1])
     assert summary["success_rate_by_cell"] == {"cell-1": 1.0, "cell-2": 1.0}
-
-
-def test_up_refuses_cells_with_the_secure_bus_before_starting() -> None:
-    result = run_up("--cells", "2", "--secure", "--episodes", "1", check=False)
-    assert result.returncode != 0
-    assert "cells" in result.stderr and "access control" in result.stderr

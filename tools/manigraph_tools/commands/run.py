@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import secrets
 import time
 
 from manigraph_shared.bus import Bus
@@ -20,7 +21,10 @@ def episode_arguments(parser: argparse.ArgumentParser) -> None:
 
 def plan_from_args(args: argparse.Namespace, episodes: int) -> EpisodePlan:
     options = options_from_args(EpisodeOptions, args)
-    return options.plan(episodes, run_id=f"{options.label()}-{int(time.time())}")
+    # Seconds alone repeat: two runs started in one second (cells driven side by side) would
+    # give their episodes the same ids, and the logs would mix them.
+    run_id = f"{options.label()}-{int(time.time())}-{secrets.token_hex(2)}"
+    return options.plan(episodes, run_id=run_id)
 
 
 def _run_configure(parser: argparse.ArgumentParser) -> None:
