@@ -21,11 +21,11 @@ import pytest
 import torch
 
 from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_planner.dishwasher.expert import dishwasher_expert
+from manigraph_planner.dishwasher.training import load_dish_demonstrations
 from manigraph_planner.policies import load_policy
-from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
 from manigraph_planner.policies.gnn import GNNPolicy
 from manigraph_planner.training.dataset import count_heads, load_demonstrations
-from manigraph_planner.training.dishwasher import load_dish_demonstrations
 from manigraph_shared.errors import CONFIG_EXIT_CODE, ConfigError
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Scene

@@ -2,7 +2,7 @@
 that ``manigraph export`` wrote), write a checkpoint.
 
 The logs say which policy they teach: decisions on dishwasher scenes (with racks) train the
-four-headed dishwasher policy (``training.dishwasher``), any other the paper's object and goal
+four-headed dishwasher policy (``dishwasher.training``), any other the paper's object and goal
 heads. ``--heads`` chooses where a log holds both."""
 
 from __future__ import annotations
@@ -111,12 +111,12 @@ def _run(args: argparse.Namespace) -> int:
 def _train_dishwasher(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
-    from manigraph_planner.gnn import save_checkpoint
-    from manigraph_planner.training.dishwasher import (
+    from manigraph_planner.dishwasher.training import (
         DishTrainConfig,
         load_dish_demonstrations,
         train_dish,
     )
+    from manigraph_planner.gnn import save_checkpoint
 
     defaults = DishTrainConfig()
     config = DishTrainConfig(

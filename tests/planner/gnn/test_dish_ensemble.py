@@ -7,14 +7,14 @@ from pathlib import Path
 import pytest
 import torch
 
+from manigraph_planner.dishwasher.ensemble import DishEnsembleNet
+from manigraph_planner.dishwasher.features import dish_scene_to_graph
+from manigraph_planner.dishwasher.gnn_policy import DishwasherGNNPolicy, decision_from_heads
+from manigraph_planner.dishwasher.net import DishHeads, DishPolicyNet
+from manigraph_planner.dishwasher.training import DishTrainConfig, member_seed
 from manigraph_planner.gnn.checkpoint import load_checkpoint, save_checkpoint
-from manigraph_planner.gnn.dish_features import dish_scene_to_graph
 from manigraph_planner.gnn.models import ModelConfig
-from manigraph_planner.gnn.models.dish_ensemble import DishEnsembleNet
-from manigraph_planner.gnn.models.dish_net import DishHeads, DishPolicyNet
 from manigraph_planner.policies import load_policy
-from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy, decision_from_heads
-from manigraph_planner.training.dishwasher import DishTrainConfig, member_seed
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_sim.geometric.backend import GeometricBackend
@@ -98,8 +98,8 @@ def test_training_several_members_makes_an_ensemble_whose_first_is_the_single_ne
     tmp_path: Path,
 ) -> None:
     from manigraph_lab.demos import DemoProtocol, record_demos
-    from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
-    from manigraph_planner.training.dishwasher import load_dish_demonstrations, train_dish
+    from manigraph_planner.dishwasher.expert import dishwasher_expert
+    from manigraph_planner.dishwasher.training import load_dish_demonstrations, train_dish
 
     path = tmp_path / "demos.mcap"
     record_demos(

@@ -8,18 +8,18 @@ import pytest
 import torch
 
 from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_planner.gnn.checkpoint import load_checkpoint, save_checkpoint
-from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC, dish_scene_to_graph
-from manigraph_planner.gnn.models.dish_net import DishHeads, DishPolicyNet
-from manigraph_planner.policies import load_policy
-from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy, decision_from_heads
-from manigraph_planner.policies.dishwasher_expert import dishwasher_expert
-from manigraph_planner.recovery import ProgressMonitor
-from manigraph_planner.training.dishwasher import (
+from manigraph_planner.dishwasher.expert import dishwasher_expert
+from manigraph_planner.dishwasher.features import DISH_FEATURE_SPEC, dish_scene_to_graph
+from manigraph_planner.dishwasher.gnn_policy import DishwasherGNNPolicy, decision_from_heads
+from manigraph_planner.dishwasher.net import DishHeads, DishPolicyNet
+from manigraph_planner.dishwasher.training import (
     DishTrainConfig,
     dish_loss,
     load_dish_demonstrations,
 )
+from manigraph_planner.gnn.checkpoint import load_checkpoint, save_checkpoint
+from manigraph_planner.policies import load_policy
+from manigraph_planner.recovery import ProgressMonitor
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import EpisodeRequest, SkillState, SkillStatus, TrayAction
 from manigraph_shared.orientations import UPSIDE_DOWN
@@ -398,7 +398,7 @@ def test_the_shipped_dishwasher_checkpoints_load_and_act(preference: str) -> Non
 def test_dropping_dishes_keeps_the_demonstrated_decision(demos) -> None:  # type: ignore[no-untyped-def]
     import random
 
-    from manigraph_planner.training.dish_augment import drop_dishes
+    from manigraph_planner.dishwasher.augment import drop_dishes
 
     rng = random.Random(0)
     shrunk = 0

@@ -7,7 +7,7 @@ import torch
 
 from manigraph_planner.gnn.features import fully_connected_edge_index
 from manigraph_planner.gnn.models import ARCHITECTURES, ModelConfig, PolicyNet
-from manigraph_planner.gnn.models.dish_ensemble import policy_net_for, with_message_passing
+from manigraph_planner.gnn.models.build import policy_net_for, with_message_passing
 from manigraph_shared.errors import PolicyError
 
 ARCHS = sorted(ARCHITECTURES.names())

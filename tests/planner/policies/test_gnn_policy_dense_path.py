@@ -17,7 +17,7 @@ import torch
 
 from manigraph_planner.gnn.features import GraphState, scene_to_graph
 from manigraph_planner.gnn.models import ARCHITECTURES, ModelConfig, PolicyNet
-from manigraph_planner.gnn.models.dish_ensemble import with_message_passing
+from manigraph_planner.gnn.models.build import with_message_passing
 from manigraph_planner.policies.base import Decision
 from manigraph_planner.policies.gnn import GNNPolicy, decision_from_logits
 from manigraph_shared.messages import (

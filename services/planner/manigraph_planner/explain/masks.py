@@ -56,7 +56,7 @@ from torch_geometric.explain.algorithm.utils import clear_masks, set_masks
 
 from manigraph_planner.explain.config import ExplainerConfig, Objective
 from manigraph_planner.gnn.models import PolicyNet
-from manigraph_planner.gnn.models.dish_ensemble import with_message_passing
+from manigraph_planner.gnn.models.build import with_message_passing
 from manigraph_shared.errors import PolicyError
 
 __all__ = ["MaskExplainer", "MaskExplanation"]

@@ -33,8 +33,8 @@ from typing import Any, NamedTuple
 import torch
 
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
+from manigraph_planner.gnn.models.build import policy_net_for
 from manigraph_planner.gnn.models.config import feature_spec_for
-from manigraph_planner.gnn.models.dish_ensemble import policy_net_for
 from manigraph_shared.errors import ConfigError, PolicyError
 
 __all__ = ["CheckpointInfo", "LoadedCheckpoint", "load_checkpoint", "save_checkpoint"]

@@ -171,8 +171,8 @@ def load_gnn_policy(path: Path) -> Policy:
     a :class:`GNNPolicy`, or a dishwasher policy for a checkpoint with ``dishwasher`` heads.
     Its network holds the weights for the dense path only: serving never imports PyG (the
     explainer rebuilds the message-passing network it needs)."""
-    from manigraph_planner.gnn.models.dish_net import DishPolicyNet
-    from manigraph_planner.policies.dish_gnn import DishwasherGNNPolicy
+    from manigraph_planner.dishwasher.gnn_policy import DishwasherGNNPolicy
+    from manigraph_planner.dishwasher.net import DishPolicyNet
 
     net, info = load_checkpoint(path, message_passing=False)
     if isinstance(net, DishPolicyNet):

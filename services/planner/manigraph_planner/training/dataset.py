@@ -5,7 +5,7 @@ data: ``manigraph demos`` output, the demonstration page's (``manigraph demo-ui`
 recorded with ``manigraph up --record``; so is a LeRobot dataset that ``manigraph export``
 wrote (``training.sources`` says which reader takes a path). An action is paired with the
 scene whose ``episode_id`` and ``sequence`` it names (``scene_sequence``). Decisions on a
-dishwasher scene (one with racks) are the four-headed policy's (``training.dishwasher``) and
+dishwasher scene (one with racks) are the four-headed policy's (``dishwasher.training``) and
 are skipped here; :func:`count_heads` says which kind a log holds.
 """
 

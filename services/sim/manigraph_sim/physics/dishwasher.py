@@ -101,7 +101,7 @@ SLOT_FIT: Final = 0.02
 #: 11 cm leaves 11 cm: such a plate is taken up to x = 0.465 m, the far row's farthest.
 #: The policy reads a rack's open flag and its handle where it physically is (5 cm further
 #: out than in training when open); with a dish waiting for a rack never placed elsewhere
-#: (``dish_gnn._waiting``), it does not depend on how far they slide in the geometric world
+#: (``gnn_policy._waiting``), it does not depend on how far they slide in the geometric world
 #: (top-bottom, 10 dishes, seeds 20000-20099: 1.0 with racks sliding 12, 11, 10, 9 or 2 cm;
 #: 0.87 at 10 cm without that rule).
 RAIL: Final = 0.11

@@ -6,17 +6,20 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC
 from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec
 from manigraph_planner.gnn.models.backbone import ARCHITECTURES
 from manigraph_shared.errors import ConfigError
+from manigraph_shared.registry import Registry
 
 __all__ = ["HEADS", "ModelConfig", "feature_spec_for"]
 
 #: The policy's output heads -> the feature spec its graph states are built with.
 #: ``object-goal``: the paper's node logits (object and goal); ``dishwasher``: those plus an
 #: orientation per object node and a tray action per graph (four heads).
-HEADS: dict[str, FeatureSpec] = {"object-goal": FEATURE_SPEC, "dishwasher": DISH_FEATURE_SPEC}
+#: A task's own heads point at its package's spec, imported when first used.
+HEADS: Registry[FeatureSpec] = Registry("heads")
+HEADS.add("object-goal", FEATURE_SPEC)
+HEADS.add_lazy("dishwasher", "manigraph_planner.dishwasher.features:DISH_FEATURE_SPEC")
 
 
 def feature_spec_for(heads: str) -> FeatureSpec:

@@ -9,7 +9,7 @@ its backbone from these holders (``message_passing=False``) and never imports Py
 Each holder has exactly the parameter names and shapes of the PyG layer it stands for, so a
 checkpoint's ``state_dict`` loads into either with ``strict=True`` (a mismatch is refused by
 name), and the explainer, which needs message passing for its edge masks, rebuilds the PyG
-network from the same state (:func:`~manigraph_planner.gnn.models.with_message_passing`).
+network from the same state (:func:`~manigraph_planner.gnn.models.build.with_message_passing`).
 Calling a holder as a layer raises: it has no edges to pass messages over.
 """
 

@@ -19,11 +19,10 @@ from collections.abc import Sequence
 import torch
 from torch import Tensor, nn
 
+from manigraph_planner.dishwasher.net import DishHeads, DishPolicyNet
 from manigraph_planner.gnn.models.config import ModelConfig
-from manigraph_planner.gnn.models.dish_net import DishHeads, DishPolicyNet
-from manigraph_planner.gnn.models.policy_net import PolicyNet
 
-__all__ = ["DishEnsembleNet", "policy_net_for"]
+__all__ = ["DishEnsembleNet"]
 
 
 class DishEnsembleNet(DishPolicyNet):
@@ -67,23 +66,3 @@ class DishEnsembleNet(DishPolicyNet):
 
     def _members(self) -> list[DishPolicyNet]:
         return [m for m in self.members if isinstance(m, DishPolicyNet)]
-
-
-def policy_net_for(config: ModelConfig, message_passing: bool = True) -> PolicyNet:
-    """The network class ``config`` asks for: the block policy's, a dishwasher network, or
-    an ensemble of them (``message_passing``: see :class:`PolicyNet`)."""
-    if config.heads != "dishwasher":
-        return PolicyNet(config, message_passing)
-    if config.ensemble > 1:
-        return DishEnsembleNet(config, message_passing=message_passing)
-    return DishPolicyNet(config, message_passing)
-
-
-def with_message_passing(net: PolicyNet) -> PolicyNet:
-    """``net`` itself if it can pass messages, else the PyG network of its config holding
-    a copy of its weights (what the explainer's edge masks need)."""
-    if net.message_passing:
-        return net
-    twin = policy_net_for(net.config, message_passing=True)
-    twin.load_state_dict(net.state_dict(), strict=True)
-    return twin.train(net.training)

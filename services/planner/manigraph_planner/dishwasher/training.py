@@ -25,17 +25,21 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from manigraph_planner.gnn.dish_features import DISH_FEATURE_SPEC, TRAY_ACTIONS, dish_scene_to_graph
-from manigraph_planner.gnn.models import ModelConfig
-from manigraph_planner.gnn.models.dish_ensemble import DishEnsembleNet
-from manigraph_planner.gnn.models.dish_net import DishPolicyNet
-from manigraph_planner.training.dataset import read_decisions
-from manigraph_planner.training.dish_augment import (
+from manigraph_planner.dishwasher.augment import (
     DishSample,
     add_dishes,
     counter_dishes,
     drop_dishes,
 )
+from manigraph_planner.dishwasher.ensemble import DishEnsembleNet
+from manigraph_planner.dishwasher.features import (
+    DISH_FEATURE_SPEC,
+    TRAY_ACTIONS,
+    dish_scene_to_graph,
+)
+from manigraph_planner.dishwasher.net import DishPolicyNet
+from manigraph_planner.gnn.models import ModelConfig
+from manigraph_planner.training.dataset import read_decisions
 from manigraph_shared.errors import ConfigError, LogError
 from manigraph_shared.messages import TrayAction
 

@@ -6,8 +6,7 @@ import itertools
 
 import torch
 
-from manigraph_planner.gnn.checkpoint import CheckpointInfo
-from manigraph_planner.gnn.dish_features import (
+from manigraph_planner.dishwasher.features import (
     FILLED_COLUMN,
     ORIENTATION_COLUMNS,
     POSITION_COLUMNS,
@@ -15,14 +14,15 @@ from manigraph_planner.gnn.dish_features import (
     DishGraph,
     dish_scene_to_graph,
 )
-from manigraph_planner.gnn.models.dish_net import DishHeads, DishPolicyNet
+from manigraph_planner.dishwasher.net import DishHeads, DishPolicyNet
+from manigraph_planner.gnn.checkpoint import CheckpointInfo
 from manigraph_planner.policies.base import Decision, Policy
 from manigraph_shared.messages import TRAY_RACKS, Scene, TrayAction
 from manigraph_shared.orientations import postures_like
 
 __all__ = ["DishwasherGNNPolicy", "decision_from_heads"]
 
-#: Slot category code (dish_features) that each dish code fills: plate 0 -> 2, bowl 1 -> 3.
+#: Slot category code (``features``) that each dish code fills: plate 0 -> 2, bowl 1 -> 3.
 _SLOT_FOR_DISH = {0: 2, 1: 3}
 #: The dish kind of each dish code.
 _DISH_KIND = {0: "plate", 1: "bowl"}

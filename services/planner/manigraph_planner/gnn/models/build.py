@@ -1,0 +1,34 @@
+"""The network a :class:`ModelConfig` asks for, by its heads: the block policy's
+:class:`PolicyNet`, or a task's own network (the dishwasher's four heads, an ensemble of
+them)."""
+
+from __future__ import annotations
+
+from manigraph_planner.gnn.models.config import ModelConfig
+from manigraph_planner.gnn.models.policy_net import PolicyNet
+
+__all__ = ["policy_net_for", "with_message_passing"]
+
+
+def policy_net_for(config: ModelConfig, message_passing: bool = True) -> PolicyNet:
+    """The network class ``config`` asks for: the block policy's, a dishwasher network, or
+    an ensemble of them (``message_passing``: see :class:`PolicyNet`)."""
+    if config.heads != "dishwasher":
+        return PolicyNet(config, message_passing)
+    # Imported here: the dishwasher's networks build on this package (gnn.models).
+    from manigraph_planner.dishwasher.ensemble import DishEnsembleNet
+    from manigraph_planner.dishwasher.net import DishPolicyNet
+
+    if config.ensemble > 1:
+        return DishEnsembleNet(config, message_passing=message_passing)
+    return DishPolicyNet(config, message_passing)
+
+
+def with_message_passing(net: PolicyNet) -> PolicyNet:
+    """``net`` itself if it can pass messages, else the PyG network of its config holding
+    a copy of its weights (what the explainer's edge masks need)."""
+    if net.message_passing:
+        return net
+    twin = policy_net_for(net.config, message_passing=True)
+    twin.load_state_dict(net.state_dict(), strict=True)
+    return twin.train(net.training)
