@@ -19,8 +19,9 @@ from manigraph_shared.messages import Scene, SceneGoal, SceneObject
 
 TOP_RACK: Final = "rack_top"
 BOTTOM_RACK: Final = "rack_bottom"
-#: A dish this close to a slot's position stands in it, metres (the physics world's test
-#: and the skills' reading of a ``Scene``).
+#: A dish counts as standing in a slot when its centre is this close to the slot's position
+#: (with the rack where it physically is) and it is not held: half a plate's slot pitch,
+#: metres. The physics world's test, and the skills' reading of a ``Scene``.
 SLOT_FIT: Final = 0.02
 
 

@@ -23,9 +23,9 @@ from manigraph_shared.messages import (
     TrayAction,
 )
 from manigraph_shared.orientations import ORIENTATIONS, UPSIDE_DOWN, up_axis_orientation
+from manigraph_sim.dishwasher.physics import PHYSICAL_DISH_SIZE, RAIL, physical_counter_x
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_sim.physics.dishwasher import PHYSICAL_DISH_SIZE, RAIL, physical_counter_x
 from manigraph_skills.dishwasher.turn_over import quaternion_of, rotation_of
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 

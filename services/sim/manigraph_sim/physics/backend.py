@@ -43,12 +43,12 @@ from manigraph_shared.messages import (
 from manigraph_shared.preflight import INSTALL_VULKAN
 from manigraph_sim.backend_base import EpisodeBackend, JointedArmBackend
 from manigraph_sim.dishwasher.model import DishwasherLayout
+from manigraph_sim.dishwasher.physics import PhysicsDishwasher
 from manigraph_sim.dishwasher.scene import dishwasher_scene
 from manigraph_sim.geometric.geometric_world import GeometricWorld
 from manigraph_sim.manifest import CAMERA, JOINTS
 from manigraph_sim.observation import observed_scene
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
-from manigraph_sim.physics.dishwasher import PhysicsDishwasher
 from manigraph_sim.physics.physics_world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig, vulkan_available
 from manigraph_sim.tasks.from_request import episode_layout
@@ -105,7 +105,7 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         self.config = config or PhysicsConfig()
         self.world: PhysicsWorld | None = None
         self.layout: Layout | None = None
-        #: The dishwasher task's cabinet and dishes (``physics.dishwasher``), else None.
+        #: The dishwasher task's cabinet and dishes (``dishwasher.physics``), else None.
         self.dishwasher: PhysicsDishwasher | None = None
         #: Boxes seen open in this episode: their contents stay observed (partial observability).
         self.revealed: set[str] = set()

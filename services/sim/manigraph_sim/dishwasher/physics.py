@@ -2,7 +2,7 @@
 bodies, all built from boxes (nothing downloaded).
 
 * **Cabinet**: the articulation's fixed root, two side walls and a back wall around where
-  the racks stand pushed in (``tasks.dishwasher.RACK_CENTRES``, the geometric world's).
+  the racks stand pushed in (``dishwasher.task.RACK_CENTRES``, the geometric world's).
 * **Racks**: one link each on a prismatic joint along x (0: pushed in, ``-RAIL``:
   pulled out towards the robot, 4 cm short of the geometric world's ``RACK_TRAVEL``, and
   reported so: ``SceneRack.rail``), with joint damping so a rack stays where it is left. A
@@ -32,6 +32,7 @@ import numpy as np
 import sapien
 from sapien import physx
 
+from manigraph_shared.dishwasher_rules import SLOT_FIT
 from manigraph_shared.grasp_points import (
     RACK_FLOOR_HALF_Y,
     RACK_FLOOR_THICKNESS,
@@ -89,9 +90,6 @@ DISH_FRICTION: Final = 1.0
 #: moved a rack 6.5 cm, and the next dish went onto a rib); the hand pulling the handle
 #: works against at most DETENT * RAIL / 2 (9 N) before the rack clicks the other way.
 DETENT: Final = 150.0
-#: A dish counts as standing in a slot when its centre is this close to the slot's position
-#: (with the rack where it physically is) and it is not held: half a plate's slot pitch.
-SLOT_FIT: Final = 0.02
 #: How far a rack slides out, metres: 11 cm, not the geometric world's 16 (``RACK_TRAVEL``).
 #: Pulled out 16 cm, a rack's front (x = 0.52 m) stood 6 cm from the counter's far row
 #: (0.46 m), and a hand taking a dish there (20.8 cm long along its closing axis), or the
