@@ -9,6 +9,7 @@ never kill the subscriber.
 from __future__ import annotations
 
 import contextlib
+import functools
 import logging
 import threading
 import time
@@ -263,5 +264,7 @@ def _qos_for(delivery: Delivery) -> dict[str, Any]:
     }
 
 
+@functools.cache
 def _encoding(message_type: type[Message]) -> zenoh.Encoding:
+    """The Zenoh encoding of a type's samples, built once per type (a publish is hot)."""
     return zenoh.Encoding.APPLICATION_JSON.with_schema(message_type.type_name())

@@ -88,8 +88,9 @@ def _overlap(
 ) -> np.ndarray:
     """overlap[i, j]: footprint j (centre b, full size bs) overlaps the one of half-size
     ``half`` around a[i], by more than ``MARGIN`` along x and y."""
-    half_x = np.broadcast_to(half_x, ax.shape)
-    half_y = np.broadcast_to(half_y, ay.shape)
-    return (np.abs(bx[None, :] - ax[:, None]) < half_x[:, None] + bsx[None, :] / 2 - MARGIN) & (
-        np.abs(by[None, :] - ay[:, None]) < half_y[:, None] + bsy[None, :] / 2 - MARGIN
+    # A scalar half-size broadcasts as it is (np.broadcast_to costs more than the comparison).
+    hx = half_x[:, None] if isinstance(half_x, np.ndarray) else half_x
+    hy = half_y[:, None] if isinstance(half_y, np.ndarray) else half_y
+    return (np.abs(bx[None, :] - ax[:, None]) < hx + bsx[None, :] / 2 - MARGIN) & (
+        np.abs(by[None, :] - ay[:, None]) < hy + bsy[None, :] / 2 - MARGIN
     )

@@ -14,6 +14,7 @@ Decoding never raises anything but :class:`~manigraph_shared.errors.MessageError
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from collections.abc import Mapping
@@ -214,7 +215,10 @@ class Message(Struct, frozen=True, kw_only=True):
 
     def key_for(self) -> str:
         """The concrete key this instance is published on."""
-        return self.key.format(**{name: getattr(self, name) for name in _placeholders(self.key)})
+        names = _placeholders(self.key)
+        if not names:
+            return self.key
+        return self.key.format(**{name: getattr(self, name) for name in names})
 
     # --- wire format ------------------------------------------------------------------------
     def encode(self) -> bytes:
@@ -249,8 +253,9 @@ def _type_name(cls: type) -> str:
     return f"{PREFIX}.{cls.__name__}"
 
 
-def _placeholders(key: str) -> list[str]:
-    return re.findall(r"\{([a-z_]+)\}", key)
+@functools.cache
+def _placeholders(key: str) -> tuple[str, ...]:
+    return tuple(re.findall(r"\{([a-z_]+)\}", key))
 
 
 _AT = re.compile(r"^(?P<message>.*?)(?: - at `\$(?P<path>[^`]*)`)?$", re.DOTALL)
