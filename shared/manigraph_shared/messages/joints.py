@@ -14,6 +14,7 @@ from typing import Annotated, ClassVar
 from msgspec import Meta
 
 from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp, Struct
+from manigraph_shared.messages.robot import DriverAnswer
 
 MAX_JOINTS = 16
 MAX_POINTS = 4096
@@ -78,19 +79,13 @@ class JointTrajectoryCommand(Message, frozen=True, kw_only=True):
                 raise ValueError(f"points: time_from_start of point {index} must increase")
 
 
-class JointTrajectoryResult(Message, frozen=True, kw_only=True):
+class JointTrajectoryResult(DriverAnswer, frozen=True, kw_only=True):
     """The robot's answer to one ``JointTrajectoryCommand``, with the state it ended in."""
 
     key: ClassVar[str] = "manigraph/robot/joint_trajectory_result"
     delivery: ClassVar[Delivery] = Delivery.RELIABLE
     publisher: ClassVar[str] = "sim or robot driver"
 
-    command_id: Identifier
-    ok: bool
-    reason: Annotated[
-        Annotated[str, Meta(max_length=64)] | None, Meta(description="why it failed")
-    ] = None
-    detail: Annotated[str, Meta(max_length=1024)] = ""
     positions: Annotated[
         list[float], Meta(max_length=MAX_JOINTS, description="final arm joints, radians")
     ]

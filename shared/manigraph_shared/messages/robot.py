@@ -44,12 +44,10 @@ class RobotCommand(Message, frozen=True, kw_only=True):
     stamp: Stamp
 
 
-class RobotFeedback(Message, frozen=True, kw_only=True):
-    """The driver's answer to one ``RobotCommand``."""
-
-    key: ClassVar[str] = "manigraph/robot/feedback"
-    delivery: ClassVar[Delivery] = Delivery.RELIABLE
-    publisher: ClassVar[str] = "sim or robot driver"
+class DriverAnswer(Message, frozen=True, kw_only=True):
+    """What a robot driver says of one command it was given: which command, whether it was
+    done and why not. Each driver answer extends it (``RobotFeedback``,
+    ``JointTrajectoryResult``); it has no key of its own."""
 
     command_id: Identifier
     ok: bool
@@ -57,4 +55,13 @@ class RobotFeedback(Message, frozen=True, kw_only=True):
         Annotated[str, Meta(max_length=64)] | None, Meta(description="why it failed")
     ] = None
     detail: Annotated[str, Meta(max_length=1024)] = ""
+
+
+class RobotFeedback(DriverAnswer, frozen=True, kw_only=True):
+    """The driver's answer to one ``RobotCommand``."""
+
+    key: ClassVar[str] = "manigraph/robot/feedback"
+    delivery: ClassVar[Delivery] = Delivery.RELIABLE
+    publisher: ClassVar[str] = "sim or robot driver"
+
     stamp: Stamp
