@@ -258,16 +258,21 @@ class PhysicsWorld:
         Returns the number of physics steps taken."""
         dt = self.config.timestep
         total = int(np.ceil(times[-1] / dt)) + round(self.config.settle_time / dt)
+        # Every step's target at once (the same interpolation as step by step, bit for bit):
+        # per-step np.interp of each joint was an eighth of a PickAndPlace's wall time.
+        moments = np.arange(1, total + 1) * dt
+        points = np.minimum(np.searchsorted(times, moments), len(times) - 1).tolist()
+        targets = np.stack(
+            [np.interp(moments, times, positions[:, j]) for j in range(len(self.arm))], axis=1
+        )
         start_wall = time.perf_counter()
         for k in range(1, total + 1):
             if halt is not None and halt():
                 self.set_targets(self.arm_q.copy(), self.gripper_closed, self.opening)
                 self.step()
                 return k
-            t = k * dt
-            index = min(int(np.searchsorted(times, t)), len(times) - 1)
-            target = np.array([np.interp(t, times, positions[:, j]) for j in range(len(self.arm))])
-            self.set_targets(target, closed[index], openings[index] if openings else None)
+            index = points[k - 1]
+            self.set_targets(targets[k - 1], closed[index], openings[index] if openings else None)
             self.step()
             if realtime:
                 ahead = k * dt - (time.perf_counter() - start_wall)
