@@ -95,7 +95,7 @@ def test_a_goal_is_filled_only_by_a_block_of_its_size() -> None:
     large = [o.id for o in scene.objects if o.size.z == pytest.approx(LARGE)]
     small_goals = [g.id for g in scene.goals if g.id.startswith("small")]
     large_goals = [g.id for g in scene.goals if g.id.startswith("large")]
-    # Wrong size: it lands in the bin, 1.5 cm off the goal's centre height, and fills nothing
+    # Wrong size: it lands in the bin, 2 cm off the goal's centre height, and fills nothing
     # (then back to where it lay).
     for block, goal in ((large[0], small_goals[0]), (small[0], large_goals[0])):
         was = scene.object(block).position
