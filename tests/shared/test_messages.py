@@ -260,3 +260,19 @@ def test_image_bytes_travel_as_base64() -> None:
     image = CompressedImage(camera="front", stamp=NOW, sequence=0, format="png", data=b"\x89PNG")
     assert b"iVBORw" in image.encode()  # base64 of the bytes, not a list of numbers
     assert CompressedImage.decode(image.encode()).data == b"\x89PNG"
+
+
+def test_every_decoder_is_built_at_import_before_any_thread_decodes() -> None:
+    """msgspec builds a type's decoding information lazily and not thread-safely: two Zenoh
+    threads decoding their first samples at once crashed the skills service (SIGSEGV)."""
+    import subprocess
+    import sys
+
+    check = (
+        "import manigraph_shared.messages as m;"
+        "missing = [n for n, c in m.Message.registry.items() if c._decoder is None];"
+        "print(missing)"
+    )
+    result = subprocess.run([sys.executable, "-c", check], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "[]"

@@ -113,3 +113,9 @@ __all__ += [
     "MarkerDetections",
     "TaskLayout",
 ]
+
+# Decoders built now, at import, before any thread decodes (msgspec builds its type
+# information lazily and not thread-safely: Message.prepare).
+for _type in Message.registry.values():
+    _type.prepare()
+del _type

@@ -17,6 +17,7 @@ from __future__ import annotations
 import functools
 import math
 import re
+import threading
 from collections.abc import Mapping
 from enum import Enum, StrEnum
 from typing import Annotated, Any, ClassVar, Self
@@ -157,6 +158,7 @@ def _builtin(value: object) -> object:
 
 
 _ENCODER = msgspec.json.Encoder(enc_hook=_builtin)
+_PREPARING = threading.Lock()
 
 
 class Vector3(Struct, frozen=True, kw_only=True):
@@ -234,13 +236,23 @@ class Message(Struct, frozen=True, kw_only=True):
                 key,
                 [("<payload>", f"{size} bytes exceeds the {MAX_PAYLOAD_BYTES}-byte limit")],
             )
-        decoder = cls._decoder
-        if decoder is None:
-            decoder = cls._decoder = msgspec.json.Decoder(cls)
+        decoder = cls._decoder or cls.prepare()
         try:
             return decoder.decode(payload)
         except (msgspec.DecodeError, ValueError) as exc:  # ValueError: bytes that are not UTF-8
             raise MessageError(cls.type_name(), key, _problems(cls, payload, exc)) from None
+
+    @classmethod
+    def prepare(cls) -> msgspec.json.Decoder[Any]:
+        """Build this type's decoder (and msgspec's type information for every struct in
+        it). msgspec builds that information lazily and not thread-safely: two Zenoh threads
+        decoding a type's first samples at once crashed a process (SIGSEGV). Every
+        registered type is prepared when ``manigraph_shared.messages`` is imported, before
+        any thread exists; the lock covers a type defined later."""
+        with _PREPARING:
+            if cls._decoder is None:
+                cls._decoder = msgspec.json.Decoder(cls)
+            return cls._decoder
 
     @classmethod
     def mcap_schema(cls) -> bytes:
