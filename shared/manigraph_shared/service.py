@@ -40,8 +40,9 @@ from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.errors import ManigraphError, MessageError
 from manigraph_shared.health import HealthFile
 from manigraph_shared.inbox import DEFAULT_CAPACITY, Inbox
-from manigraph_shared.messages import Delivery, Message, ServiceState, ServiceStatus
+from manigraph_shared.messages import Delivery, Message, Scene, ServiceState, ServiceStatus
 from manigraph_shared.messages.status import MAX_REJECTION_KINDS
+from manigraph_shared.scene_gate import SceneGate
 
 M = TypeVar("M", bound=Message)
 HEARTBEAT_SECONDS = 1.0
@@ -142,6 +143,16 @@ class Service:
         """Run ``handler(argument)`` on the service thread: the service's own work, never
         dropped (so always True)."""
         self._inbox.put_unbounded(handler, argument)
+        return True
+
+    def admit(self, gate: SceneGate, scene: Scene) -> bool:
+        """Whether ``scene`` passes ``gate`` (:mod:`manigraph_shared.scene_gate`); one it
+        refuses is counted and logged like any rejection. Every service that takes scenes
+        hands them over this way."""
+        reason = gate.check(scene)
+        if reason is not None:
+            self.reject(scene, reason, f"{scene.episode_id} #{scene.sequence}")
+            return False
         return True
 
     def reject(self, message: Message | str, reason: str, detail: str = "") -> None:

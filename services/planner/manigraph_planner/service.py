@@ -102,9 +102,7 @@ class PlannerService(Service):
             self._on_scene(scene)
 
     def _on_scene(self, scene: Scene) -> None:
-        reason = self.gate.check(scene)
-        if reason is not None:
-            self.reject(scene, reason, f"{scene.episode_id} #{scene.sequence}")
+        if not self.admit(self.gate, scene):
             return
         if not self.skills_alive:  # nobody would execute it; decide once skills is back
             return

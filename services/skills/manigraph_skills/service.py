@@ -110,11 +110,8 @@ class SkillsService(Service):
             self._on_scene(scene)
 
     def _on_scene(self, scene: Scene) -> None:
-        reason = self.gate.check(scene)
-        if reason is not None:
-            self.reject(scene, reason, f"{scene.episode_id} #{scene.sequence}")
-            return
-        self.scenes.update(scene)
+        if self.admit(self.gate, scene):
+            self.scenes.update(scene)
 
     def _on_action(self, action: Action) -> None:
         self.messages_in += 1

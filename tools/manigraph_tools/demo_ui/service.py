@@ -113,11 +113,8 @@ class DemoUiService(Service):
             self._on_scene(scene)
 
     def _on_scene(self, scene: Scene) -> None:
-        reason = self.gate.check(scene)
-        if reason is not None:
-            self.reject(scene, reason, f"{scene.episode_id} #{scene.sequence}")
-            return
-        self.session.on_scene(scene)
+        if self.admit(self.gate, scene):
+            self.session.on_scene(scene)
 
     def tick(self) -> None:
         self.session.tick(time.monotonic())
