@@ -20,10 +20,10 @@ from PIL import Image
 
 from manigraph_lab.demos import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
+from manigraph_shared import lerobot_codes as codes
 from manigraph_shared.errors import LogError
 from manigraph_shared.mcap_log import McapLogWriter, read_log
 from manigraph_shared.messages import Action, CompressedImage, EpisodeEvent, Scene
-from manigraph_tools.interop import lerobot_layout as layout
 from manigraph_tools.interop.lerobot_export import export_lerobot
 
 Step = tuple[Scene, Action]
@@ -72,7 +72,7 @@ def expected_nodes(scene: Scene) -> dict[str, list[Any]]:
     categories += ["rack"] * len(scene.racks)
     return {
         "ids": [node.id for node in nodes],
-        "category": [layout.NODE_CATEGORIES.index(c) for c in categories],
+        "category": [codes.NODE_CATEGORIES.index(c) for c in categories],
         "position": [list(node.position.as_tuple()) for node in nodes],
         "filled": [bool(getattr(node, "filled", False)) for node in nodes],
         "visible": [bool(getattr(node, "visible", True)) for node in nodes],
@@ -132,7 +132,7 @@ def test_lerobot_reads_every_step_of_20_demonstrations_back(
             want["ids"].index(action.object_id),
             want["ids"].index(action.goal_id),
             -1 if action.orientation_index is None else action.orientation_index,
-            layout.TRAY_ACTIONS.index(action.tray_action.value),
+            codes.TRAY_ACTIONS.index(action.tray_action.value),
         ]
         assert frame["observation.scene_sequence"] == scene.sequence
         assert frame["index"] == i

@@ -26,6 +26,7 @@ from typing import Any, TextIO
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from manigraph_shared import lerobot_codes as codes
 from manigraph_shared.errors import LogError
 from manigraph_shared.messages import Action, CompressedImage, EpisodeEvent, EpisodePhase, Scene
 from manigraph_tools.interop import lerobot_layout as layout
@@ -155,7 +156,7 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
     def node(category: str, entity: Any, size: list[float], filled: bool, visible: bool) -> None:
         q = getattr(entity, "orientation", None)
         columns["mask"].append(True)
-        columns["category"].append(layout.NODE_CATEGORIES.index(category))
+        columns["category"].append(codes.NODE_CATEGORIES.index(category))
         columns["position"].append(list(entity.position.as_tuple()))
         columns["orientation"].append([q.x, q.y, q.z, q.w] if q else [0.0, 0.0, 0.0, 1.0])
         columns["size"].append(size)
@@ -179,10 +180,9 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
     pads.update({"orientation": [0.0] * 4, "size": [0.0] * 3, "filled": False})
     pads.update({"visible": False, "open": False, "rack": -1})
     row: dict[str, Any] = {
-        f"{layout.NODES}.{name}": values + [pads[name]] * padding
-        for name, values in columns.items()
+        f"{codes.NODES}.{name}": values + [pads[name]] * padding for name, values in columns.items()
     }
-    row[f"{layout.NODES}.ids"] = json.dumps(ids)
+    row[f"{codes.NODES}.ids"] = json.dumps(ids)
     return row
 
 
@@ -193,7 +193,7 @@ def decision(action: Action, ids: list[str]) -> list[int]:
         return ids.index(node_id) if node_id in ids else -1
 
     orientation = -1 if action.orientation_index is None else action.orientation_index
-    tray = layout.TRAY_ACTIONS.index(action.tray_action.value)
+    tray = codes.TRAY_ACTIONS.index(action.tray_action.value)
     return [index(action.object_id), index(action.goal_id), orientation, tray]
 
 
@@ -204,7 +204,7 @@ def _rows(
     for episode_index, episode in enumerate(episodes):
         for frame_index, step in enumerate(episode.steps):
             row = scene_nodes(step.scene, max_nodes)
-            ids = json.loads(row[f"{layout.NODES}.ids"])
+            ids = json.loads(row[f"{codes.NODES}.ids"])
             row["observation.scene_sequence"] = step.scene.sequence
             row["observation.stamp"] = step.scene.stamp
             for camera in cameras:

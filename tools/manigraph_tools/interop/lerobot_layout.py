@@ -1,12 +1,12 @@
 """The columns of a manigraph LeRobot dataset: names, dtypes, shapes, and the one meaning of
-each, shared by the exporter and documented in docs/interop.md.
+each, written by the exporter and documented in docs/interop.md.
 
 One frame is one decision: the scene it was made on as padded per-node arrays (objects, then
 goals, then racks, in the scene's order, ``max_nodes`` rows; rows past a frame's own node
 count are padding, ``observation.nodes.mask`` false) and the decision as node indices. The
-planner's reader (``manigraph_planner.training.lerobot_source``) declares the same names: tools
-and services do not import each other, so the layout is stated in both and checked by a
-round-trip test.
+codes both the exporter and the planner's reader use (robot, categories, tray actions) are
+:mod:`manigraph_shared.lerobot_codes`; the round-trip test checks the columns against the
+reader's.
 
 Positions, orientations and sizes are float64 so a value read back is the value logged.
 """
@@ -16,11 +16,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from manigraph_shared.lerobot_codes import NODES, ROBOT_TYPE
+
 #: The LeRobot dataset format written (``meta/info.json``'s ``codebase_version``).
 CODEBASE_VERSION = "v3.0"
-#: The robot of every manigraph cell (``info.json``'s ``robot_type``); a dataset naming
-#: another is refused on import.
-ROBOT_TYPE = "panda"
 #: One frame per decision: a frame is a step of the episode, not a tick of a clock.
 FPS = 1
 CHUNKS_SIZE = 1000
@@ -28,23 +27,8 @@ DATA_PATH = "data/chunk-{chunk_index:03d}/file-{file_index:03d}.parquet"
 VIDEO_PATH = "videos/{video_key}/chunk-{chunk_index:03d}/file-{file_index:03d}.mp4"
 EPISODES_PATH = "meta/episodes/chunk-000/file-000.parquet"
 
-#: ``observation.nodes.category`` codes (index in this tuple); padding rows hold -1.
-NODE_CATEGORIES = (
-    "object:cover",
-    "object:block",
-    "object:plate",
-    "object:bowl",
-    "goal:block",
-    "goal:cover",
-    "goal:plate",
-    "goal:bowl",
-    "rack",
-)
-#: ``action``'s tray column: index in this tuple (the contract's ``TrayAction`` values).
-TRAY_ACTIONS = ("none", "toggle_top", "toggle_bottom")
 ACTION_NAMES = ["object_node", "goal_node", "orientation", "tray"]
 
-NODES = "observation.nodes"
 IMAGES = "observation.images"
 
 

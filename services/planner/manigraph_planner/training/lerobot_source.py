@@ -2,9 +2,9 @@
 
 A frame holds the scene a decision was made on as padded per-node columns and the decision as
 node indices (docs/interop.md, "LeRobot datasets"; the exporter is
-``manigraph_tools.interop.lerobot_layout``, which a service cannot import, so the column names
-are stated again here). :func:`read_lerobot` rebuilds each frame's ``Scene`` and ``Action``,
-so ``manigraph train DIR`` pairs and featurises them exactly as it does a log's.
+``manigraph_tools.interop.lerobot_layout``, the codes both use
+:mod:`manigraph_shared.lerobot_codes`). :func:`read_lerobot` rebuilds each frame's ``Scene``
+and ``Action``, so ``manigraph train DIR`` pairs and featurises them exactly as it does a log's.
 
 A dataset of another robot, of another LeRobot format, or without a column this needs is
 refused with a :class:`ConfigError` naming what is wrong.
@@ -20,6 +20,7 @@ from typing import Any
 import pyarrow.parquet as pq
 
 from manigraph_shared.errors import ConfigError
+from manigraph_shared.lerobot_codes import NODE_CATEGORIES, NODES, ROBOT_TYPE, TRAY_ACTIONS
 from manigraph_shared.messages import (
     Action,
     GoalCategory,
@@ -33,8 +34,6 @@ from manigraph_shared.messages import (
     Vector3,
 )
 
-ROBOT_TYPE = "panda"
-NODES = "observation.nodes"
 #: The columns a frame needs, with the dtype each must have.
 REQUIRED_COLUMNS = {
     f"{NODES}.mask": "bool",
@@ -53,18 +52,6 @@ REQUIRED_COLUMNS = {
     "episode_index": "int64",
     "frame_index": "int64",
 }
-NODE_CATEGORIES = (
-    "object:cover",
-    "object:block",
-    "object:plate",
-    "object:bowl",
-    "goal:block",
-    "goal:cover",
-    "goal:plate",
-    "goal:bowl",
-    "rack",
-)
-TRAY_ACTIONS = ("none", "toggle_top", "toggle_bottom")
 #: The policy named on the rebuilt actions.
 POLICY = "lerobot-dataset"
 
