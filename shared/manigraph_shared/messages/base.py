@@ -18,6 +18,8 @@ import functools
 import math
 import re
 import threading
+import types
+import typing
 from collections.abc import Mapping
 from enum import Enum, StrEnum
 from typing import Annotated, Any, ClassVar, Self
@@ -123,29 +125,23 @@ class Struct(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=Tr
         return {**top, "$defs": defs} if defs else top
 
 
-_ENUM_FIELDS: dict[type, tuple[tuple[str, type[Enum]], ...]] = {}
-
-
+@functools.cache
 def _enum_fields(cls: type) -> tuple[tuple[str, type[Enum]], ...]:
-    cached = _ENUM_FIELDS.get(cls)
-    if cached is None:
-        found = []
-        for info in msgspec.structs.fields(cls):
-            kind = _enum_in(info.type)
-            if kind is not None:
-                found.append((info.name, kind))
-        cached = _ENUM_FIELDS[cls] = tuple(found)
-    return cached
+    """The fields of ``cls`` typed as an enum (or an optional one), read once per type."""
+    found = []
+    for info in msgspec.structs.fields(cls):
+        kind = _enum_in(info.type)
+        if kind is not None:
+            found.append((info.name, kind))
+    return tuple(found)
 
 
 def _enum_in(annotation: object) -> type[Enum] | None:
     """The enum an annotation is (or is optionally): ``Kind`` or ``Kind | None``."""
-    import typing
-
     if isinstance(annotation, type) and issubclass(annotation, Enum):
         return annotation
     args = [a for a in typing.get_args(annotation) if a is not type(None)]
-    union = typing.get_origin(annotation) in (typing.Union, __import__("types").UnionType)
+    union = typing.get_origin(annotation) in (typing.Union, types.UnionType)
     return _enum_in(args[0]) if union and len(args) == 1 else None
 
 
