@@ -8,12 +8,12 @@ the rightful one only, so each forged copy is a refusal at the router (counted).
 from __future__ import annotations
 
 import json
-import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import replace
 
 import pytest
+from acl_helpers import Inbox
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import BusError
@@ -64,25 +64,6 @@ def robot_command(tag: str) -> RobotCommand:
         command_id=tag, decision_id=f"{tag}:0", op="place", object_id="block_0",
         position=Vector3(x=0.5, y=0.0, z=0.02), stamp=NOW,
     )  # fmt: skip
-
-
-def tag_of(message: Message) -> str:
-    return str(getattr(message, "command_id", None) or getattr(message, "episode_id", ""))
-
-
-class Inbox:
-    def __init__(self) -> None:
-        self.tags: list[str] = []
-        self.arrived = threading.Condition()
-
-    def receive(self, message: Message) -> None:
-        with self.arrived:
-            self.tags.append(tag_of(message))
-            self.arrived.notify_all()
-
-    def wait_for(self, tag: str, timeout: float = 5.0) -> bool:
-        with self.arrived:
-            return self.arrived.wait_for(lambda: tag in self.tags, timeout)
 
 
 CASES: list[tuple[Callable[[str], Message], str, str, str, str]] = [

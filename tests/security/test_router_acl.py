@@ -7,13 +7,13 @@ one after it, and the reader must receive only the rightful one.
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
 import zenoh
+from acl_helpers import Inbox
 
 from manigraph_shared.errors import BusError
 from manigraph_shared.messages import (
@@ -89,25 +89,6 @@ def episode_event(tag: str) -> EpisodeEvent:
         episode_id=tag, phase="start", task="stack", seed=0, goals_total=1, goals_filled=0,
         stamp=NOW,
     )  # fmt: skip
-
-
-def tag_of(message: Message) -> str:
-    return str(getattr(message, "episode_id", None) or getattr(message, "command_id", ""))
-
-
-class Inbox:
-    def __init__(self) -> None:
-        self.tags: list[str] = []
-        self.arrived = threading.Condition()
-
-    def receive(self, message: Message) -> None:
-        with self.arrived:
-            self.tags.append(tag_of(message))
-            self.arrived.notify_all()
-
-    def wait_for(self, tag: str, timeout: float = 5.0) -> bool:
-        with self.arrived:
-            return self.arrived.wait_for(lambda: tag in self.tags, timeout)
 
 
 CASES: list[tuple[Callable[[str], Message], str, str, str]] = [
