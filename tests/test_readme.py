@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_tools.contract_doc import field_tables, key_table
 from manigraph_tools.doc_blocks import Block, blocks, pages, refresh
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,7 +47,7 @@ def test_a_stale_block_is_found_and_rewritten() -> None:
     (block,) = blocks(text)
     assert block == Block("keys", "| old |\n", 26, 34) and block.stale
     fresh = refresh(text)
-    assert fresh.startswith("intro\n<!-- keys:start -->\n| key expression |")
+    assert fresh.startswith("intro\n<!-- keys:start -->\n| key expression (")
     assert fresh.endswith("|\n<!-- keys:end -->\nafter\n")
     assert not any(b.stale for b in blocks(fresh)) and refresh(fresh) == fresh
 
@@ -131,3 +132,16 @@ def test_the_link_check_sees_broken_links(tmp_path: Path) -> None:
         "there.md#nope (no such heading)",
         "#a (no such heading)",
     ]
+
+
+def test_the_key_table_shows_which_keys_are_per_cell_and_which_bus_wide() -> None:
+    rows = [line for line in key_table().splitlines() if line.startswith("| `")]
+    cells = {row.split(" | ")[0].strip("| `"): row.split(" | ")[4] for row in rows}
+    assert cells["manigraph/<cell>/world/scene"] == "per cell"
+    assert cells["manigraph/<cell>/status/{service}"] == "per cell"
+    assert cells["manigraph/<cell>/alive/<service>"] == "per cell"
+    assert cells["manigraph/**"] == "bus-wide"
+    assert set(cells.values()) == {"per cell", "bus-wide"}
+    assert all(key.startswith("manigraph/<cell>/") for key, c in cells.items() if c == "per cell")
+    assert "the default cell has no `<cell>/`" in key_table().splitlines()[0]
+    assert "**`Scene`** (`manigraph/<cell>/world/scene`)" in field_tables()

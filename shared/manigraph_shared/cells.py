@@ -15,11 +15,14 @@ import re
 from manigraph_shared.errors import ConfigError
 
 __all__ = [
+    "CELL_SEGMENT",
+    "EVERY_CELL",
     "PREFIX",
     "RESERVED",
     "cell_key",
     "cell_names",
     "cell_of",
+    "cell_pattern",
     "check_cell",
     "check_cells",
     "default_key",
@@ -29,6 +32,12 @@ PREFIX = "manigraph"
 #: The second segments of the default cell's keys: no cell may be named like them.
 RESERVED = frozenset({"world", "planner", "robot", "skills", "camera", "status", "alive", "cells"})
 _NAME = re.compile(r"[a-z0-9][a-z0-9_-]{0,31}")
+#: How the docs and the manifests write a key's cell segment: ``manigraph/<cell>/world/scene``.
+CELL_SEGMENT = "<cell>"
+#: The one bus-wide key expression: every cell's messages, the default cell's included. Read
+#: by an observer in the default cell (``manigraph record``, ``manigraph view``) and relayed
+#: from router to router; every other key (messages, heartbeats, liveliness) is per cell.
+EVERY_CELL = f"{PREFIX}/**"
 
 
 def check_cell(name: str) -> str:
@@ -54,6 +63,13 @@ def cell_key(key: str, cell: str | None) -> str:
     if head != PREFIX or not sep:
         return key
     return f"{PREFIX}/{cell}/{rest}"
+
+
+def cell_pattern(key: str) -> str:
+    """``key`` (a default-cell key) as the docs and manifests show a per-cell key:
+    ``manigraph/world/scene`` -> ``manigraph/<cell>/world/scene`` (the default cell drops
+    ``<cell>/``)."""
+    return cell_key(key, CELL_SEGMENT)
 
 
 def cell_of(key: str) -> str | None:

@@ -17,6 +17,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 
+from manigraph_shared.cells import EVERY_CELL, cell_pattern
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import Message
 
@@ -32,7 +33,9 @@ class Port:
 
     @property
     def key(self) -> str:
-        return self.message.key
+        """The port's key in any cell: ``manigraph/<cell>/world/scene`` (a process joins one
+        cell with ``--cell``; in the default cell the key has no ``<cell>/``)."""
+        return cell_pattern(self.message.key)
 
 
 def port(message: type[Message], ability: str | None = None) -> Port:
@@ -56,7 +59,8 @@ class Manifest:
     requests: tuple[Port, ...] = ()
     variant_option: str | None = None
     variants: Mapping[str, frozenset[str]] = field(default_factory=dict)
-    #: Records every message under ``manigraph/**`` (the recorder, the live viewer).
+    #: Reads every message of every cell, ``manigraph/**`` (the recorder, the live viewer; with
+    #: ``--cell NAME``, that cell's only).
     observes_all: bool = False
 
     def __post_init__(self) -> None:
@@ -125,7 +129,8 @@ def driver_for_world(world: Manifest, backend: str, robot: Manifest) -> str:
 def mermaid_flow(manifests: Iterable[Manifest]) -> str:
     """A Mermaid flowchart: one arrow from each producer to each consumer, labelled with the
     keys between them (dotted where an ability gates them); queries from client to server;
-    the recorder and the viewer under everything."""
+    the recorder and the viewer under everything. Keys show their cell segment
+    (``manigraph/<cell>/...``, written so Mermaid prints the brackets)."""
     items = sorted(manifests, key=lambda m: m.service)
     ids = {m.service: m.service.upper().replace("-", "_") for m in items}
     lines = ["flowchart LR"]
@@ -147,12 +152,18 @@ def mermaid_flow(manifests: Iterable[Manifest]) -> str:
                     edge = (ids[producer.service], ids[server.service], True)
                     edges.setdefault(edge, set()).add(f"query {asked.key}")
     for (source, target, dotted), labels in sorted(edges.items()):
-        text = "<br/>".join(sorted(labels))
+        text = "<br/>".join(_mermaid_text(label) for label in sorted(labels))
         arrow = f'-. "{text}" .->' if dotted else f'-- "{text}" -->'
         lines.append(f"  {source} {arrow} {target}")
     watchers = [m for m in items if m.observes_all]
     sources = [m for m in items if m.produces and not m.observes_all]
     for watcher in watchers:
         names = " & ".join(ids[m.service] for m in sources)
-        lines.append(f'  {names} -- "manigraph/**" --> {ids[watcher.service]}')
+        lines.append(f'  {names} -- "{EVERY_CELL} (every cell)" --> {ids[watcher.service]}')
     return "\n".join(lines)
+
+
+def _mermaid_text(text: str) -> str:
+    """``text`` for a Mermaid label: ``<`` and ``>`` as Mermaid's entity codes (a bare
+    ``<cell>`` would be taken for an HTML tag and vanish)."""
+    return text.replace("<", "#lt;").replace(">", "#gt;")

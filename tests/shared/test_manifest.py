@@ -41,7 +41,7 @@ def test_a_driver_no_world_offers_is_never_picked_and_no_match_is_an_error() -> 
 
 
 def test_a_port_gated_by_an_undeclared_ability_is_refused() -> None:
-    with pytest.raises(ConfigError, match=r"x\.manifest: port manigraph/robot/joint_state"):
+    with pytest.raises(ConfigError, match=r"x\.manifest: port manigraph/<cell>/robot/joint_state"):
         Manifest("x", "x", produces=(port(JointState, "joints"),))
 
 
@@ -62,9 +62,9 @@ def test_flow_draws_an_arrow_from_each_producer_to_each_consumer_dotted_when_gat
         variants={"d": frozenset({"grip"})},
     )
     flow = mermaid_flow([world, brain, hand])
-    assert 'WORLD -- "manigraph/world/scene" --> BRAIN' in flow
-    assert 'BRAIN -- "manigraph/planner/action" --> HAND' in flow
-    assert 'HAND -. "manigraph/robot/command (grip)" .-> WORLD' in flow
+    assert 'WORLD -- "manigraph/#lt;cell#gt;/world/scene" --> BRAIN' in flow
+    assert 'BRAIN -- "manigraph/#lt;cell#gt;/planner/action" --> HAND' in flow
+    assert 'HAND -. "manigraph/#lt;cell#gt;/robot/command (grip)" .-> WORLD' in flow
     assert "HAND -- " not in flow.replace('HAND -. "', "")  # the gated edge only, dotted
 
 
@@ -75,3 +75,17 @@ def test_without_the_sim_installed_the_contract_table_matches_the_driver() -> No
     without_sim = {name: m for name, m in manifests.items() if name != "sim"}
     assert driver_for_backend("physics", without_sim) == "panda-sim"
     assert driver_for_backend("geometric", without_sim) == "sim-gripper"
+
+
+def test_ports_and_the_flow_show_each_key_with_its_cell_segment() -> None:
+    """A service runs in one robot cell (``--cell``), so its manifest's keys are per cell;
+    the recorder and the viewer read every cell (the one bus-wide key expression)."""
+    assert port(Scene).key == "manigraph/<cell>/world/scene"
+    watcher = Manifest("watcher", "w", observes_all=True)
+    world = Manifest("world", "w", produces=(port(Scene),))
+    brain = Manifest("brain", "b", consumes=(port(Scene),))
+    flow = mermaid_flow([world, brain, watcher])
+    # Mermaid takes a bare <cell> for an HTML tag and drops it: its entity codes print it.
+    assert 'WORLD -- "manigraph/#lt;cell#gt;/world/scene" --> BRAIN' in flow
+    assert "<cell>" not in flow
+    assert 'WORLD -- "manigraph/** (every cell)" --> WATCHER' in flow

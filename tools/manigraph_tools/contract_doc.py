@@ -1,5 +1,6 @@
 """The docs' generated blocks (README.md, docs/contract.md): the key and field tables from the
-message declarations, and the flow diagram from the services' manifests."""
+message declarations, and the flow diagram from the services' manifests. Keys are written as
+in any robot cell, ``manigraph/<cell>/world/scene`` (:mod:`manigraph_shared.cells`)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ from enum import Enum
 
 import msgspec
 
+from manigraph_shared.bus import ALIVE_PREFIX
+from manigraph_shared.cells import EVERY_CELL, cell_pattern
 from manigraph_shared.manifest import load_manifests, mermaid_flow
 from manigraph_shared.messages import Delivery, Message
 
@@ -20,24 +23,27 @@ DELIVERY_NOTE = {
 
 
 def key_table() -> str:
+    """Every key of the contract, written as in any robot cell (``manigraph/<cell>/...``), and
+    which of them is per cell and which bus-wide."""
     lines = [
-        "| key expression | message | delivery | publisher | meaning |",
-        "|---|---|---|---|---|",
+        "| key expression (`<cell>`: the robot cell's name, `cell-1`; the default cell has no "
+        "`<cell>/`) | message | delivery | publisher | cells | meaning |",
+        "|---|---|---|---|---|---|",
     ]
     for cls in Message.registry.values():
         summary = (cls.__doc__ or "").strip().splitlines()[0].replace("``", "`")
         lines.append(
-            f"| `{cls.key}` | `{cls.__name__}` | {DELIVERY_NOTE[cls.delivery]} "
-            f"| {cls.publisher} | {summary} |"
+            f"| `{cell_pattern(cls.key)}` | `{cls.__name__}` | {DELIVERY_NOTE[cls.delivery]} "
+            f"| {cls.publisher} | per cell | {summary} |"
         )
     lines.append(
-        "| `manigraph/alive/<service>` | liveliness token | - | every service | "
-        "present while the service runs |"
+        f"| `{cell_pattern(ALIVE_PREFIX)}/<service>` | liveliness token | - | every service "
+        "| per cell | present while the service runs |"
     )
     lines.append(
-        "| `manigraph/<cell>/...` | any of the above | as above | that cell's services | "
-        "the same key in robot cell `<cell>`, its second segment (`manigraph/cell-1/world/scene`); "
-        "the default cell has none (`docs/scaling.md`) |"
+        f"| `{EVERY_CELL}` | any of the above | as above | - | bus-wide "
+        "| every cell's messages: what `manigraph record` and `manigraph view` read in the "
+        "default cell, and what a router relays to another site's |"
     )
     return "\n".join(lines)
 
@@ -45,7 +51,7 @@ def key_table() -> str:
 def field_tables() -> str:
     parts = []
     for cls in Message.registry.values():
-        parts.append(f"**`{cls.__name__}`** (`{cls.key}`)\n")
+        parts.append(f"**`{cls.__name__}`** (`{cell_pattern(cls.key)}`)\n")
         parts.append(_fields(cls))
     return "\n".join(parts)
 
