@@ -3,8 +3,9 @@
 Site a (a network namespace) holds router a and cell-1's sim and skills; site b holds router b,
 linked to router a over mutual TLS, and the planner. Every decision crosses the link twice
 (scene out, Action back). The suite checks that episodes succeed across it, that cutting the
-link for 4 s loses no decision and moves nothing twice, and that each router refuses another
-cell's identities. Every wait is bounded; the namespaces go in the fixture's teardown.
+link for 4 s loses no decision and moves nothing twice, that each router refuses another
+cell's identities, and that killing site a's router and starting it again after 5 s loses and
+repeats nothing either, every session reconnecting by itself. Every wait is bounded; the namespaces go in the fixture's teardown.
 """
 
 from __future__ import annotations
@@ -34,6 +35,8 @@ from manigraph_tools.netlab import (
 
 pytestmark = pytest.mark.integration
 CUT_SECONDS = 4.0
+#: How long the cells' router stays down (the issue's target: up to 5 s).
+RESTART_SECONDS = 5.0
 
 #: Round trip of the link between the sites: 10 ms each way.
 RTT_MS = 20.0
@@ -109,13 +112,23 @@ def test_a_link_cut_loses_no_decision_and_moves_nothing_twice(network: Network) 
         finally:
             hosts.restore()
         run.wait(timeout=120)
-    log = (network.tmp / "cut-run.log").read_text()
-    lines = [line for line in log.splitlines() if line.startswith("{")]
-    assert lines, f"the run printed no JSON:\n{log[-3000:]}"
+    _, report = check_run(network.tmp / "cut-run.log", events, episodes=30)
+    print(f"link cut {CUT_SECONDS:g} s: {report}")
+
+
+def check_run(
+    log: Path, events: list[dict[str, object]], episodes: int
+) -> tuple[list[dict[str, object]], str]:
+    """The run's JSON (always printed), every episode ended with success or a named reason,
+    no decision or command seen twice, no decision of a succeeded episode left unexecuted.
+    Returns the run's results and a line for the test's report."""
+    text = log.read_text()
+    lines = [line for line in text.splitlines() if line.startswith("{")]
+    assert lines, f"the run printed no JSON:\n{text[-3000:]}"
     summary = json.loads(lines[-1])  # the run's JSON, always printed
     print(json.dumps(summary))
     results = summary["results"]
-    assert len(results) == 30
+    assert len(results) == episodes
     assert all(r["success"] or r["reason"] for r in results), "an episode ended without a reason"
     actions = [e["decision"] for e in events if e["kind"] == "action"]
     commands = [e["command"] for e in events if e["kind"] == "command"]
@@ -126,9 +139,9 @@ def test_a_link_cut_loses_no_decision_and_moves_nothing_twice(network: Network) 
     succeeded = {r["episode_id"] for r in results if r["success"]}
     lost = [a for a in actions if a not in executed and str(a).split(":")[0] in succeeded]
     assert not lost, f"decisions never executed: {lost}"
-    print(
-        f"link cut {CUT_SECONDS:g} s: {sum(r['success'] for r in results)}/30 succeeded, "
-        f"{len(actions)} decisions, {len(commands)} commands, 0 twice, 0 lost; "
+    return results, (
+        f"{sum(r['success'] for r in results)}/{episodes} succeeded, {len(actions)} decisions, "
+        f"{len(commands)} commands, 0 twice, 0 lost; "
         f"reasons {sorted({r['reason'] for r in results})}"
     )
 
@@ -168,3 +181,30 @@ def wait_for_line(log: Path, text: str, process: subprocess.Popen[bytes], timeou
         assert process.poll() is None, f"the run ended early:\n{log.read_text()[-3000:]}"
         assert time.monotonic() < deadline, f"no '{text}' within {timeout} s"
         time.sleep(0.05)
+
+
+def test_a_router_restart_loses_no_decision_and_moves_nothing_twice(network: Network) -> None:
+    """Site a's router, the one cell-1's sim, skills and run client connect through, killed
+    and started again on the same endpoint after RESTART_SECONDS: every session reconnects by
+    itself, the episode in flight ends with a named reason, no command is sent twice, and the
+    episodes after the restart succeed. Runs last: the sites' other tests need no restart."""
+    sites, hosts = network.sites, network.hosts
+    episodes = 20
+    args = ["run", "--blocks", "3", "--episodes", str(episodes), "--stall-timeout", "20", "--json"]
+    log = network.tmp / "restart-run.log"
+    with network.sites.listening("restart") as events:
+        run = hosts.a.start(
+            [*MANIGRAPH, *args], sites.env(hosts.a, "client.cell-1", "cell-1"), log
+        )  # fmt: skip
+        wait_for_line(log, f"episode 2/{episodes}", run, timeout=60)
+        down = sites.restart_router("a", RESTART_SECONDS)
+        try:
+            run.wait(timeout=180)
+        except subprocess.TimeoutExpired:
+            run.kill()
+            raise AssertionError(f"the run never ended:\n{log.read_text()[-3000:]}") from None
+    results, report = check_run(log, events, episodes)
+    # Sessions reconnected: the last episodes ran on the restarted router, and succeeded.
+    last = results[-5:]
+    assert all(r["success"] for r in last), f"no recovery after the restart: {last}"
+    print(f"router a down {down:.1f} s: {report}")

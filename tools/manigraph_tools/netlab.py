@@ -216,6 +216,8 @@ class Sites:
         self.a, self.b, self.link, self.ports = a, b, link, ports
         self.certs, self.log_dir, self.cells, self.policy = certs, log_dir, cells, policy
         self.scheme = "tls" if certs else "tcp"
+        #: Each site's router process and how it was started (:meth:`restart_router`).
+        self.routers: dict[str, tuple[subprocess.Popen[bytes], list[str]]] = {}
 
     def endpoint(self, host: Host) -> str:
         port = self.ports[0] if host is self.a else self.ports[1]
@@ -236,17 +238,34 @@ class Sites:
     def start(self) -> None:
         a, b = self.a, self.b
         log = self.log_dir
-        a.start([*MANIGRAPH, "router", "--listen", self.endpoint(a)],
-                self.env(a, "router.site-a"), log / "router-a.log")  # fmt: skip
+        self._start_router(a, [*MANIGRAPH, "router", "--listen", self.endpoint(a)], "a")
         link = f"{self.scheme}/{self.link}"
-        b.start([*MANIGRAPH, "router", "--listen", self.endpoint(b), "--connect", link],
-                self.env(b, "router.site-b"), log / "router-b.log")  # fmt: skip
+        self._start_router(
+            b, [*MANIGRAPH, "router", "--listen", self.endpoint(b), "--connect", link], "b"
+        )
         for cell in self.cells:
             for service in ("sim", "skills"):
                 a.start([*MANIGRAPH, service], self.env(a, f"{service}.{cell}", cell),
                         log / f"{service}-{cell}.log")  # fmt: skip
         b.start([*MANIGRAPH, "planner", "--policy", self.policy, "--cells", ",".join(self.cells)],
                 self.env(b, "planner.site-b"), log / "planner.log")  # fmt: skip
+
+    def _start_router(self, host: Host, argv: list[str], site: str) -> None:
+        env = self.env(host, f"router.site-{site}")
+        process = host.start(argv, env, self.log_dir / f"router-{site}.log")
+        self.routers[site] = (process, argv)
+
+    def restart_router(self, site: str, down_seconds: float) -> float:
+        """Kill site ``site``'s router (SIGKILL: no goodbye to its clients), start it again on
+        the same endpoint after ``down_seconds``; the seconds it was down."""
+        process, argv = self.routers[site]
+        host = self.a if site == "a" else self.b
+        process.kill()
+        process.wait(timeout=10)
+        killed = time.monotonic()
+        time.sleep(down_seconds)
+        self._start_router(host, argv, site)
+        return time.monotonic() - killed
 
     def wait_ready(self, timeout: float = 150.0) -> None:
         """Until every cell's sim, skills and (across the link) planner are alive in site a."""
