@@ -57,9 +57,8 @@ bench: install  ## speed figures (not tests): medians and ratios
 	$(RUN) python bench/bench_ray_suite.py
 	$(RUN) python bench/bench_training.py --device cuda
 
-soak: install  ## reliability soak (~30 min): 100k fuzzed payloads per key, floods, explain bomb, then 3 episodes
-	$(RUN) python bench/soak.py
-	$(RUN) python bench/soak_flood.py
+soak: install  ## one stack, one run (~45 min): 100k fuzzed payloads per key, floods, explain bomb, 3 episodes
+	$(RUN) python bench/soak.py --json logs/soak.json
 
 clean:
 	rm -rf .venv logs .pytest_cache .ruff_cache .mypy_cache

@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import os
 import tempfile
 import threading
 import time
@@ -341,13 +342,20 @@ def main() -> None:
                 notes="" if episodes_ok else final.stderr[-300:].replace("\n", " "),
             )
         )
+    minutes = (time.time() - started) / 60
+    load = os.getloadavg()
     print(
         f"\nsoak of {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime(started))}, "
-        f"{(time.time() - started) / 60:.1f} min, policy {args.policy}"
+        f"{minutes:.1f} min, policy {args.policy}, load average at the end {load[0]:.1f} "
+        f"(15 min: {load[2]:.1f})"
     )
     print(table(soak.rows))
     if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps([row.__dict__ for row in soak.rows], indent=1))
+    figures = {"bench": "soak", "minutes": round(minutes, 1), "load_15min": round(load[2], 1)}
+    figures["rows"] = [{"check": row.check, "held": row.held} for row in soak.rows]
+    print(json.dumps(figures))
     raise SystemExit(0 if all(row.held for row in soak.rows) else 1)
 
 
