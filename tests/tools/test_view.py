@@ -115,3 +115,32 @@ def test_a_foxglove_client_receives_the_scene_as_a_scene_update(
             assert Scene.decode(client.next_data(8)) == scene
     assert running_stack.stop("view") == 0
     assert "served" in running_stack.log("view")
+
+
+def test_a_cells_scene_has_its_schema_and_is_drawn_on_the_cells_own_topic(
+    running_stack: Stack, decode_protobuf: ProtobufDecoder
+) -> None:
+    """A view in the default cell serves every cell: cell ``left``'s key is its channel, with
+    the contract schema, and its scene is drawn apart on ``/left/foxglove/scene``."""
+    port = free_port()
+    running_stack.start("router")
+    running_stack.start("view", "view", "--port", str(port))
+    scene = a_scene()
+    with running_stack.client() as bus:
+        running_stack.wait_alive(bus, "view")
+        left = bus.in_cell("left")
+        with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL]) as ws:  # type: ignore[list-item]
+            client = FoxgloveClient(ws)
+            left.publish(scene)
+            raw = client.channel("manigraph/left/world/scene")
+            assert (raw["encoding"], raw["schemaName"]) == ("json", "manigraph.Scene")
+            topic = f"/left{SCENE_TOPIC}"
+            channel = client.channel(topic)
+            assert channel["schemaName"] == "foxglove.SceneUpdate"
+            client.subscribe(9, topic)
+            left.publish(scene)
+            schema = base64.b64decode(channel["schema"])
+            update = decode_protobuf(channel["schemaName"], schema, client.next_data(9))
+            assert "object/block_0" in {entity["id"] for entity in update["entities"]}
+        left.close()
+    assert running_stack.stop("view") == 0

@@ -6,6 +6,12 @@ A foxglove-sdk WebSocket server (``ws://127.0.0.1:8765`` by default) serves
 * ``/foxglove/scene`` and ``/foxglove/tf``, the well-known types Foxglove's 3D panel draws
   (:mod:`manigraph_tools.foxglove_bridge`).
 
+Robot cells (:mod:`manigraph_shared.cells`), as the recorder writes them: a cell's key is its
+channel (``manigraph/cell-1/world/scene``, with the ``Scene`` schema) and each cell is drawn
+apart, on ``/cell-1/foxglove/scene`` and ``/cell-1/foxglove/tf`` (at most
+``MAX_DRAWN_CELLS`` cells). A view in the default cell shows every cell; ``--cell NAME``, that
+cell only. A log recorded from cells replays into the view the same way.
+
 Connect with Foxglove (app or web): Open connection → Foxglove WebSocket → the URL. The Zenoh
 callback only queues samples (at most ``MAX_PENDING``; beyond that they are dropped and
 counted; at most ``MAX_CHANNELS`` keys are served), and one thread converts and logs them, so
@@ -28,6 +34,7 @@ from foxglove.channels import FrameTransformsChannel, SceneUpdateChannel
 
 from manigraph_shared.bus import ALIVE_PREFIX, Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
+from manigraph_shared.cells import cell_of, default_key
 from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import message_type_for_key
@@ -39,6 +46,8 @@ from manigraph_tools.foxglove_layout import layout_json
 MAX_PENDING = 4096
 #: Keys served as channels; a publisher inventing keys cannot grow the view without bound.
 MAX_CHANNELS = 512
+#: Cells drawn apart; a publisher inventing cell names cannot grow the view without bound.
+MAX_DRAWN_CELLS = 64
 RESEND_SECONDS = 1.0
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8765
@@ -51,11 +60,13 @@ class FoxgloveView(Service):
         super().__init__(bus)
         self.host = host
         self.port = port
-        self.bridge = FoxgloveBridge()
+        #: One bridge per cell drawn (``None``: the default cell), each keeping its own scene.
+        self.bridges: dict[str | None, FoxgloveBridge] = {None: FoxgloveBridge()}
         self.samples_dropped = 0
         self._pending: queue.Queue[tuple[str, bytes] | None] = queue.Queue(maxsize=MAX_PENDING)
         self._raw: dict[str, Channel] = {}
         self._last: dict[str, Converted] = {}
+        self._drawn: dict[str, SceneUpdateChannel | FrameTransformsChannel] = {}
         self._worker = threading.Thread(target=self._convert_loop, name="foxglove-view")
 
     def setup(self) -> None:
@@ -63,8 +74,8 @@ class FoxgloveView(Service):
             self.server = foxglove.start_server(name="manigraph", host=self.host, port=self.port)
         except Exception as exc:  # the SDK raises its own error types for a busy port
             raise ConfigError("port", f"cannot serve on {self.host}:{self.port}: {exc}") from None
-        self.scene_channel = SceneUpdateChannel(SCENE_TOPIC)
-        self.tf_channel = FrameTransformsChannel(TF_TOPIC)
+        self._drawn[SCENE_TOPIC] = SceneUpdateChannel(SCENE_TOPIC)
+        self._drawn[TF_TOPIC] = FrameTransformsChannel(TF_TOPIC)
         self._worker.start()
         self.bus.subscribe_raw(f"{PREFIX}/**", self._enqueue)
         self.log.info("serving the bus to Foxglove at ws://%s:%d", self.host, self.server.port)
@@ -106,7 +117,15 @@ class FoxgloveView(Service):
             self.samples_dropped += 1
             return
         channel.log(payload, log_time=time.time_ns())
-        for converted in self.bridge.convert(key, payload):
+        cell = cell_of(key)
+        bridge = self.bridges.get(cell)
+        if bridge is None:
+            if len(self.bridges) > MAX_DRAWN_CELLS:
+                return
+            bridge = self.bridges[cell] = FoxgloveBridge()
+        for converted in bridge.convert(default_key(key), payload):
+            if cell is not None:
+                converted = Converted(f"/{cell}{converted.topic}", converted.message)
             self._last[converted.topic] = converted
             self._log(converted)
 
@@ -115,7 +134,7 @@ class FoxgloveView(Service):
         if channel is None:
             if len(self._raw) >= MAX_CHANNELS:
                 return None
-            message_type = message_type_for_key(key)
+            message_type = message_type_for_key(default_key(key))
             schema = (
                 Schema(
                     name=message_type.type_name(),
@@ -130,7 +149,11 @@ class FoxgloveView(Service):
         return channel
 
     def _log(self, converted: Converted) -> None:
-        channel = self.scene_channel if converted.topic == SCENE_TOPIC else self.tf_channel
+        channel = self._drawn.get(converted.topic)
+        if channel is None:  # a cell's first update: its topic is /<cell>/foxglove/...
+            scene = converted.topic.endswith(SCENE_TOPIC)
+            channel = (SceneUpdateChannel if scene else FrameTransformsChannel)(converted.topic)
+            self._drawn[converted.topic] = channel
         channel.log(converted.message, log_time=time.time_ns())  # type: ignore[arg-type]
 
     def teardown(self) -> None:
