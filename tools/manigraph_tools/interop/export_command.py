@@ -18,11 +18,17 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "-o", "--output", type=Path, required=True, help="folder to write (new, or empty)"
     )
+    parser.add_argument(
+        "--cell",
+        default=None,
+        help="the robot cell to export from a log of several ('': the default cell); "
+        "default: the log's only cell",
+    )
 
 
 def _run(args: argparse.Namespace) -> int:
     exporter = FORMATS[args.format]
-    emit_json(exporter(args.log, args.output, sys.stderr))
+    emit_json(exporter(args.log, args.output, sys.stderr, args.cell))
     return 0
 
 

@@ -1,7 +1,8 @@
 """The export formats ``manigraph export --format`` offers, one registry entry each.
 
-An exporter is ``export(log, out, progress) -> summary``: it reads the MCAP ``log``, writes
-into the folder ``out`` (new, or empty), prints progress lines to ``progress`` and returns a
+An exporter is ``export(log, out, progress, cell) -> summary``: it reads robot cell ``cell``
+of the MCAP ``log`` (``None``: the log's only cell; :func:`~.source.choose_cell`), writes into
+the folder ``out`` (new, or empty), prints progress lines to ``progress`` and returns a
 JSON-able summary of what it wrote. Entries are imported when chosen, so listing the formats
 imports neither rosbags nor pyarrow.
 """
@@ -14,7 +15,7 @@ from typing import TextIO
 
 from manigraph_shared.registry import Registry
 
-Exporter = Callable[[Path, Path, TextIO], dict[str, object]]
+Exporter = Callable[[Path, Path, TextIO, str | None], dict[str, object]]
 
 FORMATS: Registry[Exporter] = Registry("format")
 FORMATS.add_lazy(

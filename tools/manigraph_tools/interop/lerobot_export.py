@@ -31,7 +31,7 @@ from manigraph_shared.errors import LogError
 from manigraph_shared.messages import Action, CompressedImage, EpisodeEvent, EpisodePhase, Scene
 from manigraph_tools.interop import lerobot_layout as layout
 from manigraph_tools.interop.lerobot_frames import LatestFrames
-from manigraph_tools.interop.source import SourceLog, check_paths
+from manigraph_tools.interop.source import SourceLog, check_paths, choose_cell
 
 #: A task name for episodes whose start event is not in the log.
 UNKNOWN_TASK = "unknown"
@@ -53,10 +53,13 @@ class Episode:
     ended: bool = False
 
 
-def export_lerobot(log: Path, out: Path, progress: TextIO) -> dict[str, object]:
-    """Write the decisions of ``log`` as a LeRobot v3 dataset in ``out``; return a summary."""
+def export_lerobot(
+    log: Path, out: Path, progress: TextIO, cell: str | None = None
+) -> dict[str, object]:
+    """Write the decisions of ``log``'s robot cell ``cell`` (:func:`choose_cell`) as a LeRobot
+    v3 dataset in ``out``; return a summary."""
     check_paths(log, out)
-    source = SourceLog(log)
+    source = SourceLog(log, choose_cell(log, cell))
     episodes, skipped, frames = _read_episodes(source)
     exported = [episode for episode in episodes if episode.steps]
     if not exported:
@@ -94,6 +97,7 @@ def export_lerobot(log: Path, out: Path, progress: TextIO) -> dict[str, object]:
     progress.write(f"lerobot: {len(exported)} episodes, {total} frames -> {out}\n")
     return {
         "format": "lerobot",
+        "cell": source.cell,
         "output": str(out),
         "codebase_version": layout.CODEBASE_VERSION,
         "episodes": len(exported),

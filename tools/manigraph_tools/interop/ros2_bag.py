@@ -27,7 +27,7 @@ from manigraph_shared.messages import (
     Scene,
 )
 from manigraph_tools.interop.ros2_messages import AS_JSON, ROS_DISTRO, Converter, typestore
-from manigraph_tools.interop.source import SourceLog, check_paths
+from manigraph_tools.interop.source import SourceLog, check_paths, choose_cell
 
 #: The contract types that have a ROS 2 form.
 EXPORTED: tuple[type[Message], ...] = (Scene, JointState, CompressedImage, CameraInfo, *AS_JSON)
@@ -37,12 +37,15 @@ BAG_VERSION: Literal[9] = 9
 PROGRESS_EVERY = 50_000
 
 
-def export_ros2(log: Path, out: Path, progress: TextIO) -> dict[str, object]:
-    """Write the ROS 2 bag of ``log`` into the folder ``out`` (new, or empty)."""
+def export_ros2(
+    log: Path, out: Path, progress: TextIO, cell: str | None = None
+) -> dict[str, object]:
+    """Write the ROS 2 bag of ``log``'s robot cell ``cell`` (:func:`choose_cell`) into the
+    folder ``out`` (new, or empty)."""
     check_paths(log, out)
+    source = SourceLog(log, choose_cell(log, cell))
     if out.is_dir():
         out.rmdir()  # empty (checked): rosbags creates the bag's folder itself
-    source = SourceLog(log)
     converter = Converter()
     store = typestore()
     written: Counter[str] = Counter()
@@ -65,6 +68,7 @@ def export_ros2(log: Path, out: Path, progress: TextIO) -> dict[str, object]:
     summary: dict[str, object] = {
         "format": "ros2",
         "log": str(log),
+        "cell": source.cell,
         "bag": str(out),
         "storage": "mcap",
         "serialization": "cdr",
