@@ -59,14 +59,30 @@ if [ "$HOST_CA" -eq 1 ] && ls /usr/local/share/ca-certificates/*.crt >/dev/null 
 fi
 cp -p "$REPO"/docker/extra-ca/*.crt "$CTX/docker/extra-ca/" 2>/dev/null || true
 
+# A service image is the Dockerfile's `service` stage grown from the stage its package needs
+# (the same pairs as compose.yaml's x-build-* entries).
+service_deps() {
+    case "$1" in
+        perception|skills) echo shared-deps ;;
+        planner) echo torch ;;
+        sim) echo sim-deps ;;
+        *) echo "" ;;
+    esac
+}
+
 for target in "${TARGETS[@]}"; do
     image="$PREFIX/$target:$TAG"
-    echo "[build.sh] building target $target -> $image"
+    deps="$(service_deps "$target")"
+    stage_args=(--target "$target")
+    if [ -n "$deps" ]; then
+        stage_args=(--target service --build-arg SERVICE="$target" --build-arg SERVICE_DEPS="$deps")
+    fi
+    echo "[build.sh] building $target (${stage_args[*]}) -> $image"
     start=$(date +%s)
     # shellcheck disable=SC2086
     docker build ${DOCKER_BUILD_FLAGS:-} \
-        --build-arg BASE_IMAGE="$BASE_IMAGE" \
-        -f "$CTX/docker/Dockerfile" --target "$target" -t "$image" "$CTX"
+        --build-arg BASE_IMAGE="$BASE_IMAGE" "${stage_args[@]}" \
+        -f "$CTX/docker/Dockerfile" -t "$image" "$CTX"
     size=$(docker image inspect -f '{{.Size}}' "$image" | awk '{printf "%.2f GB", $1/1e9}')
     echo "[build.sh] $image built in $(( $(date +%s) - start ))s, size $size"
 done
