@@ -23,7 +23,7 @@ from manigraph_skills.drivers.base import Motion
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.grasp_choice import choose_grasps
 from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, JointTrajectory, PandaModel
-from manigraph_skills.motion.collision import ESCAPE_TIME, ArmCollisionModel
+from manigraph_skills.motion.collision import ESCAPE_TIME, ArmCollisionModel, LinkSpheres
 from manigraph_skills.motion.model import top_down
 from manigraph_skills.obstacles import Obstacle, box_walls
 
@@ -220,3 +220,53 @@ def test_from_above_the_tower_a_short_motion_swings_the_elbow_harder(
     PandaMotionDriver(arm).pick(Motion("e:0", item.id, item.position, item.orientation, pick))
     (sent,) = arm.sent
     assert collision.first_contact(trajectory_of(sent), pick.obstacles) is None
+
+
+def _random_boxes(rng: np.random.Generator, count: int) -> tuple[Obstacle, ...]:
+    """Boxes of 2-30 cm, some turned about the vertical, scattered over the arm's reach."""
+    boxes = []
+    for i in range(count):
+        yaw = rng.uniform(0, np.pi) if i % 2 else 0.0
+        boxes.append(
+            Obstacle(
+                f"box_{i}",
+                (rng.uniform(0.2, 0.8), rng.uniform(-0.5, 0.5), rng.uniform(0.0, 0.5)),
+                tuple(rng.uniform(0.02, 0.3, 3).tolist()),
+                (0.0, 0.0, float(np.sin(yaw / 2)), float(np.cos(yaw / 2))),
+                support=bool(i % 5 == 0),
+            )
+        )
+    return tuple(boxes)
+
+
+def test_checking_only_the_near_pairs_finds_what_checking_every_pair_finds(
+    collision: ArmCollisionModel, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The bounding-sphere pre-filter (``LinkSpheres``) leaves out only pairs that cannot
+    touch over a segment: over random picks, places and joint sweeps among random boxes,
+    every first contact (link, obstacle, time), and every clear motion, is the same as with
+    every pair checked at every sample."""
+    rng = np.random.default_rng(7)
+    planner = GraspPlanner(PandaModel())
+    cases: list[tuple[JointTrajectory, tuple[Obstacle, ...]]] = []
+    while len(cases) < 40:
+        boxes = _random_boxes(rng, int(rng.integers(3, 12)))
+        target = np.array([rng.uniform(0.3, 0.6), rng.uniform(-0.4, 0.4), rng.uniform(0.02, 0.2)])
+        try:
+            if len(cases) % 3 == 2:
+                trajectory = JointTrajectory()
+                trajectory.add(0.0, HOME_Q, False)
+                trajectory.add(1.0, HOME_Q + rng.uniform(-1.0, 1.0, 7), False)
+            else:
+                trajectory = planner.pick(HOME_Q, target, rng.uniform(-np.pi, np.pi))
+        except SkillError:
+            continue
+        cases.append((trajectory, boxes))
+    found = [collision.first_contact(t, boxes) for t, boxes in cases]
+    assert 5 < sum(c is None for c in found) < len(found) - 5  # both kinds are exercised
+
+    def every_pair(self: LinkSpheres, data: object, qa: object, qb: object) -> np.ndarray:
+        return np.ones(len(self.first), dtype=bool)
+
+    monkeypatch.setattr(LinkSpheres, "near", every_pair)
+    assert [collision.first_contact(t, boxes) for t, boxes in cases] == found
