@@ -69,6 +69,10 @@ class Dish:
     slot: str | None = None  # the slot it stands in, if any
     #: Its own extents (the physics world's dishes), else the kind's ``DISH_SIZE``.
     extents: tuple[float, float, float] | None = None
+    #: How far it is turned about the vertical from its discrete orientation, radians: a
+    #: physics world measures it (a dish let go of sideways comes to rest turned), the
+    #: geometric world's dishes are square to the axes (0).
+    yaw: float = 0.0
 
     @property
     def size(self) -> np.ndarray:

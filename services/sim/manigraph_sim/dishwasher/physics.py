@@ -46,6 +46,7 @@ from manigraph_sim.dishwasher.dishwasher_world import DishwasherWorld
 from manigraph_sim.dishwasher.model import (
     BOWL,
     PLATE,
+    SLOT_PITCH,
     Dish,
     DishwasherLayout,
 )
@@ -103,6 +104,9 @@ DETENT: Final = 150.0
 #: (top-bottom, 10 dishes, seeds 20000-20099: 1.0 with racks sliding 12, 11, 10, 9 or 2 cm;
 #: 0.87 at 10 cm without that rule).
 RAIL: Final = 0.11
+#: A dish turned about the vertical by less than this (radians) reads as square: one at rest
+#: as laid out, whose pose carries only the solver's noise.
+YAW_RESOLUTION: Final = 1e-3
 #: A rack counts as pulled out once it has travelled more than this fraction of its rail.
 OPEN_FRACTION: Final = 0.5
 CABINET_COLOUR = [0.8, 0.8, 0.82, 1.0]
@@ -116,6 +120,26 @@ def on_rim_as_asked(index: int, asked: int) -> int:
     ``index``. In a slot that asks one of them, a plate in any of them stands as asked (a
     plate set down upright between the ribs and read as "side-x" did not count as loaded)."""
     return asked if index in postures_like(PLATE, asked) else index
+
+
+def yaw_from(q: Quaternion, index: int) -> float:
+    """How far a dish at pose ``q``, whose up axis is orientation ``index``'s, is turned
+    about the vertical from that orientation, radians in [-pi, pi); 0 under
+    ``YAW_RESOLUTION`` (a dish at rest as laid out reads exactly square)."""
+    turn = _rotation(q) @ _rotation(ORIENTATIONS[index]).T  # about the vertical, nearly
+    yaw = float(np.arctan2(turn[1, 0], turn[0, 0]))
+    return 0.0 if abs(yaw) < YAW_RESOLUTION else yaw
+
+
+def _rotation(q: Quaternion) -> np.ndarray:
+    x, y, z, w = q.x, q.y, q.z, q.w
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def physical_counter_x(x: float) -> float:
@@ -289,8 +313,10 @@ class PhysicsDishwasher:
             slot = None
             if dish.id != held:
                 slot = self._slot_near(position, physical)
+            yaw = yaw_from(Quaternion(x=x, y=y, z=z, w=w), index)
             if slot is not None and dish.kind == PLATE:
-                index = on_rim_as_asked(index, self.slots[slot].orientation)
+                asked = on_rim_as_asked(index, self.slots[slot].orientation)
+                index, yaw = asked, (yaw if asked == index else 0.0)
             dishes.append(
                 Dish(
                     dish.id,
@@ -299,11 +325,35 @@ class PhysicsDishwasher:
                     index,
                     slot,
                     extents=PHYSICAL_DISH_SIZE[dish.kind],
+                    yaw=yaw,
                 )
             )
         world = DishwasherWorld(replace(self.layout, dishes=dishes, racks=racks))
         world.held = held
         return world
+
+    def slot_offsets(self) -> dict[str, float]:
+        """How far each dish in a rack rests from the slot of its kind nearest it, across
+        the rack (x and y), millimetres, with the racks where they physically are. A dish in
+        no slot, lying between two, shows how far off it came to rest (issue 33: no bowl
+        more than 10 mm off). A dish more than a slot pitch from every slot of its kind (on
+        the counter) is left out."""
+        centres = {
+            r.id: r.closed_centre - np.array([self.rack_travel(r.id), 0.0, 0.0])
+            for r in self.racks.values()
+        }
+        offsets = {}
+        for dish in self.layout.dishes:
+            position = self.world.pose(dish.id)[0]
+            gaps = [centres[s.rack] + s.offset - position for s in self.slots.values()]
+            kinds = [s.kind for s in self.slots.values()]
+            gap = min(
+                (g for g, kind in zip(gaps, kinds, strict=True) if kind == dish.kind),
+                key=lambda g: float(np.linalg.norm(g)),
+            )
+            if float(np.linalg.norm(gap)) <= SLOT_PITCH:
+                offsets[dish.id] = 1000.0 * float(np.linalg.norm(gap[:2]))
+        return offsets
 
     def _slot_near(self, position: np.ndarray, rack_centres: dict[str, np.ndarray]) -> str | None:
         best, best_distance = None, SLOT_FIT
