@@ -14,7 +14,7 @@ from manigraph_shared.messages import (
     SceneObject,
     TrayAction,
 )
-from manigraph_shared.orientations import nearest_orientation
+from manigraph_shared.orientations import nearest_orientation, up_axis_orientation
 
 TOP, BOTTOM = TRAY_RACKS[TrayAction.TOGGLE_TOP], TRAY_RACKS[TrayAction.TOGGLE_BOTTOM]
 _TOGGLE = {rack: action for action, rack in TRAY_RACKS.items()}
@@ -84,7 +84,7 @@ class DishwasherExpert(Policy):
                 for a, b in zip(slot.position.as_tuple(), dish.position.as_tuple(), strict=True)
             )
             if gap < _IN_SLOT:
-                return preferred(self.preference, dish.category, slot) and nearest_orientation(
+                return preferred(self.preference, dish.category, slot) and up_axis_orientation(
                     dish.orientation
                 ) == nearest_orientation(slot.orientation)
         return False

@@ -28,7 +28,11 @@ from torch import Tensor
 from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import TRAY_RACKS, Scene, TrayAction
-from manigraph_shared.orientations import NUM_ORIENTATIONS, nearest_orientation
+from manigraph_shared.orientations import (
+    NUM_ORIENTATIONS,
+    nearest_orientation,
+    up_axis_orientation,
+)
 
 __all__ = [
     "DISH_FEATURE_SPEC",
@@ -121,7 +125,7 @@ def dish_scene_to_graph(scene: Scene) -> DishGraph:
         if obj.category.value not in _DISH_CODE:
             raise PolicyError(f"scene: object '{obj.id}' is a {obj.category}, not a dish")
         if obj.visible:
-            o = nearest_orientation(obj.orientation)
+            o = up_axis_orientation(obj.orientation)  # at any yaw (a physical dish)
             row(_DISH_CODE[obj.category.value], obj.position.as_tuple(), obj.filled, 0.0, o)
             object_ids.append(obj.id)
     for goal in scene.goals:
