@@ -12,6 +12,7 @@ from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus, TrayAction
 from manigraph_shared.orientations import orientation
 from manigraph_shared.workspace import Workspace
+from manigraph_skills.dishwasher.slot_room import set_down_point
 from manigraph_skills.drivers.base import Motion, RobotDriver, TrayToggle
 from manigraph_skills.grasp_choice import choose_grasps
 
@@ -80,9 +81,10 @@ class PickAndPlace:
                         }
                     )
                     item = turned
-            pick, place = choose_grasps(scene, item, goal.position)
+            target = set_down_point(scene, item, goal) if scene.racks else goal.position
+            pick, place = choose_grasps(scene, item, target)
             self.driver.pick(Motion(decision, item.id, item.position, item.orientation, pick))
-            self.driver.place(Motion(decision, item.id, goal.position, turn, place))
+            self.driver.place(Motion(decision, item.id, target, turn, place))
         except SkillError as exc:
             return status(SkillState.FAILED, exc.reason, exc.detail)
         return status(SkillState.SUCCEEDED)
