@@ -13,6 +13,7 @@ from torch_geometric.nn import GraphConv
 from manigraph_planner.gnn.features import fully_connected_edge_index
 from manigraph_planner.gnn.models import ARCHITECTURES, ConvStack, ModelConfig, PolicyNet
 from manigraph_planner.gnn.models.complete_graph import (
+    AttentionStructure,
     complete_edge_index,
     neighbour_mean,
     neighbour_softmax,
@@ -227,3 +228,29 @@ def test_a_graph_without_neighbours_keeps_attention_gradients_finite() -> None:
     mask = torch.tensor([[True, True], [True, False]])
     neighbour_softmax(scores, mask).sum().backward()
     assert scores.grad is not None and bool(scores.grad.isfinite().all())
+
+
+def test_attention_structure_gives_the_masked_softmax_bit_for_bit() -> None:
+    """GAT's scores pushed far down off the edges give exactly the weights and gradients of
+    masking them (neighbour_softmax) at every real node, lone nodes included: its rows at
+    padding differ, and nothing reads them."""
+    x, mask = padded(random_batch(seed=40, dtype=torch.float32), padding=3.0)
+    generator = torch.Generator().manual_seed(2)
+    target, source = (10 * torch.randn(mask.shape, generator=generator) for _ in range(2))
+    # Padded nodes' outputs are never read, so nothing flows back into their rows.
+    upstream = torch.randn(*mask.shape, mask.shape[1], generator=generator) * mask.unsqueeze(-1)
+    results = []
+    for structured in (False, True):
+        t, s = target.clone().requires_grad_(), source.clone().requires_grad_()
+        if structured:
+            structure = AttentionStructure.of(x, mask)
+            scores = torch.nn.functional.leaky_relu(structure.scores(t, s), 0.2, inplace=True)
+            weights = structure.softmax(scores)
+        else:
+            scores = torch.nn.functional.leaky_relu(t.unsqueeze(-1) + s.unsqueeze(-2), 0.2)
+            weights = neighbour_softmax(scores, mask)
+        (weights * upstream).sum().backward()
+        assert t.grad is not None and s.grad is not None
+        results.append((weights[mask], t.grad[mask], s.grad[mask]))
+    for masked, structured in zip(*results, strict=True):
+        assert torch.equal(structured, masked)

@@ -21,6 +21,7 @@ nodes is finite but unspecified, so callers ignore it (e.g. the loss masks those
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import torch
 from torch import Tensor
@@ -28,6 +29,7 @@ from torch import Tensor
 from manigraph_planner.gnn.features import fully_connected_edge_index
 
 __all__ = [
+    "AttentionStructure",
     "complete_edge_index",
     "message_passing_on_complete",
     "neighbour_mean",
@@ -78,6 +80,71 @@ def neighbour_softmax(scores: Tensor, mask: Tensor | None = None) -> Tensor:
     # zeroed below) instead of becoming NaN, which would also poison the gradients.
     lowest = torch.finfo(scores.dtype).min
     return scores.masked_fill(~edges, lowest).softmax(dim=-1).masked_fill(~edges, 0)
+
+
+@dataclass(frozen=True)
+class AttentionStructure:
+    r"""Which score of an :math:`N \times N` attention matrix is an edge, for every attention
+    layer of one forward pass: built once per pass (not once per layer), as additive offsets
+    rather than boolean masks, so that a layer spends no pass over its :math:`B N^2` scores
+    on masking them.
+
+    :meth:`scores` adds a quarter of the dtype's lowest value (three of them still sum to a
+    finite number) to every score that is not an edge: on the diagonal and wherever
+    the source or the target is padding. A layer may then apply any increasing activation
+    with :math:`f(0) = 0` (LeakyReLU) and :meth:`softmax` the result. Wherever a row has an
+    edge, the edges keep exactly their scores (:math:`s + 0 = s`) and every other entry gets
+    weight exactly 0 (:math:`\exp` of a number below :math:`-10^{37}`), with gradient exactly
+    0, as :func:`neighbour_softmax` gives after its masks: the same numbers, without
+    allocating and filling two masked copies per layer and their gradients.
+    Rows without an edge are all-zero for a real lone node, as in :func:`neighbour_softmax`,
+    and finite but unspecified at padding, whose outputs nobody reads.
+
+    Shapes: for a padded batch ``node_offset`` :math:`(B, N)` (0 at real nodes) and ``lone``
+    :math:`(B, N, 1)` or None; for one graph both None. ``self_offset`` :math:`(N, N)`.
+    """
+
+    self_offset: Tensor
+    node_offset: Tensor | None
+    #: 0.0 at a real node without neighbours, 1.0 elsewhere; None where there is no such node.
+    lone: Tensor | None
+
+    @classmethod
+    def of(cls, x: Tensor, mask: Tensor | None = None) -> AttentionStructure:
+        """The structure of ``x`` (:math:`(N, F)`, or :math:`(B, N_{max}, F)` with ``mask``)."""
+        num_nodes, far = x.shape[-2], _far(x.dtype)
+        eye = torch.eye(num_nodes, dtype=x.dtype, device=x.device)
+        self_offset = eye * far
+        if mask is None:
+            return cls(self_offset, None, torch.zeros_like(eye) if num_nodes == 1 else None)
+        node_offset = torch.zeros(mask.shape, dtype=x.dtype, device=x.device)
+        node_offset.masked_fill_(~mask, far)
+        sizes = mask.sum(dim=-1, keepdim=True)
+        lone = None
+        if bool((sizes == 1).any()):  # graphs of one node: rarely; the only rows to zero
+            lone = ~(mask & (sizes == 1))
+            lone = lone.to(x.dtype).unsqueeze(-1)
+        return cls(self_offset, node_offset, lone)
+
+    def scores(self, target: Tensor, source: Tensor) -> Tensor:
+        r"""A fresh :math:`(\ldots, N, N)` tensor of ``target[i] + source[j]`` at edges
+        :math:`j \to i`, and far below any score elsewhere.
+
+        Shapes: ``target`` and ``source`` :math:`(N,)` or :math:`(B, N)`."""
+        if self.node_offset is not None:
+            target, source = target + self.node_offset, source + self.node_offset
+        pairs = torch.add(target.unsqueeze(-1), source.unsqueeze(-2))
+        return pairs.add_(self.self_offset)
+
+    def softmax(self, scores: Tensor) -> Tensor:
+        """Row-wise softmax of :meth:`scores` (through an activation): the weights over each
+        node's neighbours, as :func:`neighbour_softmax` gives them."""
+        weights = scores.softmax(dim=-1)
+        return weights if self.lone is None else weights * self.lone
+
+
+def _far(dtype: torch.dtype) -> float:
+    return torch.finfo(dtype).min / 4
 
 
 def complete_edge_index(mask: Tensor) -> Tensor:

@@ -19,7 +19,7 @@ import torch.nn.functional as F
 from torch import Tensor, nn
 
 from manigraph_planner.gnn.models.backbone import ConvStack, register_architecture
-from manigraph_planner.gnn.models.complete_graph import neighbour_softmax
+from manigraph_planner.gnn.models.complete_graph import AttentionStructure
 from manigraph_planner.gnn.models.layer_weights import GATWeights
 
 
@@ -35,17 +35,28 @@ class GATBackbone(ConvStack):
     def make_weights(self, in_channels: int, out_channels: int) -> nn.Module:
         return GATWeights(in_channels, out_channels)
 
+    def forward_complete(self, x: Tensor, mask: Tensor | None = None) -> Tensor:
+        structure = AttentionStructure.of(x, mask)  # once for every layer
+        for conv in self.convs:
+            x = self.attend(conv, x, structure).relu()
+        return x
+
     def conv_complete(self, conv: Any, x: Tensor, mask: Tensor | None = None) -> Tensor:
+        return self.attend(conv, x, AttentionStructure.of(x, mask))
+
+    @staticmethod
+    def attend(gat: Any, x: Tensor, structure: AttentionStructure) -> Tensor:
         r"""The layer as an :math:`N \times N` attention matrix, one per graph of a padded
         batch. With one head, PyG's ``att_src`` and ``att_dst`` (shape :math:`(1, 1, C)`) are
         the two halves of :math:`\mathbf{a}`; the score of edge :math:`j \to i` is
         :math:`\mathbf{a}_{dst}^\top \theta_2 h_i + \mathbf{a}_{src}^\top \theta_2 h_j`, and
-        ``res`` (:math:`\theta_1`) and ``bias`` are added after aggregation."""
-        gat = conv
+        ``res`` (:math:`\theta_1`) and ``bias`` are added after aggregation. The scores of
+        non-edges are pushed far down before LeakyReLU, in place, and get weight 0
+        (:class:`AttentionStructure`)."""
         projected = gat.lin(x)  # lin: theta_2, shared by sources and targets (no bias)
         score_src = projected @ gat.att_src.view(-1)
         score_dst = projected @ gat.att_dst.view(-1)
-        pairs = score_dst.unsqueeze(-1) + score_src.unsqueeze(-2)  # [..., i, j]: edge j -> i
-        scores = F.leaky_relu(pairs, gat.negative_slope)
-        out = neighbour_softmax(scores, mask) @ projected + gat.res(x)
+        scores = structure.scores(score_dst, score_src)  # [..., i, j]: edge j -> i
+        scores = F.leaky_relu(scores, gat.negative_slope, inplace=True)
+        out = structure.softmax(scores) @ projected + gat.res(x)
         return out + gat.bias
