@@ -12,7 +12,7 @@ from manigraph_planner.gnn.models import ARCHITECTURES, ModelConfig, PolicyNet
 from manigraph_planner.training.augment import Augmentation
 from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
 from manigraph_planner.training.dataset import Demonstrations, Sample
-from manigraph_planner.training.padded_batch import PaddedBatch, size_groups
+from manigraph_planner.training.padded_batch import PackedSamples, PaddedBatch, size_groups
 from manigraph_planner.training.trainer import TrainConfig, accuracy, train
 from manigraph_shared.messages import Scene
 
@@ -42,6 +42,17 @@ def test_a_padded_batch_pads_every_graph_to_the_largest(samples: list[Sample]) -
         assert not bool(batch.is_object[b, n:].any())
     assert batch.object_index.tolist() == [s.object_index for s in samples]
     assert batch.goal_index.tolist() == [s.goal_index for s in samples]
+
+
+def test_a_packed_training_set_gathers_the_same_padded_batches(samples: list[Sample]) -> None:
+    packed = PackedSamples.pack(samples)
+    assert len(packed) == len(samples)
+    for indices in ([0, 1, 2, 3, 4, 5, 6, 7], [4, 1], [6], [7, 2, 6]):
+        got = packed.padded(indices)
+        expected = PaddedBatch.from_samples([samples[i] for i in indices])
+        for field in ("x", "mask", "is_object", "object_index", "goal_index"):
+            a, b = getattr(got, field), getattr(expected, field)
+            assert a.dtype == b.dtype and torch.equal(a, b), (indices, field)
 
 
 def test_size_groups_bound_the_padding_of_every_graph() -> None:

@@ -12,6 +12,7 @@ for edge masks; the trainer keeps it selectable as a reference.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 
 import torch
 from torch import Tensor
@@ -26,7 +27,7 @@ from manigraph_planner.gnn.selection import (
     selection_loss,
 )
 from manigraph_planner.training.dataset import Sample
-from manigraph_planner.training.padded_batch import PaddedBatch, size_groups
+from manigraph_planner.training.padded_batch import PackedSamples, PaddedBatch, size_groups
 from manigraph_shared.registry import Registry
 
 __all__ = ["BATCH_LAYOUTS", "BatchLayout", "PaddedLayout", "PygLayout", "pyg_batch"]
@@ -41,6 +42,11 @@ class BatchLayout(ABC):
     def loss(self, net: PolicyNet, samples: list[Sample]) -> Tensor:
         """The paper's Eq. (ce), averaged over ``samples`` (a scalar with gradients)."""
 
+    def packed_loss(self, net: PolicyNet, packed: PackedSamples, indices: Sequence[int]) -> Tensor:
+        """:meth:`loss` of the samples at ``indices`` of ``packed`` (what the trainer calls:
+        it packs every draw once)."""
+        return self.loss(net, [packed.samples[i] for i in indices])
+
     @abstractmethod
     def choices(self, net: PolicyNet, samples: list[Sample]) -> tuple[Tensor, Tensor]:
         """The network's argmax object and goal for each sample, as node indices within the
@@ -54,13 +60,17 @@ class PaddedLayout(BatchLayout):
     name = "padded"
 
     def loss(self, net: PolicyNet, samples: list[Sample]) -> Tensor:
+        return self.packed_loss(net, PackedSamples.pack(samples), range(len(samples)))
+
+    def packed_loss(self, net: PolicyNet, packed: PackedSamples, indices: Sequence[int]) -> Tensor:
         parts = []
-        for indices in size_groups([s.x.shape[0] for s in samples]):
-            batch, logits = self._logits(net, [samples[i] for i in indices])
+        for group in size_groups([packed.sizes[i] for i in indices]):
+            batch = packed.padded([indices[i] for i in group]).to(_device_of(net))
+            logits = net.forward_complete(batch.x, batch.mask)
             loss = padded_selection_loss(
                 logits, batch.is_object, batch.mask, batch.object_index, batch.goal_index
             )
-            parts.append(loss * (len(indices) / len(samples)))  # a mean over all samples
+            parts.append(loss * (len(group) / len(indices)))  # a mean over all samples
         return torch.stack(parts).sum()
 
     def choices(self, net: PolicyNet, samples: list[Sample]) -> tuple[Tensor, Tensor]:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import torch
 from torch import Tensor
@@ -11,7 +11,7 @@ from torch.nn.utils.rnn import pad_sequence
 
 from manigraph_planner.training.dataset import Sample, stack_targets
 
-__all__ = ["PaddedBatch", "size_groups"]
+__all__ = ["PackedSamples", "PaddedBatch", "size_groups"]
 
 
 @dataclass(frozen=True)
@@ -61,6 +61,57 @@ class PaddedBatch:
             self.is_object.to(device),
             self.object_index.to(device),
             self.goal_index.to(device),
+        )
+
+
+@dataclass(frozen=True)
+class PackedSamples:
+    """A training set as flat tensors, from which :meth:`padded` gathers a
+    :class:`PaddedBatch` in a few tensor operations: :meth:`PaddedBatch.from_samples` copies
+    every sample on its own (two copies per sample, 128 per batch of 64), every epoch.
+    The trainer packs each draw once; the batches are the same tensors, bit for bit.
+
+    Shapes: **x** :math:`(\\sum_s N_s + 1, F)`, every sample's nodes one after another, then
+    one row of zeros that padding gathers; **is_object** likewise (False last); **start**,
+    **object_index**, **goal_index** :math:`(S,)`.
+    """
+
+    samples: list[Sample]
+    x: Tensor
+    is_object: Tensor
+    start: Tensor
+    object_index: Tensor
+    goal_index: Tensor
+    sizes: list[int] = field(repr=False)
+
+    @classmethod
+    def pack(cls, samples: list[Sample]) -> PackedSamples:
+        sizes = [s.x.shape[0] for s in samples]
+        first = samples[0].x if samples else torch.zeros(0, 5)
+        x = torch.cat([*(s.x for s in samples), first.new_zeros(1, first.shape[1])])
+        no = torch.zeros(1, dtype=torch.bool)
+        is_object = torch.cat([*(s.is_object for s in samples), no])
+        start = torch.tensor([0, *sizes]).cumsum(0)[:-1]
+        object_index, goal_index = stack_targets(samples)
+        return cls(samples, x, is_object, start, object_index, goal_index, sizes)
+
+    def __len__(self) -> int:
+        return len(self.samples)
+
+    def padded(self, indices: Sequence[int]) -> PaddedBatch:
+        """:meth:`PaddedBatch.from_samples` of the samples at ``indices`` (at least one)."""
+        picked = torch.tensor(indices)
+        sizes = self.start.new_tensor([self.sizes[i] for i in indices])
+        slots = torch.arange(max(self.sizes[i] for i in indices))
+        mask = slots < sizes.unsqueeze(1)
+        padding = self.x.shape[0] - 1
+        rows = torch.where(mask, self.start[picked].unsqueeze(1) + slots, padding)
+        return PaddedBatch(
+            self.x[rows],
+            mask,
+            self.is_object[rows],
+            self.object_index[picked],
+            self.goal_index[picked],
         )
 
 

@@ -23,7 +23,8 @@ from manigraph_planner.training.augmented_draws import (
 )
 from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
 from manigraph_planner.training.dataset import Demonstrations, Sample
-from manigraph_planner.training.padded_batch import PaddedBatch
+from manigraph_planner.training.flat_adam import FlatAdam
+from manigraph_planner.training.padded_batch import PackedSamples, PaddedBatch
 from manigraph_planner.training.recipes import augmentation_for, resample_every_for
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.progress import Progress
@@ -192,9 +193,9 @@ def _fit(
     bar: Progress,
     on_epoch: EpochCallback | None,
 ) -> tuple[PolicyNet, dict[str, object]]:
-    samples = draws.take()
+    samples = PackedSamples.pack(draws.take())
     net = PolicyNet(config.model_config()).to(config.device)
-    optimiser = torch.optim.Adam(
+    optimiser = FlatAdam(  # torch.optim.Adam's arithmetic, in one kernel per operation
         net.parameters(), lr=config.learning_rate, weight_decay=config.weight_decay
     )
     schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, T_max=config.epochs)
@@ -205,12 +206,12 @@ def _fit(
     loss_value = float("nan")
     for epoch in range(1, config.epochs + 1):
         if epoch in fresh and epoch > 1:
-            samples = draws.take()
+            samples = PackedSamples.pack(draws.take())
         random.shuffle(order)
         total = 0.0
         for b in range(batches_per_epoch):
-            chunk = [samples[i] for i in order[b * config.batch_size : (b + 1) * config.batch_size]]
-            loss = layout.loss(net, chunk)
+            chunk = order[b * config.batch_size : (b + 1) * config.batch_size]
+            loss = layout.packed_loss(net, samples, chunk)
             optimiser.zero_grad()
             loss.backward()
             optimiser.step()
@@ -221,6 +222,7 @@ def _fit(
         bar.update()
         if on_epoch is not None:
             on_epoch(epoch, loss_value)
+    optimiser.unflatten()
     metrics: dict[str, object] = {
         "final_loss": round(loss_value, 6),
         "demo_accuracy": round(accuracy(net, demos.samples, config.batch_layout), 4),
