@@ -220,6 +220,7 @@ class PhysicsDishwasher:
         self.slots = {slot.id: slot for slot in layout.slots}
         self.cabinet = self._build_cabinet()
         self.rails = {joint.name: joint for joint in self.cabinet.active_joints}
+        self._rail_index = {name: index for index, name in enumerate(self.rails)}
         for joint in self.rails.values():
             joint.set_drive_properties(DETENT, 0.0)  # the rail's own damping stays as it is
         self._held_at: dict[str, float] = {}
@@ -281,13 +282,14 @@ class PhysicsDishwasher:
     # --- state ------------------------------------------------------------------------------
     def rack_travel(self, rack_id: str) -> float:
         """How far rack ``rack_id`` is pulled out, metres (0: pushed in)."""
-        index = [j.name for j in self.cabinet.active_joints].index(rack_id)
-        return float(-self.cabinet.qpos[index])
+        return float(-self.cabinet.qpos[self._rail_index[rack_id]])
 
     def _hold_racks(self) -> None:
         """Each rack's detent at the end of its rail it is nearer."""
+        qpos = self.cabinet.qpos  # (after every physics step: read once)
         for rack_id, joint in self.rails.items():
-            target = -RAIL if self.is_open(rack_id) else 0.0
+            out = -float(qpos[self._rail_index[rack_id]]) > OPEN_FRACTION * RAIL
+            target = -RAIL if out else 0.0
             if self._held_at.get(rack_id) != target:
                 joint.set_drive_target(target)
                 self._held_at[rack_id] = target
