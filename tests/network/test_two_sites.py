@@ -5,7 +5,8 @@ linked to router a over mutual TLS, and the planner. Every decision crosses the 
 (scene out, Action back). The suite checks that episodes succeed across it, that cutting the
 link for 4 s loses no decision and moves nothing twice, that each router refuses another
 cell's identities, and that killing site a's router and starting it again after 5 s loses and
-repeats nothing either, every session reconnecting by itself. Every wait is bounded; the namespaces go in the fixture's teardown.
+repeats nothing either, every session reconnecting by itself. Every wait is bounded; the
+namespaces go in the fixture's teardown.
 """
 
 from __future__ import annotations
