@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import http.client
 import json
+import math
 import threading
 import time
 from collections.abc import Iterator
@@ -18,12 +19,13 @@ from manigraph_shared.messages import (
     EpisodeEvent,
     EpisodePhase,
     EpisodeRequest,
+    Quaternion,
     Scene,
     SkillState,
     SkillStatus,
     TrayAction,
 )
-from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN
+from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN, nearest_orientation
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_tools.demo_ui.clicks import Click, ClickRefused
 from manigraph_tools.demo_ui.http import BadRequest, DemoHttpServer, click_from_json
@@ -236,6 +238,28 @@ def test_the_page_sees_each_thing_with_its_extent_along_the_world_axes() -> None
     assert world_extent((1.0, 2.0, 3.0), world.scene().goals[0].orientation) == pytest.approx(
         [1.0, 3.0, 2.0]
     )
+
+
+def test_a_dish_turned_about_the_vertical_keeps_its_orientation_on_the_page() -> None:
+    """A physical dish can rest turned about the vertical (a turned-over bowl at 13 deg was
+    seen); the page shows the orientation its up axis says, as the planner reads it."""
+    scene = dish_world().scene()
+    dish = scene.objects[0]
+    half = math.radians(135.0) / 2  # 135 deg about world z, then the dish's own pose
+    cz, sz = math.cos(half), math.sin(half)
+    q = dish.orientation
+    turned = Quaternion(
+        x=cz * q.x - sz * q.y,
+        y=cz * q.y + sz * q.x,
+        z=cz * q.z + sz * q.w,
+        w=cz * q.w - sz * q.z,
+    )
+    moved = scene.model_copy(
+        update={"objects": [dish.model_copy(update={"orientation": turned}), *scene.objects[1:]]}
+    )
+    (shown, *_) = scene_view(moved)["objects"]  # type: ignore[misc]
+    assert shown["orientation"] == nearest_orientation(q)
+    assert nearest_orientation(turned) != nearest_orientation(q)  # what the page showed before
 
 
 def test_clicks_from_the_page_are_checked_field_by_field() -> None:

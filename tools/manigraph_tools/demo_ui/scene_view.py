@@ -12,7 +12,7 @@ from __future__ import annotations
 import statistics
 
 from manigraph_shared.messages import Quaternion, Scene, SceneObject
-from manigraph_shared.orientations import nearest_orientation
+from manigraph_shared.orientations import nearest_orientation, up_axis_orientation
 
 #: A goal of a category no object of the scene has (metres): a block's size.
 DEFAULT_EXTENT = (0.04, 0.04, 0.04)
@@ -62,7 +62,8 @@ def scene_view(scene: Scene) -> dict[str, object]:
             "category": item.category.value,
             **_xyz(item.position),
             "extent": world_extent(item.size.as_tuple(), item.orientation),
-            "orientation": nearest_orientation(item.orientation),
+            # by its up axis: a physical dish keeps its index at any turn about the vertical
+            "orientation": up_axis_orientation(item.orientation),
             "filled": item.filled,
             "visible": item.visible,
         }
