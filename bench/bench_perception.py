@@ -37,18 +37,6 @@ from manigraph_shared.messages import EpisodeRequest
 from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_sim.physics.camera import CameraConfig, ideal_calibration, marker_shapes
 
-
-def rotation_of(q: np.ndarray) -> np.ndarray:
-    x, y, z, w = q
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 #: A calibration board: six 8 cm markers printed on a 24 x 36 cm sheet, laid on the table at
 #: a few known places (as one would in a lab; the markers the robot places would do too).
 BOARD_SIZE = np.array([0.24, 0.36, 0.002])

@@ -23,6 +23,7 @@ from manigraph_perception.calibration_fit import (
 from manigraph_shared.cli import main
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.markers import marker_in_object
+from manigraph_shared.rotations import rotation_matrix
 
 FRAMES = ["stack4-start", "stack4-one-placed", "boxpack3-start"]
 
@@ -71,15 +72,7 @@ def _known_markers(frame, markers, flat_only: bool = False) -> list[KnownMarker]
     record = json.loads((Path(__file__).parent / "frames" / f"{frame}.json").read_text())
     sizes = {o["id"]: np.array(list(o["size"].values())) for o in record["layout"]["objects"]}
     for body, (position, quaternion) in record["truth"].items():
-        x, y, z, w = quaternion
-        rotation = cv2.Rodrigues(np.zeros(3))[0]
-        rotation = np.array(
-            [
-                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-            ]
-        )
+        rotation = rotation_matrix(quaternion)
         yaw = float(np.arctan2(rotation[1, 0], rotation[0, 0]))
         for spec in markers.for_object(body):
             if flat_only and spec.face != "top":

@@ -23,10 +23,11 @@ from manigraph_shared.messages import (
     TrayAction,
 )
 from manigraph_shared.orientations import ORIENTATIONS, UPSIDE_DOWN, up_axis_orientation
+from manigraph_shared.rotations import rotation_matrix
 from manigraph_sim.dishwasher.physics import PHYSICAL_DISH_SIZE, RAIL, physical_counter_x
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_skills.dishwasher.turn_over import quaternion_of, rotation_of
+from manigraph_skills.dishwasher.turn_over import quaternion_of
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
 #: Seed 8, 10 dishes: bowl_3 lies upside down and plate_3 stands on its rim (x >= 0.3 m), so
@@ -279,8 +280,8 @@ def test_a_plate_on_its_rim_in_its_slot_is_loaded_whichever_edge_is_down() -> No
     plate = next(o for o in scene.objects if o.category.value == "plate")
     slot = next(g for g in scene.goals if g.id.startswith("bottom_plate"))
     quarter = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-    side_x = quaternion_of(quarter @ rotation_of(ORIENTATIONS[4]))  # thin axis along y
-    assert rotation_of(side_x)[:, 2] == pytest.approx([0.0, -1.0, 0.0], abs=1e-9)
+    side_x = quaternion_of(quarter @ rotation_matrix(ORIENTATIONS[4]))  # thin axis along y
+    assert rotation_matrix(side_x)[:, 2] == pytest.approx([0.0, -1.0, 0.0], abs=1e-9)
     pose = sapien.Pose(
         np.array(slot.position.as_tuple()) + np.array([0.0, 0.0, 0.002]),
         [side_x.w, side_x.x, side_x.y, side_x.z],
@@ -317,7 +318,7 @@ def test_a_bowl_set_down_beside_a_turned_one_knocks_neither_off_its_slot(loop: L
     assert dishes.toggle("rack_top").state is SkillState.SUCCEEDED
     first = dishes.act("bowl_3", "top_bowl_02", orientation_index=UPSIDE_DOWN)
     assert first.state is SkillState.SUCCEEDED, first
-    turned = rotation_of(dishes.scene().object("bowl_3").orientation)
+    turned = rotation_matrix(dishes.scene().object("bowl_3").orientation)
     assert abs(np.degrees(np.arctan2(turned[1, 0], turned[0, 0]))) % 90 > 5  # seen turned
     second = dishes.act("bowl_2", "top_bowl_03", orientation_index=UPSIDE_DOWN)
     assert second.state is SkillState.SUCCEEDED, second

@@ -20,7 +20,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.orientations import ORIENTATIONS, UPRIGHT
 from manigraph_shared.panda import FINGER_OPEN
-from manigraph_skills.dishwasher.turn_over import rotation_of
+from manigraph_shared.rotations import rotation_matrix
 from manigraph_skills.drivers.base import Motion
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.grasp_choice import (
@@ -79,7 +79,7 @@ def test_a_dish_is_taken_with_the_fingers_open_to_its_width_a_block_fully() -> N
 
 def on_rim_thin(plate: SceneObject) -> np.ndarray:
     """The world direction of a plate's thin axis."""
-    return rotation_of(plate.orientation)[:, 2]
+    return rotation_matrix(plate.orientation)[:, 2]
 
 
 def test_a_neighbour_beside_fully_open_fingers_is_clear_of_fingers_opened_to_the_dish() -> None:

@@ -9,6 +9,7 @@ from arm_helpers import PerfectArm, trajectory_of
 
 from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, SceneRack, Vector3
 from manigraph_shared.orientations import ORIENTATIONS
+from manigraph_shared.rotations import rotation_matrix
 from manigraph_skills.dishwasher.panda_turn_over import (
     SPARE_Y,
     SPOT_FREE,
@@ -16,7 +17,7 @@ from manigraph_skills.dishwasher.panda_turn_over import (
     move_dish,
     set_down_spots,
 )
-from manigraph_skills.dishwasher.turn_over import rotation_of, up_index
+from manigraph_skills.dishwasher.turn_over import up_index
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
 #: A bowl (5 cm across, 3.5 cm deep) lying upside down.
@@ -68,7 +69,7 @@ def test_the_dish_is_carried_top_down_and_set_down_on_the_first_cell() -> None:
     arm = PerfectArm()
     driver = PandaMotionDriver(arm)
     here = np.array(FAR.position.as_tuple())
-    dish = rotation_of(FAR.orientation)
+    dish = rotation_matrix(FAR.orientation)
     cells = free_cells(SCENE, FAR, here)
     position, turned = move_dish(driver, "e:1", FAR, SCENE, here, dish, cells)
     assert position == pytest.approx([*cells[0], here[2]])

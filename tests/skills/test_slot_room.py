@@ -14,8 +14,9 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_shared.orientations import ORIENTATIONS, UPSIDE_DOWN
+from manigraph_shared.rotations import rotation_matrix
 from manigraph_skills.dishwasher.slot_room import CLEARANCE, MAX_SHIFT, half_across, set_down_point
-from manigraph_skills.dishwasher.turn_over import quaternion_of, rotation_of
+from manigraph_skills.dishwasher.turn_over import quaternion_of
 
 PITCH = 0.055
 SLOT_Z = 0.325
@@ -29,7 +30,7 @@ def bowl(name: str, y: float, degrees: float = 0.0, x: float = 0.685) -> SceneOb
         id=name,
         category=ObjectCategory.BOWL,
         position=Vector3(x=x, y=y, z=SLOT_Z - 0.0025),
-        orientation=quaternion_of(about_z @ rotation_of(ORIENTATIONS[UPSIDE_DOWN])),
+        orientation=quaternion_of(about_z @ rotation_matrix(ORIENTATIONS[UPSIDE_DOWN])),
         size=Vector3(x=0.05, y=0.05, z=0.035),
     )
 

@@ -14,10 +14,10 @@ from manigraph_shared.orientations import (
     postures_like,
     up_axis_orientation,
 )
+from manigraph_shared.rotations import rotation_matrix
 from manigraph_skills.dishwasher.turn_over import (
     next_tilts,
     quaternion_of,
-    rotation_of,
     set_down_hands,
     top_down_rotation,
     up_index,
@@ -46,7 +46,7 @@ def _tilt(dish: np.ndarray, size: np.ndarray, target: int) -> np.ndarray:
 def test_every_orientation_is_at_most_two_tilts_away(
     size: np.ndarray, start: int, target: int
 ) -> None:
-    dish = rotation_of(ORIENTATIONS[start])
+    dish = rotation_matrix(ORIENTATIONS[start])
     assert up_index(dish) == start
     for _tilt_number in range(2):
         if up_index(dish) == target:
@@ -56,16 +56,16 @@ def test_every_orientation_is_at_most_two_tilts_away(
 
 
 def test_a_plate_too_wide_for_the_fingers_cannot_be_stood_up_from_flat() -> None:
-    flat = rotation_of(ORIENTATIONS[0])
+    flat = rotation_matrix(ORIENTATIONS[0])
     assert next_tilts(flat, WIDE_PLATE, (2,)) == []
     assert next_tilts(flat, PLATE, (2,))
 
 
 def test_rotations_and_quaternions_round_trip() -> None:
     for q in ORIENTATIONS:
-        again = quaternion_of(rotation_of(q))
+        again = quaternion_of(rotation_matrix(q))
         assert up_axis_orientation(again) == up_axis_orientation(q)
-        assert np.allclose(rotation_of(again), rotation_of(q))
+        assert np.allclose(rotation_matrix(again), rotation_matrix(q))
 
 
 def test_a_plate_on_any_edge_stands_as_upright_asks_and_a_bowl_only_as_asked() -> None:
@@ -79,7 +79,7 @@ def test_a_flat_plate_is_stood_on_its_rim_with_the_hand_rolled_either_way() -> N
     """Stood up from flat onto any edge, a plate may be set down by hands rolled both ways
     about their fingers (the wrist above the fingers, or below them, where it met the
     counter); asked for "rim-y" alone, by one roll only."""
-    flat = rotation_of(ORIENTATIONS[0])
+    flat = rotation_matrix(ORIENTATIONS[0])
     tilt = next_tilts(flat, PLATE, postures_like("plate", UPRIGHT))[0]
     hand = top_down_rotation(tilt.pick_yaw)
     only_asked = set_down_hands(hand, flat, [UPRIGHT])

@@ -35,6 +35,7 @@ from manigraph_shared.messages import (
     TaskLayout,
     Vector3,
 )
+from manigraph_shared.rotations import rotation_matrix
 
 
 @dataclass(frozen=True)
@@ -219,7 +220,7 @@ class WorldModel:
             if object_id == pose.object_id:
                 continue
             other = np.array(objects[object_id].size.as_tuple()) / 2
-            top = belief.position[2] + _half_height(_rotation(belief.orientation), other * 2)
+            top = belief.position[2] + _half_height(_unit_rotation(belief.orientation), other * 2)
             supports.append(Support(top, (belief.position[0], belief.position[1]), (0.025, 0.025)))
             if objects[object_id].category.value == "block":
                 neighbours.append(belief.position)
@@ -315,15 +316,9 @@ def _half_height(rotation: np.ndarray, size: np.ndarray) -> float:
     return float(size[int(np.argmax(np.abs(rotation[2])))]) / 2
 
 
-def _rotation(xyzw: np.ndarray) -> np.ndarray:
-    x, y, z, w = np.asarray(xyzw, dtype=float) / np.linalg.norm(xyzw)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+def _unit_rotation(xyzw: np.ndarray) -> np.ndarray:
+    """The rotation of an estimated quaternion, normalised first."""
+    return rotation_matrix(np.asarray(xyzw, dtype=float) / np.linalg.norm(xyzw))
 
 
 def quaternion_of(rotation: np.ndarray) -> np.ndarray:

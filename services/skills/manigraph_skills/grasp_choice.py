@@ -36,7 +36,8 @@ from manigraph_shared.panda import (
     FINGER_OPEN,
     FINGER_REACH,
 )
-from manigraph_skills.dishwasher.turn_over import HORIZONTAL, rotation_of
+from manigraph_shared.rotations import rotation_matrix
+from manigraph_skills.dishwasher.turn_over import HORIZONTAL
 from manigraph_skills.drivers.base import Grasp
 from manigraph_skills.obstacles import scene_obstacles
 
@@ -72,7 +73,7 @@ def dish_opening(item: SceneObject, closing: np.ndarray | None = None) -> float 
     (fully open, as before) for a block or a cover."""
     if item.category.value not in DISHES:
         return None
-    rotation = rotation_of(item.orientation)
+    rotation = rotation_matrix(item.orientation)
     size = np.array(item.size.as_tuple())
     if closing is None:
         horizontal = np.argsort(np.abs(rotation[2]))[:2]  # the two axes nearest level
@@ -117,7 +118,7 @@ def closing_turn(scene: Scene, point: np.ndarray, moving: str) -> float:
 def vertical_half(item: SceneObject) -> float:
     """Half the height of ``item`` as it lies (its box turned by its orientation)."""
     size = np.array(item.size.as_tuple())
-    return float(np.abs(rotation_of(item.orientation)[2]) @ size) / 2
+    return float(np.abs(rotation_matrix(item.orientation)[2]) @ size) / 2
 
 
 def dish_grasp_height(scene: Scene, item: SceneObject, at: np.ndarray, height: float) -> float:
@@ -164,7 +165,7 @@ def plate_turn(item: SceneObject) -> float | None:
     0 along x; None if it lies flat (wider than the fingers span that way)."""
     if item.category.value != "plate":
         return None
-    thin = rotation_of(item.orientation)[:, 2]
+    thin = rotation_matrix(item.orientation)[:, 2]
     if abs(thin[2]) > HORIZONTAL:
         return None
     return TURN_TO_Y if abs(thin[1]) > abs(thin[0]) else 0.0
@@ -180,7 +181,7 @@ def choose_grasps(scene: Scene, item: SceneObject, goal: Vector3) -> tuple[Grasp
     turn = plate_turn(item)
     if turn is not None:
         # Into its slot across y whichever way it was taken: the slot's ribs hold it so.
-        thin = rotation_of(item.orientation)[:, 2]
+        thin = rotation_matrix(item.orientation)[:, 2]
         opening = dish_opening(item, thin)
         return (
             Grasp(height, turn, carry, scene_obstacles(scene, item, here), np.pi, opening),

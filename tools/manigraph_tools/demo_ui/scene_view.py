@@ -13,25 +13,16 @@ import statistics
 
 from manigraph_shared.messages import Quaternion, Scene, SceneObject
 from manigraph_shared.orientations import nearest_orientation, up_axis_orientation
+from manigraph_shared.rotations import rotation_matrix
 
 #: A goal of a category no object of the scene has (metres): a block's size.
 DEFAULT_EXTENT = (0.04, 0.04, 0.04)
 
 
-def rotation(q: Quaternion) -> list[list[float]]:
-    """The rotation matrix of the unit quaternion ``q`` (x, y, z, w)."""
-    x, y, z, w = q.x, q.y, q.z, q.w
-    return [
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ]
-
-
 def world_extent(size: tuple[float, float, float], q: Quaternion) -> list[float]:
     """Extents along the world axes of a box of ``size`` turned by ``q``."""
-    matrix = rotation(q)
-    return [round(sum(abs(matrix[i][j]) * size[j] for j in range(3)), 4) for i in range(3)]
+    matrix = rotation_matrix(q)
+    return [round(float(sum(abs(matrix[i][j]) * size[j] for j in range(3))), 4) for i in range(3)]
 
 
 def _category_sizes(objects: list[SceneObject]) -> dict[str, tuple[float, float, float]]:

@@ -42,6 +42,7 @@ from manigraph_shared.grasp_points import (
 )
 from manigraph_shared.messages import Quaternion
 from manigraph_shared.orientations import ORIENTATIONS, postures_like, up_axis_orientation
+from manigraph_shared.rotations import rotation_matrix
 from manigraph_sim.dishwasher.dishwasher_world import DishwasherWorld
 from manigraph_sim.dishwasher.model import (
     BOWL,
@@ -126,20 +127,9 @@ def yaw_from(q: Quaternion, index: int) -> float:
     """How far a dish at pose ``q``, whose up axis is orientation ``index``'s, is turned
     about the vertical from that orientation, radians in [-pi, pi); 0 under
     ``YAW_RESOLUTION`` (a dish at rest as laid out reads exactly square)."""
-    turn = _rotation(q) @ _rotation(ORIENTATIONS[index]).T  # about the vertical, nearly
+    turn = rotation_matrix(q) @ rotation_matrix(ORIENTATIONS[index]).T  # about the vertical, nearly
     yaw = float(np.arctan2(turn[1, 0], turn[0, 0]))
     return 0.0 if abs(yaw) < YAW_RESOLUTION else yaw
-
-
-def _rotation(q: Quaternion) -> np.ndarray:
-    x, y, z, w = q.x, q.y, q.z, q.w
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 def physical_counter_x(x: float) -> float:

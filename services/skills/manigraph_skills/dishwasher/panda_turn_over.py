@@ -26,10 +26,10 @@ from manigraph_shared.grasp_points import RACK_GRIP_OFFSET
 from manigraph_shared.messages import Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATION_NAMES
 from manigraph_shared.panda import FINGER_BELOW_TCP
+from manigraph_shared.rotations import rotation_matrix
 from manigraph_skills.dishwasher.turn_over import (
     next_tilts,
     quaternion_of,
-    rotation_of,
     set_down_hands,
     top_down_rotation,
     up_index,
@@ -164,7 +164,7 @@ def turn_dish(
     plate on its rim may stand on any edge: ``orientations.postures_like``); the dish as it
     then lies (its position observed when the transport can, its orientation as turned)."""
     position = np.array(item.position.as_tuple())
-    dish = rotation_of(item.orientation)
+    dish = rotation_matrix(item.orientation)
     moved = False
     if up_index(dish) not in targets and not on_counter(position):
         # In a rack but in no slot: no room to turn it there; to the counter first.

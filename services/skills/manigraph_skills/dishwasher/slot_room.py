@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
-from manigraph_skills.dishwasher.turn_over import rotation_of
+from manigraph_shared.rotations import rotation_matrix
 
 #: Room kept between a bowl set down and the dish beside it, metres.
 CLEARANCE = 0.0015
@@ -34,7 +34,7 @@ def half_across(item: SceneObject, axis: int) -> float:
     """Half the extent of ``item`` along world ``axis`` as it lies (its box turned by its
     orientation, its turn about the vertical included)."""
     size = np.array(item.size.as_tuple())
-    return float(np.abs(rotation_of(item.orientation)[axis]) @ size) / 2
+    return float(np.abs(rotation_matrix(item.orientation)[axis]) @ size) / 2
 
 
 def set_down_point(scene: Scene, item: SceneObject, goal: SceneGoal) -> Vector3:

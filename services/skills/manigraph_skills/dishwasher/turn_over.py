@@ -29,17 +29,6 @@ MAX_GRIP_WIDTH = 2 * FINGER_OPEN - 0.01
 HORIZONTAL = 0.5
 
 
-def rotation_of(q: Quaternion) -> np.ndarray:
-    x, y, z, w = q.x, q.y, q.z, q.w
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 def quaternion_of(rotation: np.ndarray) -> Quaternion:
     """The unit quaternion of a rotation matrix (Shepperd's method)."""
     m = rotation
