@@ -318,8 +318,21 @@ def test_a_bowl_set_down_beside_a_turned_one_knocks_neither_off_its_slot(loop: L
     assert dishes.toggle("rack_top").state is SkillState.SUCCEEDED
     first = dishes.act("bowl_3", "top_bowl_02", orientation_index=UPSIDE_DOWN)
     assert first.state is SkillState.SUCCEEDED, first
+    # How far a bowl let go of sideways ends up turned is chaotic: 13 degrees in the issue's
+    # run, 3.5 in one full test run (PhysX's result depends on what the process built
+    # before). The turn that caused the knock is set here, about the bowl's own centre, and
+    # the world settles, so the placement beside it is tested whatever the turn-over gave.
+    world = loop.backend.world
+    assert world is not None
+    bowl = world.entities["bowl_3"]
+    pose = bowl.get_pose()
+    scene_turn = rotation_matrix(dishes.scene().object("bowl_3").orientation)
+    wanted = np.radians(13.0) - np.arctan2(scene_turn[1, 0], scene_turn[0, 0])
+    about_z = sapien.Pose(q=[np.cos(wanted / 2), 0.0, 0.0, np.sin(wanted / 2)])
+    bowl.set_pose(sapien.Pose(pose.p, (about_z * sapien.Pose(q=pose.q)).q))
+    world.step(round(0.5 / world.config.timestep))
     turned = rotation_matrix(dishes.scene().object("bowl_3").orientation)
-    assert abs(np.degrees(np.arctan2(turned[1, 0], turned[0, 0]))) % 90 > 5  # seen turned
+    assert abs(np.degrees(np.arctan2(turned[1, 0], turned[0, 0]))) % 90 > 10  # seen turned
     second = dishes.act("bowl_2", "top_bowl_03", orientation_index=UPSIDE_DOWN)
     assert second.state is SkillState.SUCCEEDED, second
     scene = dishes.scene()
