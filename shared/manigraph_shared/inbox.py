@@ -71,13 +71,24 @@ class Inbox:
 
     def get(self, timeout: float) -> Work | None:
         """The oldest waiting work, or None after ``timeout`` seconds."""
+        return self.pop() if self.wait(timeout) else None
+
+    def wait(self, timeout: float) -> bool:
+        """Whether work waits, after at most ``timeout`` seconds; takes nothing."""
         deadline = time.monotonic() + timeout
         with self._ready:
             while not self._queue:
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
-                    return None
+                    return False
                 self._ready.wait(remaining)
+            return True
+
+    def pop(self) -> Work | None:
+        """The oldest waiting work, or None at once if none waits."""
+        with self._ready:
+            if not self._queue:
+                return None
             entry = self._queue.popleft()
             if isinstance(entry, _Slot):
                 return self._latest.pop(entry.slot)

@@ -104,6 +104,9 @@ class Service:
         self.bus = bus
         self.log = logging.getLogger(f"manigraph.{self.name}")
         self._inbox = Inbox(INBOX_CAPACITY)
+        #: Held while a handler runs, on the service thread or inline on a Zenoh thread:
+        #: handlers never overlap, so the service's logic still needs no locks.
+        self._turn = threading.Lock()
         self.messages_in = 0
         self.rejections = Rejections()
         self.last_error: str = ""
@@ -122,10 +125,20 @@ class Service:
 
     # --- wiring -----------------------------------------------------------------------------
     def on(
-        self, message_type: type[M], handler: Callable[[M], None], key: str | None = None
+        self,
+        message_type: type[M],
+        handler: Callable[[M], None],
+        key: str | None = None,
+        inline: bool = False,
     ) -> None:
         """Run ``handler`` on the service thread for every valid ``message_type`` sample
-        (state streams coalesced to the newest waiting sample, the rest bounded)."""
+        (state streams coalesced to the newest waiting sample, the rest bounded).
+
+        ``inline``: when no handler is running and nothing waits, run it at once on the Zenoh
+        thread that decoded the sample, not after a hand-over to the service thread (which
+        costs a thread wake-up both ways, ~0.1-0.2 ms on two cores). Order and exclusion are
+        kept: a sample that finds a handler running, or work waiting, queues as usual. Only
+        for short handlers: the Zenoh thread receives nothing else meanwhile."""
         if message_type.delivery is Delivery.LATEST:
             slot = (message_type.type_name(), key, id(handler))
 
@@ -137,7 +150,24 @@ class Service:
             def enqueue(message: M) -> None:
                 self._inbox.put(handler, message)
 
-        self.bus.subscribe(message_type, enqueue, on_error=self._rejected, key=key)
+        def deliver(message: M) -> None:
+            if not (inline and self._run_inline(handler, message)):
+                enqueue(message)
+
+        self.bus.subscribe(message_type, deliver, on_error=self._rejected, key=key)
+
+    def _run_inline(self, handler: Callable[[Any], None], message: Any) -> bool:
+        """Run ``handler`` now if it is the service's turn to be idle; False if it must queue."""
+        if not self._turn.acquire(blocking=False):
+            return False
+        try:
+            if len(self._inbox):  # older work first
+                return False
+            self.messages_in += 1
+            self._dispatch(handler, message)
+            return True
+        finally:
+            self._turn.release()
 
     def call_soon(self, handler: Callable[[Any], None], argument: Any = None) -> bool:
         """Run ``handler(argument)`` on the service thread: the service's own work, never
@@ -246,15 +276,18 @@ class Service:
             while not self.stop_event.is_set():
                 now = time.monotonic()
                 wake = min(next_beat, next_tick if self.tick_period else next_beat)
-                work = self._inbox.get(timeout=max(0.0, min(wake - now, 0.1)))
-                if work is not None:
-                    self.messages_in += 1
-                    self._dispatch(*work)
+                if self._inbox.wait(timeout=max(0.0, min(wake - now, 0.1))):
+                    with self._turn:  # popped under the turn: inline work cannot overtake
+                        work = self._inbox.pop()
+                        if work is not None:
+                            self.messages_in += 1
+                            self._dispatch(*work)
                 now = time.monotonic()
                 self._report_rejections(now)
                 if self.tick_period and now >= next_tick:
                     next_tick = now + self.tick_period
-                    self._dispatch(lambda _: self.tick(), None)
+                    with self._turn:
+                        self._dispatch(lambda _: self.tick(), None)
                 if now >= next_beat:
                     next_beat = now + HEARTBEAT_SECONDS
                     self.publish_status(ServiceState.OK, self.last_error)
