@@ -194,7 +194,9 @@ def test_a_cell_stuck_in_a_decision_delays_no_other_cell(running_stack: Stack) -
     policy = StallingPolicy()
     with running_stack.client() as planner_bus:
         served = CellServices(
-            planner_bus, lambda bus, _cell: PlannerService(bus, policy), ["slow", "fast"]
+            planner_bus,
+            lambda bus, _cell: PlannerService(bus, policy, decide_on_arrival=False),
+            ["slow", "fast"],
         )
         served.start()
         try:

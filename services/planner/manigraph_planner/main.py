@@ -85,7 +85,11 @@ def _run(args: argparse.Namespace) -> int:
 
     def planner_of(bus: Bus, _cell: str | None) -> PlannerService:
         return PlannerService(
-            bus, policy, options.explain_decisions, decision_timeout=options.decision_timeout
+            bus,
+            policy,
+            options.explain_decisions,
+            decision_timeout=options.decision_timeout,
+            decide_on_arrival=len(cells) == 1,
         )
 
     return run_cell_services(planner_of, bus_config, cells)

@@ -41,6 +41,10 @@ class PlannerService(Service):
         explain_decisions: also publish an ``Explanation`` after every decision (GNN only),
             so explanations land in the MCAP log beside the decisions.
         decision_timeout: seconds a decision may wait for its skill's final status.
+        decide_on_arrival: decide on the Zenoh thread a scene arrives on when the service is
+            idle (:meth:`Service.on` ``inline``), saving two thread hand-overs on the way to
+            the skill; off where one process serves several cells, so that their decisions
+            run on their own threads rather than one after another on Zenoh's.
 
     A planner process serving several cells runs one of these per cell
     (:mod:`manigraph_shared.cell_services`), sharing only ``policy``: each has its own scene
@@ -58,8 +62,10 @@ class PlannerService(Service):
         policy: Policy,
         explain_decisions: bool = False,
         decision_timeout: float = 30.0,
+        decide_on_arrival: bool = True,
     ) -> None:
         super().__init__(bus)
+        self.decide_on_arrival = decide_on_arrival
         self.decisions = DecisionMaker(policy, decision_timeout=decision_timeout)
         self.gate = SceneGate()
         self.skills_alive = True
@@ -73,7 +79,7 @@ class PlannerService(Service):
             self.explain.prepare()  # every decision is explained: have it before the first
         self.on(EpisodeEvent, self._on_episode)
         self.on(SkillStatus, lambda status: self._act(self.decisions.on_status(status)))
-        self.on(Scene, self._on_scene)
+        self.on(Scene, self._on_scene, inline=self.decide_on_arrival)
         self.on(EmergencyStop, lambda message: self.decisions.on_stop(message.engaged))
         self.bus.watch_alive(self._on_liveliness)
         self.bus.serve(ExplainRequest, self.explain)
@@ -145,7 +151,10 @@ class PlannerService(Service):
             action.goal_id,
             action.scene_sequence,
         )
-        if self.explain_decisions:  # after the action: the skill starts while we explain
-            explanation = self.explain.explain_action(action)
-            if explanation is not None:
-                self.bus.publish(explanation)
+        if self.explain_decisions:  # after the action, on the service thread: the skill
+            self.call_soon(self._publish_explanation, action)  # starts while we explain
+
+    def _publish_explanation(self, action: Action) -> None:
+        explanation = self.explain.explain_action(action)
+        if explanation is not None:
+            self.bus.publish(explanation)
