@@ -3,6 +3,7 @@ from __future__ import annotations
 import json
 import time
 
+import msgspec
 import pytest
 
 from manigraph_shared.errors import MessageError
@@ -18,6 +19,8 @@ from manigraph_shared.messages import (
     LayoutObject,
     MarkerDetections,
     Message,
+    ObjectCategory,
+    Quaternion,
     RobotCommand,
     RobotFeedback,
     Scene,
@@ -29,6 +32,7 @@ from manigraph_shared.messages import (
     Vector3,
     message_type_for_key,
 )
+from manigraph_shared.messages.base import Struct
 
 NOW = 1_700_000_000.0
 
@@ -276,3 +280,39 @@ def test_every_decoder_is_built_at_import_before_any_thread_decodes() -> None:
     result = subprocess.run([sys.executable, "-c", check], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "[]"
+
+
+class _Checked(Struct, frozen=True, kw_only=True):
+    size: float
+
+    def _check(self) -> None:
+        if self.size <= 0:
+            raise ValueError("size: must be > 0")
+
+
+class _CheckedWithEnum(_Checked, frozen=True, kw_only=True):
+    """Inherits a check, adds an enum field: both run (each struct's __post_init__ is built
+    for what it has, see messages/base.py)."""
+
+    category: ObjectCategory
+
+
+class _Plain(_Checked, frozen=True, kw_only=True):
+    """Adds nothing: the inherited check still runs."""
+
+    label: str = ""
+
+
+def test_checks_and_enum_fields_hold_through_inheritance() -> None:
+    assert _CheckedWithEnum(size=1.0, category="block").category is ObjectCategory.BLOCK  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="size"):
+        _CheckedWithEnum(size=0.0, category=ObjectCategory.BLOCK)
+    with pytest.raises(ValueError, match="size"):
+        _Plain(size=-1.0)
+    decoded = msgspec.json.decode(b'{"size": 2.0, "category": "cover"}', type=_CheckedWithEnum)
+    assert decoded.category is ObjectCategory.COVER
+    with pytest.raises(msgspec.ValidationError, match="size"):
+        msgspec.json.decode(b'{"size": 0.0, "category": "cover"}', type=_CheckedWithEnum)
+    with pytest.raises(ValueError, match="unit quaternion"):
+        Quaternion(x=0.5)
+    assert Quaternion(x=0.7071, w=0.7071).w == pytest.approx(0.7071)

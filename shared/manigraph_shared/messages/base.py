@@ -17,6 +17,7 @@ from __future__ import annotations
 import functools
 import math
 import re
+import sys
 import threading
 import types
 import typing
@@ -54,7 +55,84 @@ class Delivery(StrEnum):
     QUERY = "query"
 
 
-class Struct(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+class _StructMeta(msgspec.StructMeta):
+    """msgspec calls a struct's ``__post_init__`` for every value it builds, from C into
+    Python; a K = 40 Scene builds ~280 values, so on the wire this is the hot path. A struct
+    gets one only when it has work to do (a ``_check`` or an enum field, its own or
+    inherited), and then the least: its ``_check`` itself, or a loop over its enum fields."""
+
+    def __new__(
+        mcls, name: str, bases: tuple[type, ...], namespace: dict[str, Any], **kw: Any
+    ) -> _StructMeta:
+        ours = any(isinstance(base, _StructMeta) for base in bases)  # not the root itself
+        if ours and "__post_init__" not in namespace:
+            own = _own_enum_fields(namespace)
+            inherited = tuple(f for base in bases for f in getattr(base, "_enum_names", ()))
+            checks = "_check" in namespace or any(getattr(base, "_checks", False) for base in bases)
+            namespace["_checks"] = checks
+            unresolved = any(getattr(b, "__post_init__", None) is _post_init_any for b in bases)
+            if own is None or unresolved:  # a forward reference: read the fields per value
+                namespace["__post_init__"] = _post_init_any
+            else:
+                enums = inherited + own
+                namespace["_enum_names"] = enums
+                if own or (enums and "_check" in namespace):
+                    namespace["__post_init__"] = _post_init_for(enums, checks)
+                elif "_check" in namespace and not enums:
+                    namespace["__post_init__"] = namespace["_check"]
+                # otherwise the base's own (or none) still holds
+        return super().__new__(mcls, name, bases, namespace, **kw)
+
+
+def _own_enum_fields(namespace: dict[str, Any]) -> tuple[tuple[str, type[Enum]], ...] | None:
+    """The fields a class body declares as (optionally) an enum; None if one cannot be
+    resolved yet (a forward reference)."""
+    module = sys.modules.get(namespace.get("__module__", ""))
+    scope = vars(module) if module is not None else {}
+    found = []
+    for name, annotation in namespace.get("__annotations__", {}).items():
+        if isinstance(annotation, str) and annotation.startswith("ClassVar["):
+            continue  # not a field
+        try:  # a string under ``from __future__ import annotations``: what it names
+            kind = (
+                eval(annotation, scope, dict(namespace))
+                if isinstance(annotation, str)
+                else annotation
+            )
+        except Exception:
+            return None
+        enum = _enum_in(kind)
+        if enum is not None:
+            found.append((name, enum))
+    return tuple(found)
+
+
+def _post_init_for(enums: tuple[tuple[str, type[Enum]], ...], checks: bool) -> Any:
+    """A ``__post_init__`` turning plain values of ``enums`` into the enum, then checking."""
+    setattr_ = msgspec.structs.force_setattr
+
+    def __post_init__(self: Struct) -> None:
+        for name, kind in enums:
+            value = getattr(self, name)
+            if value is not None and value.__class__ is not kind:
+                setattr_(self, name, kind(value))
+        if checks:
+            self._check()
+
+    return __post_init__
+
+
+def _post_init_any(self: Struct) -> None:
+    for name, kind in _enum_fields(type(self)):
+        value = getattr(self, name)
+        if value is not None and value.__class__ is not kind:
+            msgspec.structs.force_setattr(self, name, kind(value))
+    self._check()
+
+
+class Struct(
+    msgspec.Struct, metaclass=_StructMeta, frozen=True, kw_only=True, forbid_unknown_fields=True
+):
     """A nested value inside a message: strict, immutable, finite. Subclasses repeat
     ``frozen=True, kw_only=True`` (msgspec applies ``kw_only`` to a class's own fields).
 
@@ -63,13 +141,6 @@ class Struct(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=Tr
     every decoded or constructed value. Enum fields given as their plain values are turned
     into the enum on construction, as decoding does.
     """
-
-    def __post_init__(self) -> None:
-        for name, kind in _enum_fields(type(self)):
-            value = getattr(self, name)
-            if value is not None and value.__class__ is not kind:
-                msgspec.structs.force_setattr(self, name, kind(value))
-        self._check()
 
     def _check(self) -> None:
         """Cross-field rules; raise ``ValueError("field: why")``."""
@@ -140,6 +211,8 @@ def _enum_in(annotation: object) -> type[Enum] | None:
     """The enum an annotation is (or is optionally): ``Kind`` or ``Kind | None``."""
     if isinstance(annotation, type) and issubclass(annotation, Enum):
         return annotation
+    if typing.get_origin(annotation) is Annotated:
+        return _enum_in(typing.get_args(annotation)[0])
     args = [a for a in typing.get_args(annotation) if a is not type(None)]
     union = typing.get_origin(annotation) in (typing.Union, types.UnionType)
     return _enum_in(args[0]) if union and len(args) == 1 else None
@@ -177,9 +250,12 @@ class Quaternion(Struct, frozen=True, kw_only=True):
     w: Unit = 1.0
 
     def _check(self) -> None:
-        norm = math.sqrt(self.x**2 + self.y**2 + self.z**2 + self.w**2)
-        if abs(norm - 1.0) > 1e-3:
-            raise ValueError(f"not a unit quaternion (norm {norm:.4f})")
+        squared = self.x * self.x + self.y * self.y + self.z * self.z + self.w * self.w
+        if not _UNIT_LOW <= squared <= _UNIT_HIGH:  # |norm - 1| <= 1e-3, without a root
+            raise ValueError(f"not a unit quaternion (norm {math.sqrt(squared):.4f})")
+
+
+_UNIT_LOW, _UNIT_HIGH = (1.0 - 1e-3) ** 2, (1.0 + 1e-3) ** 2
 
 
 class Message(Struct, frozen=True, kw_only=True):
