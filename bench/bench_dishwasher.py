@@ -22,12 +22,10 @@ import os
 import statistics
 import time
 
-from manigraph_lab.episode_loop import run_episode
-from manigraph_lab.in_process import InProcessJointTransport
+from manigraph_lab.episode_loop import panda_driver, run_episode
 from manigraph_planner.policies.base import load_policy
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
 
 def seed_range(text: str) -> list[int]:
@@ -59,9 +57,7 @@ def episode(policy, seed: int, objects: int, preference: str) -> dict:
         policy,
         request,
         backend_factory=backend_factory,
-        driver_factory=lambda backend, _clock: PandaMotionDriver(
-            InProcessJointTransport(backend)  # type: ignore[arg-type]
-        ),
+        driver_factory=panda_driver,
     )
     wall = time.perf_counter() - started
     cpu = time.process_time() - cpu

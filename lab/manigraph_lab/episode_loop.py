@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from manigraph_lab.in_process import InProcessGripperTransport
+from manigraph_lab.in_process import InProcessGripperTransport, InProcessJointTransport
 from manigraph_planner.decisions import DecisionMaker
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.messages import (
@@ -31,6 +31,7 @@ from manigraph_shared.messages import (
 from manigraph_shared.workspace import Workspace
 from manigraph_sim.backend_base import EpisodeBackend, SimBackend
 from manigraph_sim.geometric.backend import GeometricBackend
+from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_skills.drivers.base import RobotDriver
 from manigraph_skills.drivers.gripper import GripperDriver
 from manigraph_skills.pick_and_place import PickAndPlace
@@ -80,6 +81,16 @@ def in_process_skill(
 def gripper_driver(backend: SimBackend, clock: StepClock) -> RobotDriver:
     """The geometric world's robot: the skills' gripper driver, commands straight to the world."""
     return GripperDriver(InProcessGripperTransport(backend), clock)
+
+
+def panda_driver(backend: SimBackend, clock: StepClock | None = None) -> RobotDriver:
+    """The physics world's robot: the skills' Panda driver, trajectories straight to the
+    SAPIEN world (which keeps its own time, so ``clock`` is not used)."""
+    from manigraph_skills.drivers.panda_motion import PandaMotionDriver  # Pinocchio: on demand
+
+    if not isinstance(backend, PhysicsBackend):
+        raise TypeError(f"the Panda driver needs a physics world, not {type(backend).__name__}")
+    return PandaMotionDriver(InProcessJointTransport(backend))
 
 
 def add_noise(scene: Scene, sigma: float, rng: np.random.Generator) -> Scene:

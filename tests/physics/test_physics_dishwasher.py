@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 import sapien
 
-from manigraph_lab.episode_loop import run_episode
-from manigraph_lab.in_process import InProcessJointTransport
+from manigraph_lab.episode_loop import panda_driver, run_episode
 from manigraph_planner.policies.base import load_policy
 from manigraph_shared.messages import (
     Action,
@@ -28,7 +27,6 @@ from manigraph_sim.dishwasher.physics import PHYSICAL_DISH_SIZE, RAIL, physical_
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.physics.backend import PhysicsBackend
 from manigraph_skills.dishwasher.turn_over import quaternion_of
-from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
 #: Seed 8, 10 dishes: bowl_3 lies upside down and plate_3 stands on its rim (x >= 0.3 m), so
 #: both can be loaded by top-down grasps. (Found by listing layouts; no outcome is tuned.)
@@ -172,9 +170,7 @@ def test_the_expert_loads_a_two_dish_episode_in_physics() -> None:
         policy,
         request,
         backend_factory=PhysicsBackend,
-        driver_factory=lambda backend, _clock: PandaMotionDriver(
-            InProcessJointTransport(backend)  # type: ignore[arg-type]
-        ),
+        driver_factory=panda_driver,
     )
     assert record.end.success, [
         (s.action.object_id, s.action.goal_id, s.reason) for s in record.steps
