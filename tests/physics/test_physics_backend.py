@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 import sapien
+from sapien import physx
 
 from manigraph_shared.errors import ConfigError, SkillError
 from manigraph_shared.messages import (
@@ -24,7 +25,7 @@ from manigraph_shared.messages import (
 from manigraph_shared.workspace import Workspace
 from manigraph_sim.backends import create_backend
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_sim.physics.physics_world import ARM_JOINTS, PhysicsConfig
+from manigraph_sim.physics.physics_world import ARM_JOINTS, PhysicsConfig, use_own_physx_defaults
 from manigraph_skills.drivers import Motion
 
 Loop = Any  # tests/physics/conftest.py: Loop
@@ -51,6 +52,29 @@ def test_same_seed_same_moves_same_final_poses(make_loop: Callable[..., Loop]) -
         loop.stack_inverted(2)
         finals.append([o.position.as_tuple() for o in loop.scene().objects])
     assert finals[0] == finals[1]
+
+
+def test_physx_defaults_left_by_other_code_do_not_change_a_world(
+    make_loop: Callable[..., Loop],
+) -> None:
+    """SAPIEN's PhysX defaults are process-wide, and ManiSkill sets its own on every
+    environment it builds (these values): a world built afterwards must not run with them.
+    Before the world set its own, a bowl test failed only after the ManiSkill tests."""
+
+    def final_poses() -> list[tuple[float, float, float]]:
+        loop = make_loop()
+        loop.reset(blocks=2, seed=7)
+        loop.stack_inverted(2)
+        return [o.position.as_tuple() for o in loop.scene().objects]
+
+    alone = final_poses()
+    physx.set_shape_config(contact_offset=0.02, rest_offset=0.0)
+    physx.set_body_config(solver_position_iterations=15, solver_velocity_iterations=1)
+    physx.set_default_material(0.3, 0.3, 0.0)
+    try:
+        assert final_poses() == alone
+    finally:
+        use_own_physx_defaults()
 
 
 def test_a_block_too_slippery_to_hold_is_reported_as_grasp_slipped(

@@ -315,9 +315,10 @@ def test_a_bowl_set_down_beside_a_turned_one_knocks_neither_off_its_slot(loop: L
     first = dishes.act("bowl_3", "top_bowl_02", orientation_index=UPSIDE_DOWN)
     assert first.state is SkillState.SUCCEEDED, first
     # How far a bowl let go of sideways ends up turned is chaotic: 13 degrees in the issue's
-    # run, 3.5 in one full test run (PhysX's result depends on what the process built
-    # before). The turn that caused the knock is set here, about the bowl's own centre, and
-    # the world settles, so the placement beside it is tested whatever the turn-over gave.
+    # run, 3.5 in one full test run (whose world had inherited ManiSkill's PhysX defaults,
+    # before worlds set their own: physics_world.use_own_physx_defaults). The turn that
+    # caused the knock is set here, about the bowl's own centre, and the world settles, so
+    # the placement beside it is tested whatever the turn-over gave.
     world = loop.backend.world
     assert world is not None
     bowl = world.entities["bowl_3"]

@@ -96,6 +96,26 @@ class PhysicsConfig:
         return self.cover_density if category == "cover" else self.block_density
 
 
+#: The default material of a shape given none (static and dynamic friction, restitution):
+#: SAPIEN 3's own.
+DEFAULT_MATERIAL = (0.3, 0.3, 0.1)
+
+
+def use_own_physx_defaults() -> None:
+    """Set SAPIEN's process-wide PhysX defaults (scene, body and shape configuration, the
+    default material) to SAPIEN 3's own, which every world here was tuned and measured with.
+
+    They are globals that other code changes: ManiSkill sets its own (more solver iterations,
+    a thinner contact offset, other friction) on every environment it builds, and a world
+    built after one in the same process then ran with them. A bowl set down beside a turned
+    one came to rest 15 mm off its slot after the ManiSkill tests, within 10 mm alone
+    (issue 33). So every world sets them again before it builds anything."""
+    physx.set_scene_config()
+    physx.set_body_config()
+    physx.set_shape_config()
+    physx.set_default_material(*DEFAULT_MATERIAL)
+
+
 class PhysicsWorld:
     """One episode's SAPIEN scene. Build a new one per episode: a fresh scene stepped with
     the same commands gives the same result (seeded determinism).
@@ -119,6 +139,7 @@ class PhysicsWorld:
         self.render = render
         self.markers = markers if render else None
         self.on_step: list[Callable[[], None]] = []
+        use_own_physx_defaults()
         self.scene = sapien.Scene() if render else sapien.Scene([physx.PhysxCpuSystem()])
         self.scene.set_timestep(c.timestep)
         self.sim_time = 0.0
