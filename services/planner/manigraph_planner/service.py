@@ -41,10 +41,11 @@ class PlannerService(Service):
         explain_decisions: also publish an ``Explanation`` after every decision (GNN only),
             so explanations land in the MCAP log beside the decisions.
         decision_timeout: seconds a decision may wait for its skill's final status.
-        decide_on_arrival: decide on the Zenoh thread a scene arrives on when the service is
-            idle (:meth:`Service.on` ``inline``), saving two thread hand-overs on the way to
-            the skill; off where one process serves several cells, so that their decisions
-            run on their own threads rather than one after another on Zenoh's.
+        decide_on_arrival: handle scenes, statuses, events and stops on the Zenoh thread
+            they arrive on when the service is idle (:meth:`Service.on` ``inline``), saving
+            two thread hand-overs on the way to the skill; off where one process serves
+            several cells, so that their decisions run on their own threads rather than one
+            after another on Zenoh's.
 
     A planner process serving several cells runs one of these per cell
     (:mod:`manigraph_shared.cell_services`), sharing only ``policy``: each has its own scene
@@ -77,10 +78,20 @@ class PlannerService(Service):
             raise PolicyError(f"explain_decisions: {self.explain.problem}")
         if self.explain_decisions:
             self.explain.prepare()  # every decision is explained: have it before the first
-        self.on(EpisodeEvent, self._on_episode)
-        self.on(SkillStatus, lambda status: self._act(self.decisions.on_status(status)))
-        self.on(Scene, self._on_scene, inline=self.decide_on_arrival)
-        self.on(EmergencyStop, lambda message: self.decisions.on_stop(message.engaged))
+        # Every handler is short (at most one decision), so all may run on arrival: a status
+        # or an event handed to the service thread would hold the turn when the scene after
+        # it arrives, and the decision would then wait for the hand-over too.
+        inline = self.decide_on_arrival
+        self.on(EpisodeEvent, self._on_episode, inline=inline)
+        self.on(
+            SkillStatus,
+            lambda status: self._act(self.decisions.on_status(status)),
+            inline=inline,
+        )
+        self.on(Scene, self._on_scene, inline=inline)
+        self.on(
+            EmergencyStop, lambda message: self.decisions.on_stop(message.engaged), inline=inline
+        )
         self.bus.watch_alive(self._on_liveliness)
         self.bus.serve(ExplainRequest, self.explain)
         self.log.info(
