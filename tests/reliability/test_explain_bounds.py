@@ -66,6 +66,9 @@ def test_a_scene_over_the_node_limit_is_refused_before_any_work() -> None:
     with pytest.raises(PolicyError, match=r"scene_too_large: 22 visible nodes.*at most 20"):
         explain(ExplainRequest(scene=big_scene(11)))
     assert time.monotonic() - started < 0.5
+    # Not even the explainer was built (seconds of PyG on a planner just started: a real
+    # planner once took over 3 s to refuse the bomb on a loaded machine, building it first).
+    assert explain.explainer is None
     assert isinstance(explain(ExplainRequest(scene=big_scene(10))), Explanation)
 
 

@@ -6,7 +6,8 @@ import math
 from dataclasses import dataclass
 from enum import StrEnum
 
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.errors import ConfigError, PolicyError
+from manigraph_shared.messages import Scene
 
 __all__ = ["ExplainerConfig", "Objective"]
 
@@ -110,3 +111,13 @@ class ExplainerConfig:
             )
         if self.learning_rate == 0:
             raise ConfigError("learning_rate", "must be > 0")
+
+    def check_size(self, scene: Scene) -> None:
+        """Raises ``PolicyError`` (``scene_too_large``) for a scene over ``max_nodes``. Cheap
+        and free of PyG: a query is refused so before the explainer is even built."""
+        nodes = sum(o.visible for o in scene.objects) + sum(g.visible for g in scene.goals)
+        if nodes > self.max_nodes:
+            raise PolicyError(
+                f"scene_too_large: {nodes} visible nodes, the explainer takes at most "
+                f"{self.max_nodes}"
+            )

@@ -64,9 +64,15 @@ class ExplainHandler:
             self._explainer()
 
     def __call__(self, request: ExplainRequest) -> Explanation:
-        explainer = self._explainer()
+        if self.problem:
+            raise PolicyError(self.problem)
+        # Refused before the explainer is built: a planner just started (building it takes
+        # seconds of PyG imports, far more on a loaded machine) refuses an oversized scene
+        # at once rather than after that build.
+        limits = self.config or ExplainerConfig()
         if request.scene is not None:
-            return explainer.explain_scene(request.scene, request.seed, wait=False)
+            limits.check_size(request.scene)
+            return self._explainer().explain_scene(request.scene, request.seed, wait=False)
         if request.wants_latest:
             found = self.history.latest()
             if found is None:
@@ -82,7 +88,8 @@ class ExplainHandler:
                     f"{self.history.capacity} decisions ({known})"
                 )
         scene, action = found
-        return explainer.explain(
+        limits.check_size(scene)
+        return self._explainer().explain(
             scene, action.object_id, action.goal_id, action.decision_id, request.seed, wait=False
         )
 

@@ -61,12 +61,7 @@ class SceneExplainer:
 
     def check_size(self, scene: Scene) -> None:
         """Raises ``PolicyError`` (``scene_too_large``) for a scene over ``max_nodes``."""
-        nodes = sum(o.visible for o in scene.objects) + sum(g.visible for g in scene.goals)
-        limit = self.masks.config.max_nodes
-        if nodes > limit:
-            raise PolicyError(
-                f"scene_too_large: {nodes} visible nodes, the explainer takes at most {limit}"
-            )
+        self.masks.config.check_size(scene)
 
     def explain(
         self,
