@@ -45,7 +45,9 @@ class PlannerService(Service):
             they arrive on when the service is idle (:meth:`Service.on` ``inline``), saving
             two thread hand-overs on the way to the skill; off where one process serves
             several cells, so that their decisions run on their own threads rather than one
-            after another on Zenoh's.
+            after another on Zenoh's, and with ``explain_decisions`` (an explanation, on the
+            service thread, follows every decision; one queued behind a decision made on
+            arrival was lost when the stack stopped right after the episode's last one).
 
     A planner process serving several cells runs one of these per cell
     (:mod:`manigraph_shared.cell_services`), sharing only ``policy``: each has its own scene
@@ -66,7 +68,9 @@ class PlannerService(Service):
         decide_on_arrival: bool = True,
     ) -> None:
         super().__init__(bus)
-        self.decide_on_arrival = decide_on_arrival
+        # Explaining every decision makes each one a few hundred milliseconds of the service
+        # thread's (the explanation follows its action there), so nothing is gained on arrival.
+        self.decide_on_arrival = decide_on_arrival and not explain_decisions
         self.decisions = DecisionMaker(policy, decision_timeout=decision_timeout)
         self.gate = SceneGate()
         self.skills_alive = True
@@ -162,10 +166,7 @@ class PlannerService(Service):
             action.goal_id,
             action.scene_sequence,
         )
-        if self.explain_decisions:  # after the action, on the service thread: the skill
-            self.call_soon(self._publish_explanation, action)  # starts while we explain
-
-    def _publish_explanation(self, action: Action) -> None:
-        explanation = self.explain.explain_action(action)
-        if explanation is not None:
-            self.bus.publish(explanation)
+        if self.explain_decisions:  # after the action: the skill starts while we explain
+            explanation = self.explain.explain_action(action)
+            if explanation is not None:
+                self.bus.publish(explanation)
