@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
@@ -65,15 +66,33 @@ def summary(explanation: Explanation) -> dict[str, object]:
     return {key: data[key] for key in (*keys, *extra)}
 
 
+#: The planner's refusal while its explainer is at work (one explanation at a time).
+BUSY = "explainer_busy"
+
+
 def explain_online(
     args: argparse.Namespace, decision: str | None, seed: int, timeout: float
 ) -> Explanation:
-    """One query to the planner's ``manigraph/planner/explain``; BusError on error replies."""
+    """The planner's answer on ``manigraph/planner/explain`` within ``timeout`` seconds;
+    BusError on error replies. A planner that explains every decision is often busy with the
+    last one just when a person asks: ``explainer_busy`` is asked again, a little later each
+    time, until ``timeout`` has passed (then that refusal is the error)."""
     from manigraph_shared.bus import Bus
+    from manigraph_shared.errors import RequestRefused
 
     request = ExplainRequest(decision_id=decision, seed=seed)
+    deadline = time.monotonic() + timeout
+    pause = 0.1
     with Bus.open(bus_config_from_args(args, wait_seconds=timeout)) as bus:
-        return bus.request(request, Explanation, timeout=timeout)
+        while True:
+            left = deadline - time.monotonic()
+            try:
+                return bus.request(request, Explanation, timeout=max(left, 0.1))
+            except RequestRefused as exc:
+                if BUSY not in str(exc) or time.monotonic() + pause >= deadline:
+                    raise
+            time.sleep(pause)
+            pause = min(pause * 2, 0.5)
 
 
 def explain_offline(

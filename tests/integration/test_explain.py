@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import Action, ExplainRequest, Explanation
 from manigraph_tools.testing import Stack
 
@@ -109,3 +110,33 @@ def test_explain_without_a_planner_fails_with_a_clear_message(running_stack: Sta
     result = running_stack.run("explain", "--json", "--timeout", "1", timeout=60)
     assert result.returncode == 2
     assert "no answer within 1.0 s" in result.stderr
+
+
+def test_explain_asks_again_while_the_explainer_is_busy(running_stack: Stack) -> None:
+    """A planner explaining every decision is busy with the last one just when a person asks
+    (a CI run under load got ``explainer_busy`` from a planner so): the CLI asks again until
+    its timeout. Here a queryable on the real router is busy twice, then answers."""
+    running_stack.start("router")
+    asked: list[float] = []
+
+    def busy_twice(request: ExplainRequest) -> Explanation:
+        asked.append(time.monotonic())
+        if request.decision_id == "nope:1":
+            raise PolicyError("decision_id: 'nope:1' is not one of the planner's decisions")
+        if len(asked) <= 2:
+            raise PolicyError("explainer_busy: one explanation at a time; ask again later")
+        return Explanation(
+            decision_id="e:0", episode_id="e", scene_sequence=1, policy="gnn-sage",
+            object="block_0", goal="goal_0", edges=[], features={}, nodes=[],
+            sentence="block_0 was chosen", fidelity=1.0, seed=0, stamp=time.time(),
+        )  # fmt: skip
+
+    with running_stack.client() as planner:
+        planner.serve(ExplainRequest, busy_twice)
+        answer = running_stack.run("explain", "--json", "--timeout", "4", timeout=60)
+        assert answer.returncode == 0, answer.stderr
+        assert last_json(answer.stdout)["decision_id"] == "e:0"
+        assert len(asked) == 3
+        refused = running_stack.run("explain", "--decision", "nope:1", "--json", timeout=60)
+        assert refused.returncode == 2 and "'nope:1' is not one of" in refused.stderr
+        assert len(asked) == 4  # any other refusal is final: asked once
