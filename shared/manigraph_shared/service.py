@@ -1,9 +1,11 @@
 """What every manigraph service process shares: a bus, one inbox, health, clean shutdown.
 
 Service logic lives in plain classes that take and return messages; a :class:`Service` only
-wires them to the bus. All handlers of one service run on one thread, in arrival order, so the
-logic needs no locks. A payload that fails validation is logged, counted and reported as an
-error ``ServiceStatus`` (so it also lands in the MCAP log) and the service keeps running.
+wires them to the bus. The handlers of one service run one at a time, in arrival order, so the
+logic needs no locks: on the service thread, or (``inline``, see :meth:`Service.on`) on the
+Zenoh thread a sample arrived on when the service was idle. A payload that fails validation
+is logged, counted and reported as an error ``ServiceStatus`` (so it also lands in the MCAP
+log) and the service keeps running.
 
 What a flood can cost is bounded: the inbox holds at most ``INBOX_CAPACITY`` samples and one
 waiting sample per state stream (:mod:`manigraph_shared.inbox` states the overflow policy);
@@ -265,7 +267,8 @@ class Service:
     def run(self) -> None:
         health = HealthFile.from_environment(self.bus.session)
         self.publish_status(ServiceState.STARTING)
-        self.setup()
+        with self._turn:  # no inline handler before the service is set up
+            self.setup()
         self.bus.declare_alive(self.name)
         self.publish_status(ServiceState.OK, "ready")
         self.log.info("ready")
@@ -294,6 +297,7 @@ class Service:
                     health.beat()
                     self._trim_heap()
         finally:
+            self._turn.acquire()  # for good: no inline handler beside or after the teardown
             health.clear()
             self.publish_status(ServiceState.STOPPING)
             self.teardown()
