@@ -12,7 +12,13 @@ from pathlib import Path
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError, LogError
-from manigraph_shared.messages import Action, ExplainRequest, Explanation, Scene
+from manigraph_shared.messages import (
+    EXPLAINER_BUSY,
+    Action,
+    ExplainRequest,
+    Explanation,
+    Scene,
+)
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
@@ -66,10 +72,6 @@ def summary(explanation: Explanation) -> dict[str, object]:
     return {key: data[key] for key in (*keys, *extra)}
 
 
-#: The planner's refusal while its explainer is at work (one explanation at a time).
-BUSY = "explainer_busy"
-
-
 def explain_online(
     args: argparse.Namespace, decision: str | None, seed: int, timeout: float
 ) -> Explanation:
@@ -89,7 +91,7 @@ def explain_online(
             try:
                 return bus.request(request, Explanation, timeout=max(left, 0.1))
             except RequestRefused as exc:
-                if BUSY not in str(exc) or time.monotonic() + pause >= deadline:
+                if EXPLAINER_BUSY not in str(exc) or time.monotonic() + pause >= deadline:
                     raise
             time.sleep(pause)
             pause = min(pause * 2, 0.5)

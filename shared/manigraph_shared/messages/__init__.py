@@ -76,13 +76,14 @@ __all__ += [
 ]
 
 from manigraph_shared.messages.explanation import (  # noqa: E402  (appended: the explainer)
+    EXPLAINER_BUSY,
     ExplainedEdge,
     ExplainedNode,
     ExplainRequest,
     Explanation,
 )
 
-__all__ += ["ExplainRequest", "ExplainedEdge", "ExplainedNode", "Explanation"]
+__all__ += ["EXPLAINER_BUSY", "ExplainRequest", "ExplainedEdge", "ExplainedNode", "Explanation"]
 
 from manigraph_shared.messages.estop import EmergencyStop  # noqa: E402  (appended: the e-stop)
 

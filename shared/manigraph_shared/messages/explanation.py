@@ -12,6 +12,9 @@ from manigraph_shared.messages.scene import MAX_ENTITIES, Scene
 
 #: ``decision_id`` of a request that asks for the newest decision.
 LATEST = "latest"
+#: Start of the planner's refusal while its explainer is at work (one explanation at a time):
+#: the one refusal a client may ask again after.
+EXPLAINER_BUSY = "explainer_busy"
 MAX_EXPLAINED_EDGES = 64
 IDENTIFIER_PATTERN = r"^[A-Za-z0-9_.:\-]{1,64}$"
 

@@ -13,7 +13,13 @@ from manigraph_planner.gnn.features import FEATURE_SPEC, GraphState, scene_to_gr
 from manigraph_planner.policies.base import Policy
 from manigraph_planner.policies.gnn import GNNPolicy
 from manigraph_shared.errors import PolicyError
-from manigraph_shared.messages import ExplainedEdge, ExplainedNode, Explanation, Scene
+from manigraph_shared.messages import (
+    EXPLAINER_BUSY,
+    ExplainedEdge,
+    ExplainedNode,
+    Explanation,
+    Scene,
+)
 
 __all__ = ["SceneExplainer", "sentence", "to_message"]
 
@@ -90,7 +96,7 @@ class SceneExplainer:
         seed = self.masks.config.seed if seed is None else seed
         config = self.masks.config
         if not self._lock.acquire(blocking=True, timeout=config.deadline_seconds if wait else 0):
-            raise PolicyError("explainer_busy: one explanation at a time; ask again later")
+            raise PolicyError(f"{EXPLAINER_BUSY}: one explanation at a time; ask again later")
         try:
             deadline = time.monotonic() + config.deadline_seconds
             result = self.masks.explain(
