@@ -58,6 +58,10 @@ class EpisodeEvent(Message, frozen=True, kw_only=True):
     goals_total: Annotated[int, Meta(ge=0)]
     goals_filled: Annotated[int, Meta(ge=0)]
     steps: Annotated[int, Meta(ge=0, description="skills executed so far")] = 0
+    goals_wrong_object: Annotated[
+        int,
+        Meta(ge=0, description="goals holding an object their ``accepts`` does not admit"),
+    ] = 0
     success: Annotated[bool | None, Meta(description="all goals filled; set at end")] = None
     reason: Annotated[str, Meta(max_length=256, description="why it ended")] = ""
     sim_seconds: Annotated[

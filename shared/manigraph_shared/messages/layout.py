@@ -14,7 +14,13 @@ import msgspec
 from msgspec import Meta
 
 from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp, Struct, Vector3
-from manigraph_shared.messages.scene import MAX_ENTITIES, GoalCategory, ObjectCategory
+from manigraph_shared.messages.scene import (
+    MAX_ENTITIES,
+    Accepts,
+    Attributes,
+    GoalCategory,
+    ObjectCategory,
+)
 
 
 class LayoutObject(Struct, frozen=True, kw_only=True):
@@ -26,6 +32,7 @@ class LayoutObject(Struct, frozen=True, kw_only=True):
     position: Annotated[
         Vector3, Meta(description="where it starts (centre, metres, robot base frame)")
     ]
+    attributes: Attributes = msgspec.field(default_factory=dict)
 
 
 class LayoutGoal(Struct, frozen=True, kw_only=True):
@@ -35,6 +42,7 @@ class LayoutGoal(Struct, frozen=True, kw_only=True):
     category: GoalCategory
     position: Annotated[Vector3, Meta(description="where the object's centre should be, metres")]
     optional: Annotated[bool, Meta(description="may stay empty at the end (cover storage)")] = False
+    accepts: Accepts = msgspec.field(default_factory=dict)
 
 
 class LayoutContainer(Struct, frozen=True, kw_only=True):

@@ -19,6 +19,41 @@ from manigraph_shared.messages.base import (
 )
 
 MAX_ENTITIES = 256
+#: Attributes one object may carry (colour, label, ...), and keys one goal's ``accepts`` may list.
+MAX_ATTRIBUTES = 16
+
+AttributeName = Annotated[
+    str,
+    Meta(
+        pattern=r"^[a-z][a-z0-9_]{0,31}$",
+        description="attribute name: lower case, 1-32 of [a-z0-9_], starting with a letter",
+    ),
+]
+AttributeValue = (
+    Annotated[str, Meta(min_length=1, max_length=64)] | Annotated[float, Meta(ge=-1e6, le=1e6)]
+)
+#: What a goal's ``accepts`` lists under a key: a value an object's attribute must equal, an
+#: object id (key ``id``) or full extents (key ``size``, matched within 1 mm).
+AcceptValue = (
+    AttributeValue
+    | Annotated[list[Annotated[float, Meta(gt=0.0, le=2.0)]], Meta(min_length=3, max_length=3)]
+)
+Attributes = Annotated[
+    dict[AttributeName, AttributeValue],
+    Meta(
+        max_length=MAX_ATTRIBUTES,
+        description="what the task tells objects apart by (colour, label, ...): text or number",
+    ),
+]
+Accepts = Annotated[
+    dict[AttributeName, AcceptValue],
+    Meta(
+        max_length=MAX_ATTRIBUTES,
+        description="what an object must carry to fill this goal: every key must match "
+        "(an attribute's value, ``id``, or ``size`` within 1 mm); empty: any object of its "
+        "category",
+    ),
+]
 
 
 class ObjectCategory(StrEnum):
@@ -51,10 +86,11 @@ class SceneObject(Struct, frozen=True, kw_only=True):
     ]
     orientation: Quaternion = Quaternion()
     size: Annotated[Vector3, Meta(description="full extents along the object's axes, metres")]
-    filled: Annotated[bool, Meta(description="the object rests in a goal of its category")] = False
+    filled: Annotated[bool, Meta(description="the object rests in a goal that accepts it")] = False
     visible: Annotated[bool, Meta(description="observed now (false: occluded or inside a box)")] = (
         True
     )
+    attributes: Attributes = msgspec.field(default_factory=dict)
 
     def _check(self) -> None:
         if min(self.size.as_tuple()) <= 0.0 or max(self.size.as_tuple()) > 2.0:
@@ -68,11 +104,12 @@ class SceneGoal(Struct, frozen=True, kw_only=True):
     category: GoalCategory
     position: Annotated[Vector3, Meta(description="where the object's centre should be, metres")]
     orientation: Quaternion = Quaternion()
-    filled: Annotated[bool, Meta(description="an object of the right category occupies it")] = False
+    filled: Annotated[bool, Meta(description="an object it accepts occupies it")] = False
     visible: Annotated[bool, Meta(description="observed now (false: inside a closed box)")] = True
     rack: Annotated[
         Identifier | None, Meta(description="the dishwasher rack holding this slot")
     ] = None
+    accepts: Accepts = msgspec.field(default_factory=dict)
 
 
 class SceneRack(Struct, frozen=True, kw_only=True):
