@@ -13,7 +13,12 @@ category = "block"               # block | cover (checked against the layout)
 size = 0.034                     # side of the black square, metres
 face = "top"                     # top | bottom | +x | -x | +y | -y of the object's box
 offset = [0.0, 0.0]              # marker centre on the face, metres (face right, face up)
+attributes = { colour = "red" }  # optional: what the task tells this object apart by
 ```
+
+``attributes`` (text or number values) are the object's: perception puts them on the object in
+every Scene, over what the layout says, so a goal's ``accepts`` (docs/task-files.md) is judged
+on what the camera identified. Markers of one object may each list them; they must agree.
 
 Each face has a frame: ``normal`` points out of the object, ``up`` is the printed marker's
 up (towards the object's +x on top and bottom, +z on the sides) and ``right = up x normal``.
@@ -23,6 +28,7 @@ moved to the face centre plus ``offset``.
 
 from __future__ import annotations
 
+import json
 import tomllib
 from collections.abc import Iterable
 from pathlib import Path
@@ -38,6 +44,10 @@ DICTIONARIES = {
     f"DICT_{bits}X{bits}_{count}": count for bits in (4, 5, 6, 7) for count in (50, 100, 250, 1000)
 }
 Face = Literal["top", "bottom", "+x", "-x", "+y", "-y"]
+AttributeName = Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]{0,31}$")]
+AttributeValue = (
+    Annotated[str, Field(min_length=1, max_length=64)] | Annotated[float, Field(ge=-1e6, le=1e6)]
+)
 
 #: (normal, up) of each face in the object's frame.
 FACE_AXES: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
@@ -61,6 +71,7 @@ class MarkerSpec(_Strict):
     size: float = Field(gt=0.005, le=0.5, description="black square side, metres")
     face: Face = "top"
     offset: tuple[float, float] = (0.0, 0.0)
+    attributes: dict[AttributeName, AttributeValue] = Field(default_factory=dict, max_length=16)
 
 
 class MarkerMap(_Strict):
@@ -82,7 +93,23 @@ class MarkerMap(_Strict):
         for marker in self.markers:
             if categories.setdefault(marker.object, marker.category) != marker.category:
                 raise ValueError(f"markers: object '{marker.object}' has two categories")
+        attributes: dict[str, dict[str, str | float]] = {}
+        for marker in self.markers:
+            known = attributes.setdefault(marker.object, {})
+            for name, value in marker.attributes.items():
+                if known.setdefault(name, value) != value:
+                    raise ValueError(
+                        f"markers: object '{marker.object}' has two values of {name} "
+                        f"({known[name]!r} and {value!r}, marker {marker.id})"
+                    )
         return self
+
+    def attributes_of(self, object_id: str) -> dict[str, str | float]:
+        """The attributes the markers of ``object_id`` give it (empty if none)."""
+        merged: dict[str, str | float] = {}
+        for marker in self.for_object(object_id):
+            merged.update(marker.attributes)
+        return merged
 
     def by_id(self) -> dict[int, MarkerSpec]:
         return {m.id: m for m in self.markers}
@@ -114,9 +141,17 @@ class MarkerMap(_Strict):
                 f"size = {m.size}",
                 f'face = "{m.face}"',
                 f"offset = [{m.offset[0]}, {m.offset[1]}]",
+                *([f"attributes = {{ {_inline(m.attributes)} }}"] if m.attributes else []),
                 "",
             ]
         return "\n".join(lines)
+
+
+def _inline(attributes: dict[str, str | float]) -> str:
+    return ", ".join(
+        f"{name} = {json.dumps(value) if isinstance(value, str) else repr(float(value))}"
+        for name, value in attributes.items()
+    )
 
 
 def parse_marker_map(text: str, source: str = "marker map") -> MarkerMap:

@@ -129,3 +129,34 @@ def test_a_block_seen_on_the_ray_through_its_belief_has_not_moved() -> None:
     world.update(_seen_along_ray([0.45, 0.1, 0.02], 0.0), 3.0)
     assert np.linalg.norm(world.beliefs["block_0"].position - [0.45, 0.1, 0.02]) < 1e-6
     assert world.filled_by == {}
+
+
+def _colour_layout() -> TaskLayout:
+    return TaskLayout(
+        episode_id="colours",
+        stamp=0.0,
+        objects=[
+            LayoutObject(id="block_0", category="block", size=BLOCK, position=BLOCK),
+        ],
+        goals=[
+            LayoutGoal(
+                id="red_slot",
+                category="block",
+                position=Vector3(x=0.5, y=0.0, z=0.02),
+                accepts={"colour": "red"},
+            )
+        ],
+    )
+
+
+def test_a_goal_fills_only_with_an_object_it_accepts_by_the_markers_attributes() -> None:
+    for colour, filled in (("red", True), ("blue", False)):
+        world = WorldModel(WorldConfig(fill_enter=0.02, fill_exit=0.03))
+        world.set_layout(_colour_layout(), {"block_0": {"colour": colour}})
+        world.update(_seen_at(0.0), 1.0)
+        scene = world.scene(1.0, 1.0)
+        assert scene is not None
+        assert scene.object("block_0").attributes == {"colour": colour}
+        assert scene.goal("red_slot").accepts == {"colour": "red"}
+        assert scene.goal("red_slot").filled is filled
+        assert scene.object("block_0").filled is filled

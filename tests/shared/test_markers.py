@@ -78,3 +78,47 @@ def test_face_frames_point_out_of_the_object() -> None:
         assert np.isclose(pose[normal, 3], depth)
         assert np.isclose(abs(pose[normal, 2]), 1.0)  # the marker's z is the face normal
         assert np.isclose(np.linalg.det(pose[:3, :3]), 1.0)
+
+
+def test_markers_give_their_object_attributes_that_survive_toml() -> None:
+    text = """
+[[markers]]
+id = 0
+object = "block_0"
+category = "block"
+size = 0.034
+attributes = { colour = "red", grade = 2 }
+
+[[markers]]
+id = 1
+object = "block_0"
+category = "block"
+size = 0.034
+face = "+x"
+"""
+    markers = parse_marker_map(text)
+    assert markers.attributes_of("block_0") == {"colour": "red", "grade": 2.0}
+    assert parse_marker_map(markers.to_toml()).attributes_of("block_0") == {
+        "colour": "red",
+        "grade": 2.0,
+    }
+
+
+def test_markers_of_one_object_that_disagree_on_an_attribute_are_refused() -> None:
+    text = """
+[[markers]]
+id = 0
+object = "block_0"
+category = "block"
+size = 0.034
+attributes = { colour = "red" }
+
+[[markers]]
+id = 1
+object = "block_0"
+category = "block"
+size = 0.034
+attributes = { colour = "blue" }
+"""
+    with pytest.raises(ConfigError, match="two values of colour"):
+        parse_marker_map(text)

@@ -1,5 +1,6 @@
 """A real lab's layout: a TOML file in the task file's format (``[[objects]]`` with id,
-category, position, size; ``[[goals]]`` with id, category, position, optional;
+category, position, size, attributes; ``[[goals]]`` with id, category, position, optional,
+accepts;
 ``[[containers]]`` with id, centre, inner, height; ``partially_observable``), read into the
 contract's ``TaskLayout``. See docs/perception.md."""
 
@@ -32,6 +33,7 @@ def load_layout(path: str | Path, episode_id: str = "live") -> TaskLayout:
                 "category": o["category"],
                 "position": _xyz(o["position"]),
                 "size": _xyz(o.get("size", [0.04, 0.04, 0.04])),
+                "attributes": o.get("attributes", {}),
             }
             for o in data.get("objects", [])
         ]
@@ -41,6 +43,7 @@ def load_layout(path: str | Path, episode_id: str = "live") -> TaskLayout:
                 "category": g["category"],
                 "position": _xyz(g["position"]),
                 "optional": g.get("optional", False),
+                "accepts": g.get("accepts", {}),
             }
             for g in data.get("goals", [])
         ]

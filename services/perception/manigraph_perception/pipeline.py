@@ -72,7 +72,9 @@ class Perception:
         self.markers.check_objects((o.id, o.category.value) for o in layout.objects)
         sizes = {o.id: np.array(o.size.as_tuple()) for o in layout.objects}
         self.poser = ObjectPoser(self.markers, self.calibration, sizes)
-        self.world.set_layout(layout)
+        self.world.set_layout(
+            layout, {o.id: self.markers.attributes_of(o.id) for o in layout.objects}
+        )
 
     @property
     def layout(self) -> TaskLayout | None:

@@ -7,7 +7,8 @@ hysteresis, and a stale flag.
 * ``visible`` follows the sim's meaning: false only for what a closed box hides under
   partial observability (a box seen open once stays revealed, as in the sim), so the planner
   gets the same graph from either source.
-* A goal becomes filled when an object of its category rests within ``fill_enter`` of it and
+* A goal becomes filled when an object of its category that it accepts (``accepts``: colour,
+  label, size, id; ``manigraph_shared.acceptance``) rests within ``fill_enter`` of it and
   stays filled until that object is more than ``fill_exit`` away: a pose that jitters around
   the threshold does not flicker the feature the paper found most fragile on hardware.
 * The Scene is ``stale`` when no marker of a layout object was seen in the last frame, or
@@ -27,6 +28,7 @@ import numpy as np
 
 from manigraph_perception.detection import ObjectPose
 from manigraph_perception.resting import RestConfig, Support, rest_on_support
+from manigraph_shared.acceptance import admits
 from manigraph_shared.messages import (
     Quaternion,
     Scene,
@@ -78,6 +80,8 @@ class WorldModel:
         #: The camera's centre in the robot base frame (needed to rest blocks on supports).
         self.camera = None if camera is None else np.asarray(camera, dtype=float)
         self.layout: TaskLayout | None = None
+        #: Each object's attributes: the layout's, then what its markers say over them.
+        self.attributes: dict[str, dict[str, str | float]] = {}
         self.beliefs: dict[str, _Belief] = {}
         self.filled_by: dict[str, str] = {}  # goal id -> object id
         self.revealed: set[str] = set()
@@ -88,11 +92,16 @@ class WorldModel:
         self.carrying: tuple[str, str] | None = None
         self.holding = False
 
-    def set_layout(self, layout: TaskLayout) -> bool:
-        """Start believing ``layout``'s episode; False if it is the one already held."""
+    def set_layout(
+        self, layout: TaskLayout, attributes: dict[str, dict[str, str | float]] | None = None
+    ) -> bool:
+        """Start believing ``layout``'s episode; False if it is the one already held.
+        ``attributes`` (by object id: what its markers say) go over the layout's own."""
         if self.layout is not None and layout.episode_id == self.layout.episode_id:
             return False
         self.layout = layout
+        given = attributes or {}
+        self.attributes = {o.id: {**o.attributes, **given.get(o.id, {})} for o in layout.objects}
         self.beliefs = {
             o.id: _Belief(np.array(o.position.as_tuple()), np.array([0.0, 0.0, 0.0, 1.0]))
             for o in layout.objects
@@ -167,6 +176,7 @@ class WorldModel:
                 size=sizes[object_id],
                 filled=object_id in filled_objects,
                 visible=not self._hidden(belief.position),
+                attributes=self.attributes.get(object_id, {}),
             )
             for object_id, belief in self.beliefs.items()
         ]
@@ -177,6 +187,7 @@ class WorldModel:
                 position=goal.position,
                 filled=goal.id in self.filled_by,
                 visible=not self._hidden(np.array(goal.position.as_tuple())),
+                accepts=goal.accepts,
             )
             for goal in layout.goals
         ]
@@ -237,7 +248,7 @@ class WorldModel:
 
     def _update_filled(self) -> None:
         assert self.layout is not None
-        categories = {o.id: o.category.value for o in self.layout.objects}
+        objects = {o.id: o for o in self.layout.objects}
         kept: dict[str, str] = {}
         for goal in self.layout.goals:
             target = np.array(goal.position.as_tuple())
@@ -248,7 +259,13 @@ class WorldModel:
             candidates = [
                 (self._distance(object_id, target), object_id)
                 for object_id in self.beliefs
-                if categories[object_id] == goal.category.value
+                if objects[object_id].category.value == goal.category.value
+                and admits(
+                    goal.accepts,
+                    object_id,
+                    objects[object_id].size.as_tuple(),
+                    self.attributes.get(object_id, {}),
+                )
             ]
             if candidates:
                 distance, nearest = min(candidates)
