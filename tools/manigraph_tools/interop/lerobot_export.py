@@ -156,6 +156,7 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
     }
     columns.update({name: [] for name in ("filled", "visible", "open", "rack")})
     ids: list[str] = []
+    attributes: list[dict[str, Any]] = []
 
     def node(category: str, entity: Any, size: list[float], filled: bool, visible: bool) -> None:
         q = getattr(entity, "orientation", None)
@@ -170,6 +171,9 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
         rack = getattr(entity, "rack", None)
         columns["rack"].append(racks.get(rack, -1) if rack is not None else -1)
         ids.append(entity.id)
+        attributes.append(
+            dict(getattr(entity, "attributes", None) or getattr(entity, "accepts", {}))
+        )
 
     for obj in scene.objects:
         node(
@@ -187,6 +191,7 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
         f"{codes.NODES}.{name}": values + [pads[name]] * padding for name, values in columns.items()
     }
     row[f"{codes.NODES}.ids"] = json.dumps(ids)
+    row[f"{codes.NODES}.attributes"] = json.dumps(attributes)
     return row
 
 

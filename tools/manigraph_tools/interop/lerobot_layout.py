@@ -50,6 +50,8 @@ def node_features(max_nodes: int) -> dict[str, dict[str, Any]]:
         f"{NODES}.open": column("bool", names=["node"]),
         f"{NODES}.rack": column("int64", names=["node"]),
         f"{NODES}.ids": {"dtype": "string", "shape": [1], "names": None},
+        #: JSON: per node, an object's attributes or a goal's accepts ({} for neither).
+        f"{NODES}.attributes": {"dtype": "string", "shape": [1], "names": None},
     }
 
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import zlib
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -30,6 +31,7 @@ import numpy as np
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from manigraph_shared.colours import colour_of, describe
 from manigraph_shared.messages import (
     Action,
     CameraInfo,
@@ -161,8 +163,13 @@ def _colour(r: float, g: float, b: float, a: float = 1.0) -> Any:
     return _new("std_msgs/msg/ColorRGBA", r=r, g=g, b=b, a=a)
 
 
-def _object_colour(entity_id: str, category: ObjectCategory, visible: bool) -> Any:
+def _object_colour(
+    entity_id: str, category: ObjectCategory, visible: bool, attributes: Mapping[str, object]
+) -> Any:
     alpha = 1.0 if visible else 0.3
+    named = colour_of(attributes)
+    if named is not None:  # the task's own colour (a colour-sort block is drawn red)
+        return _colour(*named, alpha)
     if category is ObjectCategory.COVER:
         return _colour(0.72, 0.53, 0.32, alpha)
     hue = marker_id(entity_id) % 360 / 360
@@ -230,18 +237,22 @@ def scene_markers(scene: Scene) -> Any:
     sizes: dict[str, tuple[float, float, float]] = {}
     for item in scene.objects:
         sizes.setdefault(item.category.value, item.size.as_tuple())
-        colour = _object_colour(item.id, item.category, item.visible)
+        colour = _object_colour(item.id, item.category, item.visible, item.attributes)
         pose = _pose(item.position, item.orientation)
-        markers.append(_cube("objects", item.id, stamp, frame, pose, item.size.as_tuple(), colour))
+        cube = _cube("objects", item.id, stamp, frame, pose, item.size.as_tuple(), colour)
+        if item.attributes:
+            cube.text = f"{item.id} ({describe(item.attributes)})"
+        markers.append(cube)
     for goal in scene.goals:
         alpha = GOAL_ALPHA if goal.visible else GOAL_ALPHA / 3
         colour = _colour(0.18, 0.8, 0.25, alpha) if goal.filled else _colour(1.0, 0.6, 0.1, alpha)
         size = sizes.get(goal.category.value, DEFAULT_SIZE)
-        markers.append(
-            _cube(
-                "goals", goal.id, stamp, frame, _pose(goal.position, goal.orientation), size, colour
-            )
+        cube = _cube(
+            "goals", goal.id, stamp, frame, _pose(goal.position, goal.orientation), size, colour
         )
+        if goal.accepts:
+            cube.text = f"{goal.id} (accepts {describe(goal.accepts)})"
+        markers.append(cube)
     return _new(MARKER_ARRAY, markers=markers)
 
 

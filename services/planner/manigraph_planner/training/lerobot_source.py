@@ -127,6 +127,13 @@ def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
             "dataset", f"column '{NODES}.ids' names {len(ids)} nodes where the mask has {count}"
         )
     racks = {k: ids[k] for k in range(count) if _category(row[f"{NODES}.category"][k]) == "rack"}
+    # Datasets exported before attributes existed have no such column: none then.
+    attributes = json.loads(row.get(f"{NODES}.attributes") or "[]") or [{}] * count
+    if len(attributes) != count:
+        raise ConfigError(
+            "dataset",
+            f"column '{NODES}.attributes' names {len(attributes)} nodes where the mask has {count}",
+        )
     objects, goals, scene_racks = [], [], []
     for k in range(count):
         kind, _, name = _category(row[f"{NODES}.category"][k]).partition(":")
@@ -146,6 +153,7 @@ def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
                     size=Vector3(x=sx, y=sy, z=sz),
                     filled=filled,
                     visible=visible,
+                    attributes=attributes[k],
                 )
             )
         elif kind == "goal":
@@ -159,6 +167,7 @@ def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
                     filled=filled,
                     visible=visible,
                     rack=racks.get(rack) if rack >= 0 else None,
+                    accepts=attributes[k],
                 )
             )
         else:
