@@ -3,7 +3,9 @@ that ``manigraph export`` wrote), write a checkpoint.
 
 The logs say which policy they teach: decisions on dishwasher scenes (with racks) train the
 four-headed dishwasher policy (``dishwasher.training``), any other the paper's object and goal
-heads. ``--heads`` chooses where a log holds both."""
+heads. ``--heads`` chooses where a log holds both. Scenes whose objects carry attributes or
+whose goals list what they accept (a task file's) train with the task's feature columns,
+learned from the scenes and stamped in the checkpoint (docs/training.md)."""
 
 from __future__ import annotations
 
@@ -94,6 +96,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.copies is not None:
         config = replace(config, augmentation=augmentation_for(args.arch, copies=args.copies))
     demos = load_demonstrations(args.demos)
+    config = config.for_task(demos.feature_spec)  # a task's columns, generic augmentation
     net, metrics = train(demos, config, progress=sys.stderr)  # a bar on a terminal only
     output = args.output or default_output(args.arch, args.seed)
     output.parent.mkdir(parents=True, exist_ok=True)
@@ -104,7 +107,8 @@ def _run(args: argparse.Namespace) -> int:
         data_hash=demos.data_hash,
         metrics=metrics,
     )
-    print(json.dumps({"checkpoint": str(output), **metrics}))
+    features = list(demos.feature_spec.names)
+    print(json.dumps({"checkpoint": str(output), **metrics, "features": features}))
     return 0
 
 

@@ -32,9 +32,9 @@ from typing import Any, NamedTuple
 
 import torch
 
+from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_planner.gnn.models.build import policy_net_for
-from manigraph_planner.gnn.models.config import feature_spec_for
 from manigraph_shared.errors import ConfigError, PolicyError
 
 __all__ = ["CheckpointInfo", "LoadedCheckpoint", "load_checkpoint", "save_checkpoint"]
@@ -107,7 +107,7 @@ def save_checkpoint(
         "format_version": FORMAT_VERSION,
         "manigraph_version": manigraph_version(),
         "model": net.config.to_dict(),
-        "feature_spec": feature_spec_for(net.config.heads).to_dict(),
+        "feature_spec": net.config.feature_spec.to_dict(),
         "training_config": training_config,
         "data_hash": data_hash,
         "metrics": metrics,
@@ -147,8 +147,9 @@ def load_checkpoint(path: str | os.PathLike[str], message_passing: bool = True) 
             f"checkpoint: {path} is not a readable manigraph checkpoint ({why})"
         ) from exc
     _check_envelope(payload, path)
-    model = _model_config(payload["model"])
-    _check_feature_spec(payload["feature_spec"], model.heads)
+    task_spec = _task_feature_spec(payload["feature_spec"], payload["model"])
+    model = _model_config(payload["model"], task_spec)
+    _check_feature_spec(payload["feature_spec"], model.feature_spec)
     net = policy_net_for(model, message_passing)
     problem = _state_dict_problem(net, payload["state_dict"])
     if problem:
@@ -198,15 +199,30 @@ def _check_envelope(payload: Any, path: str | os.PathLike[str]) -> None:
             )
 
 
-def _check_feature_spec(stored: dict[str, Any], heads: str) -> None:
-    """``stored`` must be the spec this code builds for a policy with ``heads``."""
-    expected = feature_spec_for(heads).to_dict()
+def _task_feature_spec(stored: dict[str, Any], model: dict[str, Any]) -> FeatureSpec | None:
+    """The task's spec a checkpoint stamps (``feature_spec.task``), or None: the heads'."""
+    if "task" not in stored:
+        return None
+    if model.get("heads", "object-goal") != "object-goal":
+        raise PolicyError("checkpoint feature_spec.task: only 'object-goal' heads take one")
+    try:
+        return FeatureSpec.from_dict(stored)
+    except (TypeError, ValueError) as exc:
+        raise PolicyError(f"checkpoint feature_spec.{exc}") from None
+
+
+def _check_feature_spec(stored: dict[str, Any], spec: FeatureSpec) -> None:
+    """``stored`` must be ``spec``: the one this code builds for the checkpoint's heads, or
+    the task's spec it stamps."""
+    expected = spec.to_dict()
     for key in sorted(set(stored) | set(expected)):
         if key not in expected:
             raise PolicyError(f"checkpoint feature_spec.{key}: unexpected key")
         if key not in stored:
             raise PolicyError(f"checkpoint feature_spec.{key}: missing")
         have, want = stored[key], expected[key]
+        if key == "task":
+            continue  # read back by FeatureSpec.from_dict, which checked it whole
         if isinstance(want, list):
             have, want = tuple(have) if isinstance(have, list | tuple) else have, tuple(want)
         if have != want:
@@ -216,9 +232,9 @@ def _check_feature_spec(stored: dict[str, Any], heads: str) -> None:
             )
 
 
-def _model_config(stored: dict[str, Any]) -> ModelConfig:
+def _model_config(stored: dict[str, Any], features: FeatureSpec | None = None) -> ModelConfig:
     try:
-        return ModelConfig.from_dict(stored)
+        return ModelConfig.from_dict(stored, features)
     except ConfigError as exc:
         raise PolicyError(f"checkpoint model.{exc}") from exc
     except TypeError as exc:  # a value of a type the dataclass cannot even compare

@@ -17,6 +17,11 @@ Each node has the 5-dimensional feature
 * :math:`f` — 1 if a goal is filled or an object rests in a goal of its category, else 0.
 
 Only ``visible`` objects and goals become nodes: the policy must not see inside a closed box.
+
+A policy trained on task-file demonstrations whose objects carry ``attributes`` or whose goals
+list what they ``accepts`` has wider nodes: these five columns, then the columns of the
+:class:`~.task_features.TaskFeatures` learned from the demonstrations' scenes and stamped in
+its checkpoint (``FeatureSpec.task``; :func:`scene_to_graph` takes the spec).
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ from typing import Any
 import torch
 from torch import Tensor
 
+from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneGoal, SceneObject
 
@@ -51,6 +57,8 @@ class FeatureSpec:
         category_codes: ``(category, code)`` pairs for the ``category`` column.
         version: bump when the meaning changes without the names or codes changing
             (frame, units, which nodes or edges exist).
+        task: the columns a task's attributes and accepts add after the paper's five
+            (:meth:`for_task`); None, the paper's spec, which every shipped checkpoint has.
     """
 
     names: tuple[str, ...] = ("category", "x", "y", "z", "filled")
@@ -61,6 +69,23 @@ class FeatureSpec:
         ("cover-goal", 3),
     )
     version: str = "1"
+    task: TaskFeatures | None = None
+
+    @classmethod
+    def for_task(cls, task: TaskFeatures | None) -> FeatureSpec:
+        """The paper's five columns followed by ``task``'s (the paper's spec for None)."""
+        if task is None:
+            return FEATURE_SPEC
+        return cls(names=(*FEATURE_SPEC.names, *task.names), task=task)
+
+    @classmethod
+    def from_dict(cls, values: dict[str, Any]) -> FeatureSpec:
+        """The spec :meth:`to_dict` wrote; ``ValueError`` naming the field."""
+        task = TaskFeatures.from_dict(values["task"]) if "task" in values else None
+        spec = cls.for_task(task)
+        if tuple(values.get("names", ())) != spec.names:
+            raise ValueError(f"names: do not match the task's columns {list(spec.names)}")
+        return spec
 
     def __post_init__(self) -> None:
         if not self.names or len(set(self.names)) != len(self.names):
@@ -73,6 +98,8 @@ class FeatureSpec:
             )
         if not self.version:
             raise ValueError("version: must be a non-empty string")
+        if self.task is not None and self.names[5:] != self.task.names:
+            raise ValueError("names: a task spec's names are the five of the paper, then its own")
 
     @property
     def num_features(self) -> int:
@@ -84,11 +111,14 @@ class FeatureSpec:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain types only, so ``torch.load(weights_only=True)`` can read it back."""
-        return {
+        values: dict[str, Any] = {
             "names": list(self.names),
             "category_codes": dict(self.category_codes),
             "version": self.version,
         }
+        if self.task is not None:  # the paper's spec stays what every checkpoint holds
+            values["task"] = self.task.to_dict()
+        return values
 
 
 #: The feature spec this code builds; checkpoints made with another one are refused.
@@ -113,7 +143,7 @@ class GraphState:
     ``goal_ids[l]`` is node ``len(object_ids) + l``.
 
     Shapes:
-        - **x:** :math:`(N, 5)` float32
+        - **x:** :math:`(N, F)` float32, :math:`F` the spec's columns (5: the paper's)
         - **edge_index:** :math:`(2, N (N - 1))` int64, row 0 source, row 1 target.
           Shared with a per-:math:`N` cache: never modify it in place.
         - **is_object:** :math:`(N,)` bool
@@ -160,9 +190,16 @@ def fully_connected_edge_index(num_nodes: int) -> Tensor:
     return torch.stack([source[keep], target[keep]])
 
 
-def scene_to_graph(scene: Scene) -> GraphState:
-    """The paper's graph state of ``scene``: visible objects, then visible goals."""
-    rows: list[tuple[float, float, float, float, float]] = []
+def scene_to_graph(scene: Scene, spec: FeatureSpec | None = None) -> GraphState:
+    """The paper's graph state of ``scene``: visible objects, then visible goals; with a
+    task ``spec`` (:meth:`FeatureSpec.for_task`), each node's task columns after the five.
+
+    Raises:
+        PolicyError: an entity of another family (a dish), or a value outside the spec's
+            vocabulary, naming it.
+    """
+    task = spec.task if spec is not None else None
+    rows: list[list[float]] = []
     object_ids: list[str] = []
     goal_ids: list[str] = []
     entities: list[SceneObject | SceneGoal] = [*scene.objects, *scene.goals]
@@ -175,15 +212,20 @@ def scene_to_graph(scene: Scene) -> GraphState:
     for obj in scene.objects:
         if obj.visible:
             p = obj.position
-            rows.append((_OBJECT_CODE[obj.category], p.x, p.y, p.z, float(obj.filled)))
+            rows.append([_OBJECT_CODE[obj.category], p.x, p.y, p.z, float(obj.filled)])
+            if task is not None:
+                rows[-1].extend(task.object_row(obj))
             object_ids.append(obj.id)
     for goal in scene.goals:
         if goal.visible:
             p = goal.position
-            rows.append((_GOAL_CODE[goal.category], p.x, p.y, p.z, float(goal.filled)))
+            rows.append([_GOAL_CODE[goal.category], p.x, p.y, p.z, float(goal.filled)])
+            if task is not None:
+                rows[-1].extend(task.goal_row(goal))
             goal_ids.append(goal.id)
     num_nodes = len(rows)
-    x = torch.tensor(rows, dtype=torch.float32) if rows else torch.zeros(0, 5)
+    width = (spec or FEATURE_SPEC).num_features
+    x = torch.tensor(rows, dtype=torch.float32) if rows else torch.zeros(0, width)
     is_object = torch.zeros(num_nodes, dtype=torch.bool)
     is_object[: len(object_ids)] = True
     return GraphState(x, fully_connected_edge_index(num_nodes), object_ids, goal_ids, is_object)

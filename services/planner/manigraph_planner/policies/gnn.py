@@ -75,6 +75,11 @@ class GNNPolicy(Policy):
         net, info = load_checkpoint(path, message_passing=False)
         return cls(net, info)
 
+    def graph(self, scene: Scene) -> GraphState:
+        """``scene`` as this policy's graph state: the paper's five columns, or its task's
+        (``PolicyError`` for a value outside the checkpoint's vocabulary, naming it)."""
+        return scene_to_graph(scene, self.net.config.feature_spec)
+
     def node_logits(self, graph: GraphState) -> Tensor:
         """The network's node logits for ``graph``, a complete graph like every graph state,
         computed by the dense path (:meth:`PolicyNet.forward_complete`): same parameters and
@@ -83,13 +88,13 @@ class GNNPolicy(Policy):
             return self.net.forward_complete(graph.x)
 
     def probabilities(self, scene: Scene) -> Probabilities:
-        graph = scene_to_graph(scene)
+        graph = self.graph(scene)
         logits = self.node_logits(graph)
         k = graph.num_objects
         return Probabilities(graph, logits, logits[:k].softmax(0), logits[k:].softmax(0))
 
     def decide(self, scene: Scene) -> Decision | None:
-        graph = scene_to_graph(scene)
+        graph = self.graph(scene)
         k = graph.num_objects
         if k == 0 or k == graph.num_nodes:
             return None
@@ -98,7 +103,7 @@ class GNNPolicy(Policy):
     def ranked(self, scene: Scene) -> list[Decision]:
         """Every compatible pair by ``log p(o) + log p(g)``, most likely first (the first is
         :meth:`decide`'s; ties in scene order)."""
-        graph = scene_to_graph(scene)
+        graph = self.graph(scene)
         k = graph.num_objects
         if k == 0 or k == graph.num_nodes:
             return []

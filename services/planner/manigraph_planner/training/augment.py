@@ -74,6 +74,12 @@ validation episodes
   towers too (the inverse of step 1 for blocks) made it worse (50 of 50 at K = 2, 290
   covered picks over 50 9-stacks).
 
+**Task-file demonstrations** (objects with attributes, goals with ``accepts``; a wider
+feature spec, :mod:`~manigraph_planner.gnn.task_features`) get no structural step: steps 1-4
+are written for the block and box tasks' geometry. They get :meth:`Augmentation.for_task`:
+steps 5 and 6 on the position columns only, which hold for any task (which goal is lowest,
+which object is on top, what accepts what: unchanged), and no code of the task's own.
+
 Node order is not augmented: every architecture is permutation-equivariant (tested).
 Why each step keeps the label is argued in :mod:`~manigraph_planner.training.structure` and
 checked against the expert in ``tests/planner/training/test_structure.py``.
@@ -139,6 +145,8 @@ class Augmentation:
     max_finished_levels: int = 40
     drop_finished_probability: float = 0.0
     geometry: SceneGeometry = field(default_factory=SceneGeometry)
+    #: Only the steps that hold for any task (:meth:`for_task`).
+    generic: bool = False
 
     def __post_init__(self) -> None:
         if self.copies < 0:
@@ -159,6 +167,12 @@ class Augmentation:
         off: dict[str, Any] = {name: 0.0 for name in STRUCTURAL_PROBABILITIES}
         return replace(self, **off)
 
+    def for_task(self) -> Augmentation:
+        """Rigid translation and position noise only (steps 5, 6), on the position columns
+        of any feature spec: for demonstrations of a task file, whose structure no step of
+        this module knows."""
+        return replace(self.without_structure(), generic=True)
+
     def apply(self, samples: list[Sample], generator: torch.Generator) -> list[Sample]:
         """The originals followed by ``copies`` randomized copies of each."""
         out = list(samples)
@@ -168,6 +182,8 @@ class Augmentation:
         return out
 
     def randomize(self, sample: Sample, generator: torch.Generator) -> Sample:
+        if self.generic:
+            return sample.with_x(self._jitter(sample.x, generator))
         graph = Graph(sample.x, sample.object_index, sample.goal_index)
         if self._chance(self.tower_probability, generator):
             source, below = (self._levels(generator, self.max_levels) for _ in range(2))

@@ -7,6 +7,11 @@ wrote (``training.sources`` says which reader takes a path). An action is paired
 scene whose ``episode_id`` and ``sequence`` it names (``scene_sequence``). Decisions on a
 dishwasher scene (one with racks) are the four-headed policy's (``dishwasher.training``) and
 are skipped here; :func:`count_heads` says which kind a log holds.
+
+What a node's features are is learned from the paired scenes too
+(:meth:`~manigraph_planner.gnn.task_features.TaskFeatures.learn`): the paper's five columns
+when no object carries an attribute and no goal lists what it accepts (every shipped recipe),
+else those five and the task's columns (sizes, one-hot attributes, accepts).
 """
 
 from __future__ import annotations
@@ -19,7 +24,8 @@ from pathlib import Path
 import torch
 from torch import Tensor
 
-from manigraph_planner.gnn.features import GraphState, scene_to_graph
+from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec, GraphState, scene_to_graph
+from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_planner.training.sources import read_source
 from manigraph_shared.errors import LogError
 from manigraph_shared.messages import Action, Scene
@@ -29,7 +35,7 @@ from manigraph_shared.messages import Action, Scene
 class Sample:
     """One expert decision on one graph: node features and the chosen object/goal nodes."""
 
-    x: Tensor  # (N, 5)
+    x: Tensor  # (N, F): the demonstrations' feature spec
     is_object: Tensor  # (N,) bool
     object_index: int  # node index of the expert's object
     goal_index: int  # node index of the expert's goal
@@ -44,6 +50,8 @@ class Demonstrations:
     data_hash: str
     episodes: int
     skipped: int
+    #: What the columns of every sample's ``x`` mean, learned from the scenes.
+    feature_spec: FeatureSpec = FEATURE_SPEC
 
 
 def read_decisions(paths: Iterable[Path]) -> tuple[dict[tuple[str, int], Scene], list[Action]]:
@@ -77,14 +85,25 @@ def count_heads(paths: Iterable[Path]) -> dict[str, int]:
 
 
 def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
+    """Every decision paired with its scene, as samples of the feature spec the scenes need.
+
+    Raises:
+        LogError: no decision pairs with a scene, or an attribute is text in one scene and a
+            number in another (naming it).
+    """
     scenes, actions = read_decisions(paths)
+    paired = [scenes.get((action.episode_id, action.scene_sequence)) for action in actions]
+    try:
+        task = TaskFeatures.learn(s for s in paired if s is not None and not s.racks)
+    except ValueError as exc:
+        raise LogError(f"demonstrations: {exc}") from None
+    spec = FeatureSpec.for_task(task)
     digest = hashlib.sha256()
     samples: list[Sample] = []
     skipped = 0
     episodes = set()
-    for action in actions:
-        scene = scenes.get((action.episode_id, action.scene_sequence))
-        sample = _sample(scene, action) if scene is not None and not scene.racks else None
+    for action, scene in zip(actions, paired, strict=True):
+        sample = _sample(scene, action, spec) if scene is not None and not scene.racks else None
         if sample is None:
             skipped += 1
             continue
@@ -94,11 +113,11 @@ def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
         digest.update(f"{action.object_id}->{action.goal_id}".encode())
     if not samples:
         raise LogError("demonstrations: no action could be paired with the scene it was decided on")
-    return Demonstrations(samples, digest.hexdigest()[:16], len(episodes), skipped)
+    return Demonstrations(samples, digest.hexdigest()[:16], len(episodes), skipped, spec)
 
 
-def _sample(scene: Scene, action: Action) -> Sample | None:
-    graph: GraphState = scene_to_graph(scene)
+def _sample(scene: Scene, action: Action, spec: FeatureSpec = FEATURE_SPEC) -> Sample | None:
+    graph: GraphState = scene_to_graph(scene, spec)
     try:
         object_index = graph.object_ids.index(action.object_id)
         goal_index = graph.num_objects + graph.goal_ids.index(action.goal_id)

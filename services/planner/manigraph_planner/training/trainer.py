@@ -7,12 +7,13 @@ import random
 import re
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import TextIO
 
 import torch
 
+from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_planner.training.augment import Augmentation
 from manigraph_planner.training.augmented_draws import (
@@ -56,6 +57,9 @@ class TrainConfig:
     batch_layout: str = "padded"
     #: Where the network trains: "cpu", "cuda" or "cuda:N" (the checkpoint is CPU either way).
     device: str = "cpu"
+    #: A task's feature spec (:meth:`FeatureSpec.for_task`); None: the paper's five columns.
+    #: :func:`train` sets it from demonstrations that carry attributes or accepts.
+    features: FeatureSpec | None = None
 
     def __post_init__(self) -> None:
         for name in ("epochs", "batch_size"):
@@ -77,15 +81,30 @@ class TrainConfig:
 
     def model_config(self) -> ModelConfig:
         """The network this trains (``ConfigError`` naming a bad field)."""
+        scale = self.feature_scale
+        if self.features is not None and len(scale) != self.features.num_features:
+            scale = (*scale[:5], *(1.0,) * (self.features.num_features - 5))
         return ModelConfig(
             architecture=self.architecture,
             hidden_channels=self.hidden_channels,
             num_layers=self.num_layers,
-            feature_scale=self.feature_scale,
+            feature_scale=scale,
+            features=self.features,
         )
 
+    def for_task(self, spec: FeatureSpec) -> TrainConfig:
+        """This config for demonstrations of ``spec``: a task's spec trains with its columns
+        and the generic augmentation (:meth:`Augmentation.for_task`); the paper's, as is."""
+        if spec.task is None:
+            return self
+        assert self.augmentation is not None  # set in __post_init__
+        return replace(self, features=spec, augmentation=self.augmentation.for_task())
+
     def to_dict(self) -> dict[str, object]:
-        return asdict(self)
+        """Plain types (the feature spec is stamped in the checkpoint on its own)."""
+        values = asdict(self)
+        values.pop("features")
+        return values
 
 
 def _check_device(device: str) -> None:
@@ -122,7 +141,8 @@ def accuracy(net: PolicyNet, samples: list[Sample], batch_layout: str = "padded"
     objects, goals = (torch.cat(per_chunk) for per_chunk in zip(*choices, strict=True))
     batch = PaddedBatch.from_samples(samples)
     graphs = torch.arange(batch.num_graphs)
-    columns = [0, 3, 4]  # category, z, filled
+    # category, z, filled and a task's columns: everything but x and y
+    columns = [0, *range(3, batch.x.shape[2])]
 
     def same(chosen: torch.Tensor, expert: torch.Tensor) -> torch.Tensor:
         a, b = batch.x[graphs, chosen][:, columns], batch.x[graphs, expert][:, columns]
@@ -165,6 +185,7 @@ def train(
 def _train(
     demos: Demonstrations, config: TrainConfig, bar: Progress, on_epoch: EpochCallback | None
 ) -> tuple[PolicyNet, dict[str, object]]:
+    config = config.for_task(demos.feature_spec)
     torch.manual_seed(config.seed)
     random.seed(config.seed)
     assert config.augmentation is not None  # set in __post_init__

@@ -45,6 +45,9 @@ class ModelConfig:
         heads: ``object-goal`` (the block tasks) or ``dishwasher`` (:data:`HEADS`).
         ensemble: independently trained members whose logits are averaged (``dishwasher``
             heads only; 1, the default, is one plain network).
+        features: a task's feature spec (:meth:`FeatureSpec.for_task`, ``object-goal`` heads
+            only); None, the heads' own. Not in :meth:`to_dict`: the checkpoint stamps it as
+            its ``feature_spec`` and :meth:`from_dict` takes it back from there.
 
     Raises:
         ConfigError: (a ``ValueError``) naming the offending field.
@@ -57,6 +60,12 @@ class ModelConfig:
     feature_scale: tuple[float, ...] | None = None
     heads: str = "object-goal"
     ensemble: int = 1
+    features: FeatureSpec | None = None
+
+    @property
+    def feature_spec(self) -> FeatureSpec:
+        """What the network's input columns mean: ``features``, else the heads' spec."""
+        return self.features if self.features is not None else feature_spec_for(self.heads)
 
     @property
     def input_size(self) -> int:
@@ -67,6 +76,10 @@ class ModelConfig:
     def __post_init__(self) -> None:
         ARCHITECTURES.check(self.architecture)  # ConfigError naming the registered ones
         spec = feature_spec_for(self.heads)
+        if self.features is not None:
+            if self.heads != "object-goal":
+                raise ConfigError("features", "only 'object-goal' heads take a task's spec")
+            spec = self.features
         if self.in_channels is None:
             object.__setattr__(self, "in_channels", spec.num_features)
         if self.feature_scale is None:
@@ -112,15 +125,20 @@ class ModelConfig:
         return values
 
     @classmethod
-    def from_dict(cls, values: dict[str, Any]) -> ModelConfig:
-        """Inverse of :meth:`to_dict`; unknown or missing keys raise ``ConfigError``."""
+    def from_dict(cls, values: dict[str, Any], features: FeatureSpec | None = None) -> ModelConfig:
+        """Inverse of :meth:`to_dict` (``features``: the checkpoint's task spec); unknown or
+        missing keys raise ``ConfigError``."""
         fields = set(cls.__dataclass_fields__)
         unknown = sorted(set(values) - fields)
         if unknown:
             raise ConfigError(unknown[0], f"unknown field (known: {', '.join(sorted(fields))})")
         if "architecture" not in values:
             raise ConfigError("architecture", "missing")
+        if "features" in values:
+            raise ConfigError("features", "unknown field (the spec is the checkpoint's own)")
         kwargs = dict(values)
+        if features is not None:
+            kwargs["features"] = features
         if "feature_scale" in kwargs and isinstance(kwargs["feature_scale"], list | tuple):
             kwargs["feature_scale"] = tuple(kwargs["feature_scale"])
         return cls(**kwargs)

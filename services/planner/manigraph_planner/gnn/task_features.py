@@ -1,0 +1,230 @@
+"""Node feature columns a task brings: sizes, attributes, and what goals accept.
+
+A policy trained on a task file whose objects carry ``attributes`` (``colour = "red"``) or
+whose goals list what they ``accepts`` (``colour = "red"``, ``id = "part_2"``, ``size =
+[0.03, 0.03, 0.03]``) sees, after the paper's five columns (:mod:`.features`):
+
+* ``size_x, size_y, size_z``: an object's full extents; on a goal, the extents it accepts
+  (zero when it accepts any size); in decimetres (``size_scale``), like a block's 0.4;
+* ``size:any``: 1 on a goal that accepts any size, else 0;
+* per categorical attribute (``colour``), one column per value of its vocabulary
+  (``colour=blue``, ``colour=red``): an object's value one-hot, a goal's accepted value
+  one-hot; then ``colour:any``, 1 on a goal that does not ask for a colour. An object
+  without the attribute has zeros. ``id`` is a categorical attribute whose vocabulary is the
+  ids goals accept (an object whose id no goal names has zeros);
+* per numeric attribute (``weight``): its value scaled to ``(value - offset) / span`` (the
+  demonstrations' range maps to [0, 1]), then ``weight:any``.
+
+What the columns are is learned from the demonstrations' scenes (:meth:`TaskFeatures.learn`)
+and stamped in the checkpoint (``feature_spec.task``); a scene whose object or goal has a
+value outside a categorical vocabulary, or a goal asking by a key the policy never saw, is
+refused with a :class:`~manigraph_shared.errors.PolicyError` naming both.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+from manigraph_shared.errors import PolicyError
+from manigraph_shared.messages import Scene, SceneGoal, SceneObject
+
+__all__ = ["SIZE_SCALE", "AttributeColumns", "TaskFeatures"]
+
+#: Size columns are in decimetres: a 4 cm block reads 0.4, beside positions in metres.
+SIZE_SCALE = 10.0
+SIZE_COLUMNS = ("size_x", "size_y", "size_z", "size:any")
+
+
+@dataclass(frozen=True)
+class AttributeColumns:
+    """The columns of one attribute: a categorical ``vocabulary`` (sorted), or numeric with
+    its ``offset`` and ``span``."""
+
+    name: str
+    vocabulary: tuple[str, ...] = ()
+    numeric: bool = False
+    offset: float = 0.0
+    span: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not self.name:
+            raise ValueError("attributes.name: must be non-empty")
+        if self.numeric and self.vocabulary:
+            raise ValueError(f"attributes.{self.name}: numeric, so it has no vocabulary")
+        if not self.numeric and len(set(self.vocabulary)) != len(self.vocabulary):
+            raise ValueError(f"attributes.{self.name}.vocabulary: values must be unique")
+        if not (math.isfinite(self.offset) and math.isfinite(self.span) and self.span > 0):
+            raise ValueError(f"attributes.{self.name}: offset finite and span > 0")
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        if self.numeric:
+            return (self.name, f"{self.name}:any")
+        return (*(f"{self.name}={value}" for value in self.vocabulary), f"{self.name}:any")
+
+    def object_cells(self, obj: SceneObject) -> list[float]:
+        """The object's value (zeros without one; an id outside the vocabulary too)."""
+        value = obj.id if self.name == "id" else obj.attributes.get(self.name)
+        if value is None or (self.name == "id" and value not in self.vocabulary):
+            return [0.0] * len(self.columns)
+        return [*self._cells(value, f"{obj.id} {self.name}"), 0.0]
+
+    def goal_cells(self, goal: SceneGoal) -> list[float]:
+        """The value the goal accepts, or zeros and the ``any`` flag."""
+        value = goal.accepts.get(self.name)
+        if value is None:
+            return [*([0.0] * (len(self.columns) - 1)), 1.0]
+        if isinstance(value, list):
+            raise PolicyError(
+                f"scene: goal {goal.id} accepts {self.name} {value}, a list; this policy "
+                f"knows {self.name} as {'a number' if self.numeric else 'a word'}"
+            )
+        return [*self._cells(value, f"goal {goal.id} accepts {self.name}"), 0.0]
+
+    def _cells(self, value: str | float, who: str) -> list[float]:
+        if self.numeric:
+            if isinstance(value, str):
+                raise PolicyError(f"scene: {who} {value!r} is text; this policy knows numbers")
+            return [(float(value) - self.offset) / self.span]
+        if not isinstance(value, str) or value not in self.vocabulary:
+            raise PolicyError(
+                f"scene: {who} {value!r} is not in this policy's vocabulary "
+                f"({', '.join(self.vocabulary)})"
+            )
+        return [1.0 if value == known else 0.0 for known in self.vocabulary]
+
+    def to_dict(self) -> dict[str, Any]:
+        if self.numeric:
+            return {"name": self.name, "offset": self.offset, "span": self.span}
+        return {"name": self.name, "vocabulary": list(self.vocabulary)}
+
+    @classmethod
+    def from_dict(cls, values: dict[str, Any]) -> AttributeColumns:
+        if not isinstance(values, dict) or not isinstance(values.get("name"), str):
+            raise ValueError("attributes: each entry needs a 'name'")
+        name = values["name"]
+        if "vocabulary" in values:
+            vocabulary = values["vocabulary"]
+            if not isinstance(vocabulary, list | tuple) or not all(
+                isinstance(v, str) for v in vocabulary
+            ):
+                raise ValueError(f"attributes.{name}.vocabulary: must be a list of words")
+            return cls(name, tuple(vocabulary))
+        try:
+            return cls(
+                name, numeric=True, offset=float(values["offset"]), span=float(values["span"])
+            )
+        except (KeyError, TypeError, ValueError) as exc:
+            if isinstance(exc, ValueError) and str(exc).startswith("attributes."):
+                raise
+            raise ValueError(f"attributes.{name}: needs a vocabulary, or offset and span") from None
+
+
+@dataclass(frozen=True)
+class TaskFeatures:
+    """The columns a task adds after the paper's five (see the module docstring)."""
+
+    attributes: tuple[AttributeColumns, ...] = ()
+    size_scale: float = SIZE_SCALE
+
+    def __post_init__(self) -> None:
+        names = [a.name for a in self.attributes]
+        if len(set(names)) != len(names) or "size" in names:
+            raise ValueError(f"attributes: names must be unique and not 'size', got {names}")
+        if not (math.isfinite(self.size_scale) and self.size_scale > 0):
+            raise ValueError("size_scale: must be a positive number")
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return (*SIZE_COLUMNS, *(column for a in self.attributes for column in a.columns))
+
+    def object_row(self, obj: SceneObject) -> list[float]:
+        size = [extent * self.size_scale for extent in obj.size.as_tuple()]
+        return [*size, 0.0, *(cell for a in self.attributes for cell in a.object_cells(obj))]
+
+    def goal_row(self, goal: SceneGoal) -> list[float]:
+        self._check_keys(goal)
+        size = goal.accepts.get("size")
+        if isinstance(size, list):
+            cells = [float(extent) * self.size_scale for extent in size] + [0.0]
+        elif size is None:
+            cells = [0.0, 0.0, 0.0, 1.0]
+        else:
+            raise PolicyError(f"scene: goal {goal.id} accepts size {size!r}, not [x, y, z]")
+        return [*cells, *(cell for a in self.attributes for cell in a.goal_cells(goal))]
+
+    def _check_keys(self, goal: SceneGoal) -> None:
+        known = {"size", *(a.name for a in self.attributes)}
+        for key in goal.accepts:
+            if key not in known:
+                raise PolicyError(
+                    f"scene: goal {goal.id} accepts by {key!r}, which this policy was not "
+                    f"trained on (it knows {', '.join(sorted(known))})"
+                )
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "size_scale": self.size_scale,
+            "attributes": [a.to_dict() for a in self.attributes],
+        }
+
+    @classmethod
+    def from_dict(cls, values: Any) -> TaskFeatures:
+        """Raises ``ValueError`` naming the field (below ``task``)."""
+        if not isinstance(values, dict):
+            raise ValueError("task: must be a table")
+        unknown = sorted(set(values) - {"size_scale", "attributes"})
+        if unknown:
+            raise ValueError(f"task.{unknown[0]}: unexpected key")
+        attributes = values.get("attributes", [])
+        if not isinstance(attributes, list | tuple):
+            raise ValueError("task.attributes: must be a list")
+        try:
+            scale = float(values.get("size_scale", SIZE_SCALE))
+            return cls(tuple(AttributeColumns.from_dict(a) for a in attributes), scale)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"task.{exc}") from None
+
+    @classmethod
+    def learn(cls, scenes: Iterable[Scene]) -> TaskFeatures | None:
+        """The columns the scenes' attributes and accepts need; None when no object carries an
+        attribute and no goal lists what it accepts (the paper's five columns then).
+
+        Raises:
+            ValueError: an attribute is text on one object and a number on another.
+        """
+        values: dict[str, list[str | float]] = {}
+        ids: set[str] = set()
+        seen = False
+        for scene in scenes:
+            for obj in scene.objects:
+                seen = seen or bool(obj.attributes)
+                for name, value in obj.attributes.items():
+                    values.setdefault(name, []).append(value)
+            for goal in scene.goals:
+                seen = seen or bool(goal.accepts)
+                for name, accepted in goal.accepts.items():
+                    if name == "id" and isinstance(accepted, str):
+                        ids.add(accepted)
+                    elif name != "size" and not isinstance(accepted, list):
+                        values.setdefault(name, []).append(accepted)
+        if not seen:
+            return None
+        columns = [_columns(name, found) for name, found in sorted(values.items())]
+        if ids:
+            columns.append(AttributeColumns("id", tuple(sorted(ids))))
+        return cls(tuple(columns))
+
+
+def _columns(name: str, values: list[str | float]) -> AttributeColumns:
+    words = [v for v in values if isinstance(v, str)]
+    if words and len(words) != len(values):
+        raise ValueError(f"attribute {name}: text on some objects or goals, numbers on others")
+    if words:
+        return AttributeColumns(name, tuple(sorted(set(words))))
+    numbers = [float(v) for v in values]
+    low, high = min(numbers), max(numbers)
+    return AttributeColumns(name, numeric=True, offset=low, span=high - low if high > low else 1.0)
