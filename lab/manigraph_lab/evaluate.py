@@ -92,6 +92,8 @@ def summarize(
         if count
         else 0.0,
         "mean_steps": statistics.fmean(len(r.steps) for r in records) if count else 0.0,
+        # Goals left holding an object they do not accept, over all episodes' ends.
+        "wrong_object": sum(r.end.goals_wrong_object for r in records),
         "infeasible_actions": failures,
         "decisions_per_second": decisions / seconds if seconds > 0 else 0.0,
         "seconds": round(seconds, 3),

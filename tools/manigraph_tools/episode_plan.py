@@ -99,6 +99,8 @@ class EpisodeResult:
     reason: str
     #: Simulated seconds, from a world with a clock (physics); None otherwise.
     sim_seconds: float | None = None
+    #: Goals holding an object they do not accept at the end.
+    goals_wrong_object: int = 0
 
 
 @dataclass(frozen=True)
@@ -209,6 +211,8 @@ def summarize(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, obje
             else 0.0
         ),
         "mean_steps": statistics.fmean(r.steps for r in results) if count else 0.0,
+        # Goals left holding an object they do not accept, over all episodes' ends.
+        "wrong_object": sum(r.goals_wrong_object for r in results),
         "mean_seconds": statistics.fmean(r.seconds for r in results) if count else 0.0,
         **_simulated(results),
         "results": [asdict(r) for r in results],

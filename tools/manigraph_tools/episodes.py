@@ -13,6 +13,10 @@ the run needs, and an episode is failed, with a named reason, and the run goes o
   episode (``no_progress``), e.g. a service alive but stuck;
 * it does not end within ``timeout`` seconds (``timeout``), or the reset fails (``reset_failed``).
 
+An engaged emergency stop ends the run instead: the sim refuses the reset at once, or cuts the
+episode under way, with reason ``estop_engaged: <why> (by <who>)``; that episode is the run's
+last, and the summary names the reason under ``aborted`` (``manigraph run`` then exits 1).
+
 Before each episode the client waits (up to ``recover_timeout`` seconds) until every service is
 back, so a service restarted by a supervisor (or by hand) takes the next episode.
 """
@@ -28,6 +32,7 @@ from typing import TextIO
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import BusError, RequestRefused
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, SkillStatus
+from manigraph_shared.service_facts import ESTOP_ENGAGED
 from manigraph_tools.episode_plan import (
     EpisodeOptions,
     EpisodePlan,
@@ -150,9 +155,13 @@ def run_episodes(bus: Bus, plan: EpisodePlan, progress: TextIO = sys.stderr) -> 
                 file=progress,
                 flush=True,
             )
+            if result.reason.startswith(ESTOP_ENGAGED):  # every later episode would be too
+                break
     except KeyboardInterrupt:
         interrupted = True
     summary = summarize(plan, results)
+    if results and results[-1].reason.startswith(ESTOP_ENGAGED):
+        summary["aborted"] = results[-1].reason
     if interrupted:
         summary["interrupted"] = True
     return summary
@@ -183,7 +192,10 @@ def _run_one(
     events.start(request.episode_id)
     try:
         start = bus.request(request, EpisodeEvent, timeout=min(plan.timeout, 30.0))
-    except RequestRefused:  # the request itself was refused (a bad task file): abort
+    except RequestRefused as exc:  # the request itself was refused (a bad task file): abort
+        stopped = str(exc).find(ESTOP_ENGAGED)
+        if stopped >= 0:  # not the request's fault: the stack is stopped
+            return failed(str(exc)[stopped:][:256])
         raise
     except BusError as exc:
         lost = watch.lost_within(0.5)  # killed while it answered? Its token goes too: say so
@@ -212,4 +224,5 @@ def _run_one(
                 seconds=round(time.monotonic() - started, 3),
                 reason=end.reason,
                 sim_seconds=end.sim_seconds,
+                goals_wrong_object=end.goals_wrong_object,
             )

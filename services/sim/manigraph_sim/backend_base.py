@@ -84,6 +84,8 @@ class EpisodeBackend(SimBackend):
         self.sequence = 0
         self.ended = True
         self._end_reported = True
+        #: Why the episode was cut short (:meth:`cut`); empty: it ended by its own rules.
+        self.cut_reason = ""
         #: Set while the emergency stop is engaged (from any thread): no motion at all.
         self.halted = threading.Event()
 
@@ -104,11 +106,25 @@ class EpisodeBackend(SimBackend):
         self.max_steps = max_steps
         self.ended = False
         self._end_reported = False
+        self.cut_reason = ""
         return self._event(EpisodePhase.START, stamp)
+
+    def cut(self, reason: str) -> bool:
+        """End the running episode now, unfinished, for ``reason`` (an emergency stop); its end
+        event says so. False when no episode is running."""
+        if self.ended or self.request is None:
+            return False
+        self.ended = True
+        self.cut_reason = reason
+        return True
 
     @abstractmethod
     def occupied_goals(self) -> set[str]:
         """Ids of the goals something fills now."""
+
+    def wrong_object_goals(self) -> set[str]:
+        """Ids of the goals holding an object they do not accept (none by default)."""
+        return set()
 
     def required_filled(self) -> int:
         return len(self.required & self.occupied_goals())
@@ -138,6 +154,8 @@ class EpisodeBackend(SimBackend):
             steps=self.steps,
             max_steps=self.max_steps,
             sim_seconds=self.sim_seconds() if phase is EpisodePhase.END else None,
+            wrong_object=len(self.wrong_object_goals()) if phase is EpisodePhase.END else 0,
+            cut_reason=self.cut_reason,
         )
 
 
@@ -151,14 +169,24 @@ def episode_event(
     steps: int,
     max_steps: int,
     sim_seconds: float | None = None,
+    wrong_object: int = 0,
+    cut_reason: str = "",
 ) -> EpisodeEvent:
     """The start or end event of ``request``'s episode: an episode ends in success exactly when
-    every required goal is filled, else because its step budget is spent."""
+    every required goal is filled (holds an object it accepts, on filled goals), else because
+    its step budget is spent. The end event counts the goals holding an object they do not
+    accept (``wrong_object``). An episode cut short (``cut_reason``, e.g. ``estop_engaged:
+    ...``) ends unsuccessful for that reason."""
     success = None
     reason = ""
-    if phase is EpisodePhase.END:
+    if phase is EpisodePhase.END and cut_reason:
+        success, reason = False, cut_reason[:256]
+    elif phase is EpisodePhase.END:
         success = filled == total
         reason = "all goals filled" if success else f"step budget {max_steps} spent"
+        if not success and wrong_object:
+            hold = "goals hold" if wrong_object != 1 else "goal holds"
+            reason += f"; {wrong_object} {hold} an object it does not accept"
     return EpisodeEvent(
         episode_id=request.episode_id,
         phase=phase,
@@ -167,6 +195,7 @@ def episode_event(
         goals_total=total,
         goals_filled=filled,
         steps=steps,
+        goals_wrong_object=wrong_object,
         success=success,
         reason=reason,
         sim_seconds=None if sim_seconds is None else round(sim_seconds, 3),

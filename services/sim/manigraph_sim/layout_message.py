@@ -26,6 +26,7 @@ def layout_message(layout: Layout, episode_id: str, stamp: float) -> TaskLayout:
                 category=ObjectCategory(body.category),
                 size=vector(body.size),
                 position=vector(body.position),
+                attributes=dict(body.attributes),
             )
             for body in layout.bodies
         ],
@@ -35,6 +36,7 @@ def layout_message(layout: Layout, episode_id: str, stamp: float) -> TaskLayout:
                 category=GoalCategory(goal.category),
                 position=vector(goal.position),
                 optional=goal.id in layout.optional_goals,
+                accepts=dict(goal.accepts),
             )
             for goal in layout.goals
         ],

@@ -1,5 +1,7 @@
 """What a sim backend observes: a ``Scene`` read off a geometric world, the same rules for
-every backend (goal occupancy, and what a closed box hides under partial observability)."""
+every backend (goal occupancy, and what a closed box hides under partial observability).
+Objects carry their attributes and goals what they accept; a goal is filled only by an object
+it accepts."""
 
 from __future__ import annotations
 
@@ -46,6 +48,7 @@ def observed_scene(
             size=vector(body.size),
             filled=body.id in in_goal,
             visible=not world.is_hidden(body.position),
+            attributes=dict(body.attributes),
         )
         for body in world.bodies.values()
     ]
@@ -56,6 +59,7 @@ def observed_scene(
             position=vector(goal.position),
             filled=goal.id in occupancy,
             visible=not world.is_hidden(goal.position),
+            accepts=dict(goal.accepts),
         )
         for goal in world.goals.values()
     ]

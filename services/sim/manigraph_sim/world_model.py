@@ -14,6 +14,7 @@ from typing import Final
 
 import numpy as np
 
+from manigraph_shared.acceptance import admits
 from manigraph_shared.errors import TaskError
 
 #: The object and goal categories: a block fills a block goal, a cover a cover goal.
@@ -38,6 +39,8 @@ class Body:
     category: str  # "block" | "cover"
     size: np.ndarray  # full extents (x, y, z), metres
     position: np.ndarray  # centre, metres
+    #: What the task tells objects apart by (colour, label, ...): text or number.
+    attributes: dict[str, str | float] = field(default_factory=dict)
 
     @property
     def bottom(self) -> float:
@@ -53,6 +56,15 @@ class Goal:
     id: str
     category: str  # "block" | "cover": which objects fill it
     position: np.ndarray
+    #: What an object must carry to fill it: every key must match (an attribute's value,
+    #: ``id``, or ``size`` within 1 mm); empty: any object of its category.
+    accepts: dict[str, str | float | list[float]] = field(default_factory=dict)
+
+    def admits(self, body: Body) -> bool:
+        """Whether ``body`` may fill this goal: its category, and all that ``accepts`` lists."""
+        return body.category == self.category and admits(
+            self.accepts, body.id, body.size.tolist(), body.attributes
+        )
 
 
 @dataclass

@@ -153,3 +153,8 @@ class GeometricBackend(EpisodeBackend):
             return loaded | {r.id for r in world.racks.values() if not r.open}
         assert self.world is not None
         return set(self.world.occupancy())
+
+    def wrong_object_goals(self) -> set[str]:
+        if self.world is None:
+            return set()
+        return set(self.world.wrong_objects())

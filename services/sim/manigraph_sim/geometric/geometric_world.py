@@ -5,10 +5,11 @@ table; picking a body that has another body on top of it fails; a body released 
 falls until it rests on something. A body whose centre is not over what it lands on tips off
 over the edge it overhangs and falls again (a block set on a pyramid's top goal with one of
 the two blocks under it missing ends beside the other, one level lower), as it would on a
-real table. A goal is filled by a body of its category resting within the tolerance, and
-only while every goal under it is filled: a block that stands at a pyramid's top goal on a
-stray block (one that is in no goal) does not fill it, since the pyramid under it is not
-there and cannot be finished with the block where it is.
+real table. A goal is filled by a body of its category that it accepts (``Goal.accepts``:
+attributes, id or size) resting within the tolerance, and only while every goal under it is
+filled; a body it does not accept there is a wrong object and leaves it empty. A block that
+stands at a pyramid's top goal on a stray block (one that is in no goal) does not fill it,
+since the pyramid under it is not there and cannot be finished with the block where it is.
 Containers (open-top boxes) are static: a body that fits inside rests on the floor, a wider
 one (a cover) rests on the rim and closes the box; what is inside a closed box can be hidden.
 """
@@ -183,11 +184,11 @@ class GeometricWorld:
                     supports[goal.id].append(other.id)
         return supports
 
-    def occupancy(self) -> dict[str, str]:
-        """Goal id -> id of the resting body of its category within ``goal_tolerance``, for
-        each goal whose supporting goals (``goal_supports``) are all filled."""
+    def holdings(self) -> dict[str, str]:
+        """Goal id -> id of the resting body of its category nearest to it, within
+        ``goal_tolerance`` (whether or not the goal accepts it)."""
         bodies = self.resting()
-        goals = sorted(self.goals.values(), key=lambda goal: float(goal.position[2]))
+        goals = list(self.goals.values())
         if not bodies or not goals:
             return {}
         body_xyz = np.array([b.position for b in bodies])
@@ -195,15 +196,37 @@ class GeometricWorld:
         distance = np.linalg.norm(goal_xyz[:, None, :] - body_xyz[None, :, :], axis=-1)
         same = np.array([[g.category == b.category for b in bodies] for g in goals])
         distance[~same] = np.inf
+        held: dict[str, str] = {}
+        for row, goal in enumerate(goals):
+            column = int(np.argmin(distance[row]))
+            if distance[row, column] <= self.goal_tolerance:
+                held[goal.id] = bodies[column].id
+        return held
+
+    def occupancy(self) -> dict[str, str]:
+        """Goal id -> id of the body it holds (``holdings``), for each goal that accepts that
+        body and whose supporting goals (``goal_supports``) are all filled."""
+        held = self.holdings()
         supports = self.goal_supports()
         filled: dict[str, str] = {}
-        for row, goal in enumerate(goals):  # lowest first: a goal's supports come before it
-            column = int(np.argmin(distance[row]))
-            if distance[row, column] <= self.goal_tolerance and all(
-                below in filled for below in supports[goal.id]
+        # Lowest first: a goal's supports come before it.
+        for goal in sorted(self.goals.values(), key=lambda goal: float(goal.position[2])):
+            body = held.get(goal.id)
+            if (
+                body is not None
+                and goal.admits(self.bodies[body])
+                and all(below in filled for below in supports[goal.id])
             ):
-                filled[goal.id] = bodies[column].id
+                filled[goal.id] = body
         return {goal_id: filled[goal_id] for goal_id in self.goals if goal_id in filled}
+
+    def wrong_objects(self) -> dict[str, str]:
+        """Goal id -> id of the body it holds but does not accept."""
+        return {
+            goal_id: body
+            for goal_id, body in self.holdings().items()
+            if not self.goals[goal_id].admits(self.bodies[body])
+        }
 
     def goals_filled(self) -> int:
         return len(self.occupancy())

@@ -201,7 +201,7 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         world = self.world
         layout = self.layout
         bodies = [
-            Body(body.id, body.category, body.size, world.pose(body.id)[0])
+            Body(body.id, body.category, body.size, world.pose(body.id)[0], body.attributes)
             for body in layout.bodies
         ]
         view = GeometricWorld(
@@ -357,6 +357,11 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
             loaded = {d.id for d in view.dishes.values() if view.loaded_as_preferred(d)}
             return loaded | {r.id for r in view.racks.values() if not r.open}
         return set(self._geometric_view().occupancy())
+
+    def wrong_object_goals(self) -> set[str]:
+        if self.dishwasher is not None:
+            return set()
+        return set(self._geometric_view().wrong_objects())
 
     def sim_seconds(self) -> float | None:
         """Physics time simulated in this episode (motions and settling, without the

@@ -48,14 +48,25 @@ goals closer than a block's width, and more required block (cover) goals than bl
 from __future__ import annotations
 
 import tomllib
+from difflib import get_close_matches
 from functools import cached_property
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from manigraph_shared.errors import TaskError
+from manigraph_sim.tasks import task_attributes
 from manigraph_sim.tasks.base import Task, TaskParams
+from manigraph_sim.tasks.task_file_errors import describe_errors
 from manigraph_sim.world_model import Body, Container, Goal, Layout
 
 Coordinate = Annotated[float, Field(ge=-5.0, le=5.0)]
@@ -81,6 +92,22 @@ class _Strict(BaseModel):
 Position = tuple[Coordinate, Coordinate, Coordinate]
 
 
+def _no_boolean(value: object) -> object:
+    if isinstance(value, bool):
+        raise ValueError("true and false are not attribute values: give text or a number")
+    return value
+
+
+#: The contract's attribute names and values (``manigraph_shared.messages.scene``).
+AttributeName = Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]{0,31}$")]
+AttributeValue = Annotated[
+    Annotated[str, Field(min_length=1, max_length=64)] | Annotated[float, Field(ge=-1e6, le=1e6)],
+    BeforeValidator(_no_boolean),
+]
+#: Names an object's attributes may not take: a goal's ``accepts`` means the object's own.
+RESERVED = ("id", "size")
+
+
 class ObjectSpec(_Strict):
     id: Name
     category: Literal["block", "cover"]
@@ -89,6 +116,18 @@ class ObjectSpec(_Strict):
     size: tuple[Extent, Extent, Extent] = (0.04, 0.04, 0.04)
     jitter: float = Field(0.0, ge=0.0, le=0.2, description="metres, uniform in x and y")
     spare: bool = False
+    #: Each a value, or a list of values to draw one from per episode.
+    attributes: dict[
+        AttributeName, AttributeValue | Annotated[list[AttributeValue], Field(min_length=1)]
+    ] = Field(default_factory=dict, max_length=16)
+
+    @field_validator("attributes")
+    @classmethod
+    def _not_reserved(cls, attributes: dict[str, object]) -> dict[str, object]:
+        for name in RESERVED:
+            if name in attributes:
+                raise ValueError(f"{name}: is the object's own field, not an attribute")
+        return attributes
 
     @model_validator(mode="after")
     def _one_position(self) -> ObjectSpec:
@@ -110,6 +149,22 @@ class GoalSpec(_Strict):
     category: Literal["block", "cover"]
     position: tuple[Coordinate, Coordinate, Coordinate]
     optional: bool = False
+    #: What fills it: every key must match (an attribute, ``id``, or ``size`` within 1 mm).
+    accepts: dict[AttributeName, AttributeValue | tuple[Extent, Extent, Extent]] = Field(
+        default_factory=dict, max_length=16
+    )
+
+    @field_validator("accepts")
+    @classmethod
+    def _known_forms(cls, accepts: dict[str, object]) -> dict[str, object]:
+        for key, value in accepts.items():
+            if key == "size" and not isinstance(value, tuple):
+                raise ValueError("size: give the full extents [x, y, z], metres")
+            if key == "id" and not isinstance(value, str):
+                raise ValueError("id: give an object's id")
+            if key != "size" and isinstance(value, tuple):
+                raise ValueError(f"{key}: give one value (text or a number), not a list")
+        return accepts
 
 
 class ContainerSpec(_Strict):
@@ -127,6 +182,8 @@ class TaskFile(_Strict):
     objects: list[ObjectSpec] = Field(min_length=1, max_length=256)
     goals: list[GoalSpec] = Field(min_length=1, max_length=256)
     containers: list[ContainerSpec] = Field(default_factory=list, max_length=16)
+    #: Attributes whose values are permuted among the objects carrying them, per episode.
+    shuffle: list[AttributeName] = Field(default_factory=list, max_length=16)
 
     @model_validator(mode="after")
     def _consistent(self) -> TaskFile:
@@ -148,7 +205,10 @@ class TaskFile(_Strict):
             *self._overlapping_objects(),
             *self._crowded_block_goals(),
             *self._too_many_goals(),
+            *self._unknown_attributes(),
         ]
+        if not problems:
+            problems = self._unsatisfiable()
         if problems:
             shown = problems[:MAX_PROBLEMS_NAMED]
             more = len(problems) - len(shown)
@@ -242,6 +302,63 @@ class TaskFile(_Strict):
                 )
         return problems
 
+    def _unknown_attributes(self) -> list[str]:
+        """Goals accepting, or a shuffle naming, an attribute no object carries (with the
+        name probably meant)."""
+        carried = sorted({name for o in self.objects for name in o.attributes})
+        problems = []
+
+        def unknown(field: str, name: str) -> str:
+            close = get_close_matches(name, carried, n=1, cutoff=0.6)
+            hint = f"; did you mean {close[0]}?" if close else ""
+            return f"{field}: no object carries an attribute {name}{hint}"
+
+        for i, goal in enumerate(self.goals):
+            for key, value in goal.accepts.items():
+                if key == "id" and value not in {o.id for o in self.objects}:
+                    problems.append(
+                        f"goals.{i}.accepts.id: {goal.id} accepts {value}: no such object"
+                    )
+                elif key not in RESERVED and key not in carried:
+                    problems.append(unknown(f"goals.{i}.accepts.{key}", key))
+        for i, name in enumerate(self.shuffle):
+            if name not in carried:
+                problems.append(unknown(f"shuffle.{i}", name))
+        return problems
+
+    def _unsatisfiable(self) -> list[str]:
+        """The first required goal the objects that are not spares cannot fill while the
+        others are filled, whatever the draws give (a bipartite matching)."""
+        missing = task_attributes.first_shortfall(self.required, self.candidates)
+        return [] if missing is None else [missing[1]]
+
+    @property
+    def required(self) -> list[task_attributes.Wanted]:
+        """The goals that must be filled, as the matching sees them."""
+        return [
+            task_attributes.Wanted(i, g.id, g.category, g.accepts)
+            for i, g in enumerate(self.goals)
+            if not g.optional
+        ]
+
+    @property
+    def candidates(self) -> list[task_attributes.Candidate]:
+        """The objects as the matching sees them, each attribute with every value a draw
+        may give it."""
+        possible = task_attributes.possible_values(
+            [o.attributes for o in self.objects], self.shuffle
+        )
+        return [
+            task_attributes.Candidate(o.id, o.category, o.size, values, o.spare)
+            for o, values in zip(self.objects, possible, strict=True)
+        ]
+
+    @property
+    def draws_attributes(self) -> bool:
+        """Some attribute is drawn per episode (a list value, or a shuffle)."""
+        listed = any(isinstance(v, list) for o in self.objects for v in o.attributes.values())
+        return listed or bool(self.shuffle)
+
     def support_of(self, index: int) -> int | None:
         """The object that object ``index`` rests on (same x, y within 1 mm, the highest one
         below it), or None when it stands on the table."""
@@ -307,22 +424,36 @@ class TaskFile(_Strict):
         ]
 
 
-def parse_task_file(text: str) -> TaskFile:
-    """Validate a task file's text; ``TaskError`` names the line or the field."""
+def parse_task_file(text: str, source: str | None = None) -> TaskFile:
+    """Validate a task file's text; ``TaskError`` names the line or the field. ``source``
+    (the file's path) names the file in the error; without it, "task file"."""
+    prefix = f"task file {source}" if source else "task file"
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise TaskError(f"task file: {exc}") from None
+        raise TaskError(f"{prefix}: {exc}") from None
+    except RecursionError:
+        raise TaskError(f"{prefix}: {NESTED_TOO_DEEPLY}") from None
     try:
         return TaskFile.model_validate(data)
     except ValidationError as exc:
-        problems = []
-        for error in exc.errors(include_url=False):
-            field = ".".join(str(part) for part in error["loc"])
-            message = error["msg"].removeprefix("Value error, ")
-            # Whole-file checks name their own fields ("objects.1: red overlaps ...").
-            problems.append(f"{field}: {message}" if field else message)
-        raise TaskError("task file: " + "; ".join(problems)) from None
+        tables: dict[str, type[BaseModel]] = {
+            "objects": ObjectSpec,
+            "goals": GoalSpec,
+            "containers": ContainerSpec,
+        }
+        problems = describe_errors(exc.errors(include_url=False), text, TaskFile, tables)
+        raise TaskError(f"{prefix}: " + "; ".join(problems)) from None
+    except RecursionError:
+        raise TaskError(f"{prefix}: {NESTED_TOO_DEEPLY}") from None
+
+
+#: Why a file of arrays or tables nested thousands deep is refused (Python's parser recurses).
+NESTED_TOO_DEEPLY = "arrays or tables nested too deeply to read (a task file needs a few levels)"
+
+
+def _accepts(goal: GoalSpec) -> dict[str, str | float | list[float]]:
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in goal.accepts.items()}
 
 
 class FileTask(Task):
@@ -332,7 +463,12 @@ class FileTask(Task):
     listed ``positions`` (no two on the same one) and moves by up to its ``jitter`` in x and y;
     objects resting on it move with it; then the whole layout moves by up to ``randomize_xy``.
 
-    **Success Conditions**: every goal not marked ``optional`` holds an object of its category.
+    Then each object's attributes are drawn: one value of each list, then each ``shuffle``d
+    attribute permuted among the objects carrying it; a draw that leaves a required goal
+    without an object it accepts is drawn again (``task_attributes.MAX_DRAWS`` times).
+
+    **Success Conditions**: every goal not marked ``optional`` holds an object of its category
+    that it accepts (every key of its ``accepts``), on filled goals.
     """
 
     name = "file"
@@ -344,11 +480,17 @@ class FileTask(Task):
     def layout(self, rng: np.random.Generator) -> Layout:
         r = self.spec.randomize_xy
         shift = np.array([*rng.uniform(-r, r, 2), 0.0]) if r > 0 else np.zeros(3)
+        positions = self._positions(rng)
         bodies = [
-            Body(o.id, o.category, np.array(o.size), position + shift)
-            for o, position in zip(self.spec.objects, self._positions(rng), strict=True)
+            Body(o.id, o.category, np.array(o.size), position + shift, attributes)
+            for o, position, attributes in zip(
+                self.spec.objects, positions, self._attributes(rng), strict=True
+            )
         ]
-        goals = [Goal(g.id, g.category, np.array(g.position) + shift) for g in self.spec.goals]
+        goals = [
+            Goal(g.id, g.category, np.array(g.position) + shift, _accepts(g))
+            for g in self.spec.goals
+        ]
         containers = [
             Container(c.id, np.array(c.centre) + shift[:2], np.array(c.inner), c.wall, c.height)
             for c in self.spec.containers
@@ -383,6 +525,31 @@ class FileTask(Task):
             if item.jitter > 0:
                 offsets[index][:2] += rng.uniform(-item.jitter, item.jitter, 2)
         return [np.array(o.anchor) + self._offset(i, offsets) for i, o in enumerate(objects)]
+
+    def _attributes(self, rng: np.random.Generator) -> list[dict[str, str | float]]:
+        """Each object's attributes for this episode (drawn after the positions, so a file
+        without draws keeps its layouts)."""
+        spec = self.spec
+        listed = [o.attributes for o in spec.objects]
+        if not spec.draws_attributes:
+            return [dict(a) for a in listed]  # type: ignore[arg-type]  # no lists: values
+        missing = None
+        for _ in range(task_attributes.MAX_DRAWS):
+            drawn = task_attributes.draw(rng, listed, spec.shuffle)
+            candidates = [
+                task_attributes.Candidate(
+                    o.id, o.category, o.size, {k: [v] for k, v in a.items()}, o.spare
+                )
+                for o, a in zip(spec.objects, drawn, strict=True)
+            ]
+            missing = task_attributes.first_shortfall(spec.required, candidates)
+            if missing is None:
+                return drawn
+        assert missing is not None
+        raise TaskError(
+            f"task file: {missing[1]} in {task_attributes.MAX_DRAWS} draws of the attributes "
+            "for this seed; list values that can fill every goal"
+        )
 
     def _offset(self, index: int, offsets: list[np.ndarray]) -> np.ndarray:
         base = self.spec.support_of(index)

@@ -1,0 +1,156 @@
+"""A task file's attributes and what its goals accept: drawing them per episode, and checking
+that the objects can fill every required goal.
+
+An object's attribute is a value (``colour = "red"``) or a list of values to draw one from per
+episode (``colour = ["red", "blue"]``); a file-level ``shuffle = ["colour"]`` then permutes the
+drawn values of that attribute among the objects that carry it. Both are drawn from the
+episode's seed, after the positions (a file without draws keeps its layouts).
+
+Before any episode, a file whose required goals cannot all be filled at once by objects that
+are not spares, whatever the draws give, is refused naming a goal; a draw whose values leave a
+goal without an object is drawn again (up to :data:`MAX_DRAWS` times, still from the seed).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from manigraph_shared.acceptance import admits
+from manigraph_sim.tasks.goal_matching import Shortfall, shortfall
+
+AttributeValue = str | float
+#: Draws of a file's attributes tried per episode before the episode is refused.
+MAX_DRAWS = 100
+#: Ids named in one refusal before "..." .
+NAMES_SHOWN = 5
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """What one object may carry in some draw: each attribute's possible values."""
+
+    id: str
+    category: str
+    size: tuple[float, float, float]
+    values: Mapping[str, Sequence[AttributeValue]]
+    spare: bool
+
+
+@dataclass(frozen=True)
+class Wanted:
+    """A required goal: what it is, where it is listed, what it accepts."""
+
+    index: int  # in the file's goals
+    id: str
+    category: str
+    accepts: Mapping[str, AttributeValue | Sequence[float]]
+
+
+def may_fill(goal: Wanted, item: Candidate) -> bool:
+    """Whether some draw gives ``item`` what ``goal`` accepts (every key matching)."""
+    if item.category != goal.category:
+        return False
+    for key, wanted in goal.accepts.items():
+        single = {key: wanted}
+        if key in ("id", "size"):
+            if not admits(single, item.id, item.size, {}):
+                return False
+        elif not any(
+            admits(single, item.id, item.size, {key: v}) for v in item.values.get(key, ())
+        ):
+            return False
+    return True
+
+
+def first_shortfall(goals: list[Wanted], objects: list[Candidate]) -> tuple[Shortfall, str] | None:
+    """The goal that objects which are not spares cannot fill, with why; None if they can
+    fill every goal at once."""
+    usable = [i for i, item in enumerate(objects) if not item.spare]
+    admitted = [[i for i in usable if may_fill(goal, objects[i])] for goal in goals]
+    missing = shortfall(admitted)
+    if missing is None:
+        return None
+    goal = goals[missing.goal]
+    wants = describe(goal.accepts) or f"any {goal.category}"
+    if not missing.objects:
+        why = f"it accepts {wants}, and no object that is not a spare can be that"
+    else:
+        rivals = [goals[g].id for g in missing.goals]
+        takers = [objects[usable_i].id for usable_i in missing.objects]
+        why = (
+            f"it accepts {wants}; {len(rivals)} required goals ({names(rivals)}) share the "
+            f"{len(takers)} object{'s' if len(takers) != 1 else ''} that can fill them "
+            f"({names(takers)}), spares left out"
+        )
+    return missing, f"goals.{goal.index}: {goal.id} cannot be filled: {why}"
+
+
+def draw(
+    rng: np.random.Generator,
+    listed: Sequence[Mapping[str, AttributeValue | Sequence[AttributeValue]]],
+    shuffle: Sequence[str],
+) -> list[dict[str, AttributeValue]]:
+    """One draw of every object's attributes: one value of each list, then each shuffled
+    attribute's values permuted among the objects that carry it."""
+    drawn = [
+        {name: _one_of(rng, value) for name, value in attributes.items()} for attributes in listed
+    ]
+    for name in shuffle:
+        carriers = [i for i, attributes in enumerate(drawn) if name in attributes]
+        values = [drawn[i][name] for i in carriers]
+        for i, j in zip(carriers, rng.permutation(len(carriers)), strict=True):
+            drawn[i][name] = values[int(j)]
+    return drawn
+
+
+def possible_values(
+    listed: Sequence[Mapping[str, AttributeValue | Sequence[AttributeValue]]],
+    shuffle: Sequence[str],
+) -> list[dict[str, list[AttributeValue]]]:
+    """Each object's attributes as every value some draw may give it."""
+    possible: list[dict[str, list[AttributeValue]]] = [
+        {name: _values(value) for name, value in attributes.items()} for attributes in listed
+    ]
+    for name in shuffle:
+        pooled = [v for attributes in possible for v in attributes.get(name, [])]
+        for attributes in possible:
+            if name in attributes:
+                attributes[name] = pooled
+    return possible
+
+
+def describe(accepts: Mapping[str, AttributeValue | Sequence[float]]) -> str:
+    """``colour red, size [0.03, 0.03, 0.03]``: what a goal accepts, in words."""
+    parts = []
+    for key, value in accepts.items():
+        if isinstance(value, str):
+            parts.append(f"{key} {value}")
+        elif isinstance(value, int | float):
+            parts.append(f"{key} {value:g}")
+        else:
+            parts.append(f"{key} [{', '.join(f'{v:g}' for v in value)}]")
+    return ", ".join(parts)
+
+
+def names(ids: Sequence[str]) -> str:
+    shown = ", ".join(ids[:NAMES_SHOWN])
+    return shown + (", ..." if len(ids) > NAMES_SHOWN else "")
+
+
+def _values(value: AttributeValue | Sequence[AttributeValue]) -> list[AttributeValue]:
+    """A listed attribute's values; a single value as a list of one."""
+    if isinstance(value, str | int | float):
+        return [value]
+    return list(value)
+
+
+def _one_of(
+    rng: np.random.Generator, value: AttributeValue | Sequence[AttributeValue]
+) -> AttributeValue:
+    """A listed attribute's value for this draw (a single value is no draw)."""
+    if isinstance(value, str | int | float):
+        return value
+    return value[int(rng.integers(len(value)))]
