@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from manigraph_planner.policies.base import Decision, Policy, register_policy
+from manigraph_planner.policies.matching import GoalMatching
 from manigraph_planner.scene_geometry import SceneGeometry
 from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneGoal, SceneObject
 
@@ -28,12 +29,22 @@ class ExpertPolicy(Policy):
 
     It sees only what the Scene shows: with everything still hidden in closed boxes it has
     nothing to do (box rearrangement is a test of the learned policy, not of the expert).
+
+    Where a goal says what it ``accepts`` (a task file's attributes, ids or sizes), rule 1 is
+    :mod:`~manigraph_planner.policies.matching`'s: objects matched to the goals that accept
+    them, the lowest goal that can be filled first, objects in a goal that refuses them moved
+    out; rules 2 and 3 stay. Without any ``accepts`` its decisions are exactly the three
+    rules above (the shipped checkpoints' demonstrations and the golden logs).
     """
 
     def ranked(self, scene: Scene) -> list[Decision]:
         """Its decision first, then every other movable block (highest first) to every open
         block goal (lowest first): what a planner tries when the first made no progress."""
         geometry = SceneGeometry(scene)
+        if _accepting(scene):
+            moves = GoalMatching(scene, geometry).ranked_moves()
+            cover = None if moves else self._decide_accepting(scene, geometry)
+            return moves if moves else [] if cover is None else [cover]
         first = self._decide(scene, geometry)
         if first is None:
             return []
@@ -53,7 +64,18 @@ class ExpertPolicy(Policy):
         return [first, *others]
 
     def decide(self, scene: Scene) -> Decision | None:
+        if _accepting(scene):
+            return self._decide_accepting(scene, SceneGeometry(scene))
         return self._decide(scene, SceneGeometry(scene))
+
+    def _decide_accepting(self, scene: Scene, geometry: SceneGeometry) -> Decision | None:
+        matching = GoalMatching(scene, geometry)
+        moves = matching.ranked_moves()
+        if moves:
+            return moves[0]
+        return _cover_moves(
+            matching.objects, matching.goals, geometry, matching.open_goals(), matching.to_place()
+        )
 
     def _decide(self, scene: Scene, geometry: SceneGeometry) -> Decision | None:
         objects = [o for o in scene.objects if o.visible]
@@ -65,31 +87,46 @@ class ExpertPolicy(Policy):
         movable = [o for o in blocks_to_move if not geometry.is_covered(o)]
         if open_goals and movable:
             return Decision(_highest(movable).id, _lowest(open_goals).id)
+        return _cover_moves(objects, goals, geometry, free_block_goals, blocks_to_move)
 
-        free_cover_goals = [g for g in goals if g.category is GoalCategory.COVER and not g.filled]
-        if free_block_goals and blocks_to_move:
-            in_the_way = {
-                o.id: o
-                for goal in free_block_goals
-                for o in geometry.objects_above_goal(goal)
-                if o.category is ObjectCategory.COVER
-            }
-            for block in blocks_to_move:
-                for o in geometry.objects_over(block):
-                    if o.category is ObjectCategory.COVER:
-                        in_the_way[o.id] = o
-            covers = [o for o in in_the_way.values() if not geometry.is_covered(o)]
-            if covers and free_cover_goals:
-                return Decision(_highest(covers).id, _lowest(free_cover_goals).id)
 
-        covers_in_goals = [
-            o
-            for o in objects
-            if o.category is ObjectCategory.COVER and o.filled and not geometry.is_covered(o)
-        ]
-        if covers_in_goals and free_cover_goals:
-            cover = min(covers_in_goals, key=lambda o: (round(o.position.z, 4), o.id))
-            target = max(free_cover_goals, key=lambda g: (round(g.position.z, 4), g.id))
-            if target.position.z > cover.position.z + 1e-3:
-                return Decision(cover.id, target.id)
-        return None
+def _accepting(scene: Scene) -> bool:
+    """Some goal says what it accepts: the matching rules decide the blocks' moves."""
+    return any(g.accepts for g in scene.goals if g.visible)
+
+
+def _cover_moves(
+    objects: list[SceneObject],
+    goals: list[SceneGoal],
+    geometry: SceneGeometry,
+    free_block_goals: list[SceneGoal],
+    blocks_to_move: list[SceneObject],
+) -> Decision | None:
+    """Rules 2 and 3: a cover out of the way of the blocks' work, or back onto its box."""
+    free_cover_goals = [g for g in goals if g.category is GoalCategory.COVER and not g.filled]
+    if free_block_goals and blocks_to_move:
+        in_the_way = {
+            o.id: o
+            for goal in free_block_goals
+            for o in geometry.objects_above_goal(goal)
+            if o.category is ObjectCategory.COVER
+        }
+        for block in blocks_to_move:
+            for o in geometry.objects_over(block):
+                if o.category is ObjectCategory.COVER:
+                    in_the_way[o.id] = o
+        covers = [o for o in in_the_way.values() if not geometry.is_covered(o)]
+        if covers and free_cover_goals:
+            return Decision(_highest(covers).id, _lowest(free_cover_goals).id)
+
+    covers_in_goals = [
+        o
+        for o in objects
+        if o.category is ObjectCategory.COVER and o.filled and not geometry.is_covered(o)
+    ]
+    if covers_in_goals and free_cover_goals:
+        cover = min(covers_in_goals, key=lambda o: (round(o.position.z, 4), o.id))
+        target = max(free_cover_goals, key=lambda g: (round(g.position.z, 4), g.id))
+        if target.position.z > cover.position.z + 1e-3:
+            return Decision(cover.id, target.id)
+    return None
