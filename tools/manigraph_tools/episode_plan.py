@@ -149,10 +149,10 @@ class EpisodePlan:
 def describe_task_file(text: str) -> tuple[str | None, int] | None:
     """The file's ``name`` and its number of blocks (spares included), read leniently for
     naming episodes and summaries: the sim validates the file, and refuses it naming the
-    field. None when the text is not TOML."""
+    field. None when the text is not TOML (or nested too deeply for Python to read)."""
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError):
         return None
     objects = data.get("objects")
     blocks = (
