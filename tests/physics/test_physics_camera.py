@@ -53,3 +53,54 @@ def test_camera_settings_are_validated_by_name() -> None:
         CameraConfig(hz=0)
     with pytest.raises(ConfigError, match=r"camera\.noise"):
         CameraConfig(noise_sigma=-1)
+
+
+BLUE_AND_RED = """
+[[objects]]
+id = "block_0"
+category = "block"
+position = [0.55, -0.08, 0.03]
+size = [0.06, 0.06, 0.06]
+attributes = { colour = "blue" }
+
+[[objects]]
+id = "block_1"
+category = "block"
+position = [0.55, 0.08, 0.04]
+size = [0.08, 0.08, 0.08]
+attributes = { colour = "red" }
+
+[[goals]]
+id = "goal_0"
+category = "block"
+position = [0.45, 0.0, 0.02]
+"""
+
+
+@pytest.mark.skipif(not vulkan_available(), reason="no Vulkan device (scripts/install-vulkan.sh)")
+def test_the_camera_sees_each_body_in_the_colour_and_size_its_task_gives_it() -> None:
+    backend = PhysicsBackend(camera=CameraConfig(format="png"))
+    request = EpisodeRequest(
+        episode_id="colours", task="file", task_file=BLUE_AND_RED, blocks=2, seed=0
+    )
+    backend.reset(request, time.time())
+    frame = backend.camera_frame(time.time())
+    assert frame is not None and backend.world is not None
+    image, info = frame
+    rgb = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_COLOR)[..., ::-1] / 255
+    k = np.reshape(info.camera_matrix, (3, 3))
+    camera_T_base = np.linalg.inv(backend.camera.base_T_camera())  # type: ignore[union-attr]
+    counts = {}
+    # The opposite of the colours blocks 0 and 1 get by default (red, then blue).
+    for body_id, channel in (("block_0", 2), ("block_1", 0)):  # blue, red
+        others = np.delete(rgb, channel, axis=2)
+        mask = rgb[..., channel] - others.max(axis=2) > 0.25
+        rows, cols = np.nonzero(mask)
+        centre = backend.world.pose(body_id)[0]
+        u, v, w = k @ (camera_T_base[:3, :3] @ centre + camera_T_base[:3, 3])
+        assert len(rows) > 50, body_id
+        # Its pixels lie round where the body is (not somewhere else in the picture).
+        assert np.hypot(cols.mean() - u / w, rows.mean() - v / w) < 25, body_id
+        counts[body_id] = len(rows)
+    # Drawn to its size: the 8 cm block shows more of itself round its markers than the 6 cm.
+    assert counts["block_1"] > 1.3 * counts["block_0"]

@@ -34,12 +34,12 @@ from mani_skill.utils.structs.pose import Pose
 
 from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.physics.physics_world import (
-    BLOCK_COLOURS,
     BOX_COLOUR,
     COVER_COLOUR,
     FINGER_OPEN,
     HOME_Q,
     PhysicsConfig,
+    body_colour,
     body_parts,
     box_walls,
 )
@@ -96,7 +96,7 @@ class ManigraphEnv(BaseEnv):
         for i, body in enumerate(self.layout.bodies):
             builder = self.scene.create_actor_builder()
             cover = body.category == "cover"
-            colour = COVER_COLOUR if cover else BLOCK_COLOURS[i % len(BLOCK_COLOURS)]
+            colour = COVER_COLOUR if cover else body_colour(body, i)
             density = config.density(body.category)
             for pose, half in body_parts(body):
                 builder.add_box_collision(pose, half, density=density)

@@ -19,6 +19,7 @@ import numpy as np
 import sapien
 from sapien import physx
 
+from manigraph_shared.colours import colour_of
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.grasp_points import COVER_HANDLE_SIZE, handle_offset
 from manigraph_shared.panda import ARM_JOINTS, FINGER_OPEN, HOME_Q, panda_urdf_path
@@ -33,7 +34,8 @@ if TYPE_CHECKING:
 TABLE_COLOUR = [0.62, 0.5, 0.38, 1.0]
 BOX_COLOUR = [0.75, 0.72, 0.65, 1.0]
 COVER_COLOUR = [0.45, 0.42, 0.38, 1.0]
-#: Block colours when rendering (RGBA), cycled by block index.
+#: Block colours when rendering (RGBA), cycled by block index, for blocks whose attributes
+#: name no colour of their own.
 BLOCK_COLOURS = [
     [0.85, 0.25, 0.2, 1.0],
     [0.2, 0.55, 0.85, 1.0],
@@ -42,6 +44,13 @@ BLOCK_COLOURS = [
     [0.6, 0.35, 0.75, 1.0],
     [0.95, 0.5, 0.15, 1.0],
 ]
+
+
+def body_colour(body: Body, index: int) -> list[float]:
+    """The RGBA a body is rendered in: the colour its attributes name (``colour = "red"``,
+    ``manigraph_shared.colours``), else the cycled block colour of its index."""
+    named = colour_of(body.attributes)
+    return [*named, 1.0] if named is not None else BLOCK_COLOURS[index % len(BLOCK_COLOURS)]
 
 
 def body_parts(body: Body) -> list[tuple[sapien.Pose, np.ndarray]]:
@@ -160,7 +169,7 @@ class PhysicsWorld:
             self._add_box(box)
         self.entities: dict[str, sapien.Entity] = {}
         for index, body in enumerate(bodies):
-            self.entities[body.id] = self._add_body(body, BLOCK_COLOURS[index % len(BLOCK_COLOURS)])
+            self.entities[body.id] = self._add_body(body, body_colour(body, index))
         self.set_targets(HOME_Q, closed=False)
         self.robot.set_qpos(np.concatenate([HOME_Q, [FINGER_OPEN, FINGER_OPEN]]))
         self.step(round(c.settle_time / c.timestep))
