@@ -77,13 +77,21 @@ __all__ += [
 
 from manigraph_shared.messages.explanation import (  # noqa: E402  (appended: the explainer)
     EXPLAINER_BUSY,
+    EXPLAINER_WARMING_UP,
     ExplainedEdge,
     ExplainedNode,
     ExplainRequest,
     Explanation,
 )
 
-__all__ += ["EXPLAINER_BUSY", "ExplainRequest", "ExplainedEdge", "ExplainedNode", "Explanation"]
+__all__ += [
+    "EXPLAINER_BUSY",
+    "EXPLAINER_WARMING_UP",
+    "ExplainRequest",
+    "ExplainedEdge",
+    "ExplainedNode",
+    "Explanation",
+]
 
 from manigraph_shared.messages.estop import EmergencyStop  # noqa: E402  (appended: the e-stop)
 

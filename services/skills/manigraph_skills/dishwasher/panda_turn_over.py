@@ -246,7 +246,7 @@ def _tilt_once(
             for side in set_down_hands(hand, dish, wanted):
                 half = _half_height(item, side @ held)
                 for drop in DROPS:
-                    driver._raise_if_stopped()
+                    driver.raise_if_stopped()
                     centre = np.array([*spot, half + drop])
                     try:
                         trajectory = set_down_sideways(
@@ -272,13 +272,13 @@ def _tilt_once(
         raise failure or SkillError("no_ik_solution", f"no spot to set {item.id} down")
 
     try:
-        driver._run(decision_id, plan)
+        driver.run_plan(decision_id, plan)
     except SkillError as exc:
         if exc.reason in ("collision", "no_ik_solution"):
-            driver._put_back(decision_id, item.id)
+            driver.put_back(decision_id, item.id)
         raise
     side, centre, obstacles = chosen[0]
-    released = driver._run(
+    released = driver.run_plan(
         decision_id, lambda q: _clear_let_go(driver, q, obstacles, grasp.opening)
     )
     seen = driver.transport.object_position(item.id, after=released.stamp)
@@ -322,18 +322,18 @@ def move_dish(
         setting_down = Grasp(height, 0.0, 0.0, obstacles, np.pi, opening)
         carry = driver.plans.avoiding(to_cell, setting_down, there, f"moving {item.id}")
         try:
-            driver._run(decision_id, carry)
+            driver.run_plan(decision_id, carry)
         except SkillError as exc:
             if exc.reason not in PLANNING_FAILURES:
                 raise
             failure = failure or exc
             continue
         placed = driver.planner.yaw_of(driver.transport.joint_positions())
-        released = driver._release(decision_id, setting_down)
+        released = driver.release(decision_id, setting_down)
         seen = driver.transport.object_position(item.id, after=released.stamp)
         log.info("moved %s to %s", item.id, np.round(there, 3))
         return (seen if seen is not None else there), _about_vertical(placed - taken) @ dish
-    driver._put_back(decision_id, item.id)
+    driver.put_back(decision_id, item.id)
     assert failure is not None
     raise failure
 

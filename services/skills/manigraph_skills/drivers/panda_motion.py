@@ -91,7 +91,7 @@ class PandaMotionDriver(RobotDriver):
         self.model = PandaModel()
         self.planner = GraspPlanner(self.model, config)
         self.collision = ArmCollisionModel(self.model) if check_collisions else None
-        self.plans = Replanner(self.model, self.planner, self.collision, self._raise_if_stopped)
+        self.plans = Replanner(self.model, self.planner, self.collision, self.raise_if_stopped)
         self.min_grasp_width = options.min_grasp_width
         self.placement_tolerance = options.placement_tolerance
         self._ids = itertools.count()
@@ -123,7 +123,7 @@ class PandaMotionDriver(RobotDriver):
         """Take ``object_id`` top-down with the TCP at ``target`` and the hand at ``yaw`` (or
         turned by ``grasp.other_turn`` if that is what clears the arm), and lift it."""
         self._picked = None
-        result = self._run(
+        result = self.run_plan(
             decision_id,
             self.plans.avoiding(
                 lambda planner, q, turn, carry: planner.pick(q, target, yaw + turn, carry),
@@ -137,7 +137,7 @@ class PandaMotionDriver(RobotDriver):
         taken = self.planner.yaw_of(np.array(result.positions)) if result.positions else yaw
         self._picked = (object_id, target, taken, grasp)
         if result.gripper_width < self.min_grasp_width:
-            self._release(decision_id, grasp)
+            self.release(decision_id, grasp)
             raise SkillError(
                 "grasp_slipped",
                 f"fingers closed to {result.gripper_width * 1000:.1f} mm: {object_id} not held",
@@ -151,7 +151,7 @@ class PandaMotionDriver(RobotDriver):
         # block or a square cover looks the same after a quarter turn).
         yaw = self.planner.config.hand_yaw + grasp.turn
         try:
-            carry = self._run(
+            carry = self.run_plan(
                 decision_id,
                 self.plans.avoiding(
                     lambda planner, q, turn, carry_z: planner.place(q, hand, yaw + turn, carry_z),
@@ -162,12 +162,12 @@ class PandaMotionDriver(RobotDriver):
             )
         except SkillError as exc:
             if exc.reason in PLANNING_FAILURES:
-                self._put_back(decision_id, object_id)
+                self.put_back(decision_id, object_id)
             raise
         if carry.gripper_width < self.min_grasp_width:
-            self._release(decision_id, grasp)
+            self.release(decision_id, grasp)
             raise SkillError("grasp_slipped", f"{object_id} was lost during the transfer")
-        released = self._release(decision_id, grasp)
+        released = self.release(decision_id, grasp)
         seen = self.transport.object_position(object_id, after=released.stamp)
         if seen is not None:
             miss = float(np.linalg.norm(seen - target))
@@ -176,7 +176,7 @@ class PandaMotionDriver(RobotDriver):
                     "placement_missed", f"{object_id} rests {miss * 1000:.0f} mm from its goal"
                 )
 
-    def _put_back(self, decision_id: str, object_id: str) -> None:
+    def put_back(self, decision_id: str, object_id: str) -> None:
         """After a place that could not be planned: set the held object down where it was
         picked, as it was held, so a refused placement leaves it where it was (best effort:
         if that cannot be planned either, it stays held)."""
@@ -185,13 +185,13 @@ class PandaMotionDriver(RobotDriver):
         _, hand, yaw, grasp = self._picked
         self._picked = None
         try:
-            self._run(
+            self.run_plan(
                 decision_id,
                 self.plans.checked(
                     lambda q: self.planner.place(q, hand, yaw), grasp.obstacles, grasp.opening
                 ),
             )
-            self._release(decision_id, grasp)
+            self.release(decision_id, grasp)
         except SkillError as exc:
             log.info("could not put %s back: %s", object_id, exc)
 
@@ -223,17 +223,17 @@ class PandaMotionDriver(RobotDriver):
         distance = out if is_open else rail - out
         shift = np.array([distance if is_open else -distance, 0.0, 0.0])
         # Yaw 0: the fingers close along y, across the tab.
-        held = self._run(
+        held = self.run_plan(
             decision_id,
             self.plans.checked(lambda q: self.planner.slide(q, grip, shift, 0.0), ()),
             home_around=(),
         )
         if held.gripper_width < self.min_grasp_width:
-            self._release(decision_id, Grasp())
+            self.release(decision_id, Grasp())
             raise SkillError(
                 "handle_missed", f"fingers closed to {held.gripper_width * 1000:.1f} mm"
             )
-        released = self._run(
+        released = self.run_plan(
             decision_id, self.plans.checked(lambda q: self.planner.release(q, HANDLE_BACK_OFF), ())
         )
         seen = self.transport.object_position(rack_id, after=released.stamp)
@@ -264,15 +264,15 @@ class PandaMotionDriver(RobotDriver):
         if self._decision == decision_id:
             self.transport.abort(reason)
 
-    # --- pieces -----------------------------------------------------------------------------
-    def _release(self, decision_id: str, grasp: Grasp) -> JointTrajectoryResult:
+    # --- pieces: what a skill extension composes its motions from (the dishwasher's turn-over)
+    def release(self, decision_id: str, grasp: Grasp) -> JointTrajectoryResult:
         """Open as wide as ``grasp`` says where the hand is and retreat (after a placement,
         or after a lost grasp, so the next attempt starts clean)."""
-        return self._run(
+        return self.run_plan(
             decision_id, self.plans.checked(self.planner.release, grasp.obstacles, grasp.opening)
         )
 
-    def _run(
+    def run_plan(
         self,
         decision_id: str,
         plan: Callable[[np.ndarray], JointTrajectory],
@@ -285,13 +285,13 @@ class PandaMotionDriver(RobotDriver):
         (``GraspPlanner.home``, checked against those obstacles) and plans from there."""
         if decision_id != self._decision:
             self._decision, self._decision_stops = decision_id, self._stops
-        self._raise_if_stopped()
+        self.raise_if_stopped()
         q = self.transport.joint_positions()
         if home_around is not None:
             plan = self._homing_first(decision_id, plan, home_around)
         for _attempt in range(2):
             trajectory = plan(q)  # raises SkillError('no_ik_solution') before any motion
-            self._raise_if_stopped()  # the stop (and maybe resume) came while planning
+            self.raise_if_stopped()  # the stop (and maybe resume) came while planning
             result = self.transport.execute(self._command(decision_id, trajectory))
             if result.ok:
                 return result
@@ -323,7 +323,7 @@ class PandaMotionDriver(RobotDriver):
 
         return from_home_if_stuck
 
-    def _raise_if_stopped(self) -> None:
+    def raise_if_stopped(self) -> None:
         if self._stopped:
             raise SkillError("stopped", "emergency stop engaged")
         if self._stops != self._decision_stops:
