@@ -14,6 +14,7 @@ from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError, LogError
 from manigraph_shared.messages import (
     EXPLAINER_BUSY,
+    EXPLAINER_WARMING_UP,
     Action,
     ExplainRequest,
     Explanation,
@@ -72,13 +73,18 @@ def summary(explanation: Explanation) -> dict[str, object]:
     return {key: data[key] for key in (*keys, *extra)}
 
 
+#: The planner's refusals that pass: asked again until the timeout.
+RETRIED = (EXPLAINER_BUSY, EXPLAINER_WARMING_UP)
+
+
 def explain_online(
     args: argparse.Namespace, decision: str | None, seed: int, timeout: float
 ) -> Explanation:
     """The planner's answer on ``manigraph/planner/explain`` within ``timeout`` seconds;
     BusError on error replies. A planner that explains every decision is often busy with the
-    last one just when a person asks: ``explainer_busy`` is asked again, a little later each
-    time, until ``timeout`` has passed (then that refusal is the error)."""
+    last one just when a person asks, and a planner just started may still be building its
+    explainer: ``explainer_busy`` and ``explainer_warming_up`` are asked again, a little later
+    each time, until ``timeout`` has passed (then that refusal is the error)."""
     from manigraph_shared.bus import Bus
     from manigraph_shared.errors import RequestRefused
 
@@ -91,7 +97,8 @@ def explain_online(
             try:
                 return bus.request(request, Explanation, timeout=max(left, 0.1))
             except RequestRefused as exc:
-                if EXPLAINER_BUSY not in str(exc) or time.monotonic() + pause >= deadline:
+                again = any(code in str(exc) for code in RETRIED)
+                if not again or time.monotonic() + pause >= deadline:
                     raise
             time.sleep(pause)
             pause = min(pause * 2, 0.5)

@@ -114,8 +114,9 @@ def test_explain_without_a_planner_fails_with_a_clear_message(running_stack: Sta
 
 def test_explain_asks_again_while_the_explainer_is_busy(running_stack: Stack) -> None:
     """A planner explaining every decision is busy with the last one just when a person asks
-    (a CI run under load got ``explainer_busy`` from a planner so): the CLI asks again until
-    its timeout. Here a queryable on the real router is busy twice, then answers."""
+    (a CI run under load got ``explainer_busy`` from a planner so), and one just started may
+    still warm its explainer up: the CLI asks again until its timeout. Here a queryable on the
+    real router is warming up, then busy, then answers."""
     running_stack.start("router")
     asked: list[float] = []
 
@@ -123,7 +124,9 @@ def test_explain_asks_again_while_the_explainer_is_busy(running_stack: Stack) ->
         asked.append(time.monotonic())
         if request.decision_id == "nope:1":
             raise PolicyError("decision_id: 'nope:1' is not one of the planner's decisions")
-        if len(asked) <= 2:
+        if len(asked) == 1:
+            raise PolicyError("explainer_warming_up: the explainer is being built; ask again")
+        if len(asked) == 2:
             raise PolicyError("explainer_busy: one explanation at a time; ask again later")
         return Explanation(
             decision_id="e:0", episode_id="e", scene_sequence=1, policy="gnn-sage",

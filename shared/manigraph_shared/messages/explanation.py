@@ -15,6 +15,9 @@ LATEST = "latest"
 #: Start of the planner's refusal while its explainer is at work (one explanation at a time):
 #: the one refusal a client may ask again after.
 EXPLAINER_BUSY = "explainer_busy"
+#: Start of the planner's refusal while its explainer is being built (right after start):
+#: a client may ask again after it too.
+EXPLAINER_WARMING_UP = "explainer_warming_up"
 MAX_EXPLAINED_EDGES = 64
 IDENTIFIER_PATTERN = r"^[A-Za-z0-9_.:\-]{1,64}$"
 

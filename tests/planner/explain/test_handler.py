@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import threading
+import time
 from collections.abc import Callable
 
 import pytest
@@ -108,3 +110,36 @@ def test_the_history_keeps_only_the_last_decisions(
     assert history.get(ids[0]) is None
     with pytest.raises(ValueError, match="capacity"):
         DecisionHistory(capacity=0)
+
+
+def test_a_query_while_the_explainer_warms_up_is_refused_at_once_then_answered(
+    planner: tuple[DecisionMaker, ExplainHandler],
+    make_stack_scene: Callable[[int], Scene],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The planner builds its explainer on a thread of its own; a query meanwhile gets
+    ``explainer_warming_up`` (the client asks again) instead of waiting for the build."""
+    from manigraph_planner.explain.scene_explainer import SceneExplainer
+
+    _, handler = planner
+    release, warming = threading.Event(), threading.Event()
+    warm_up = SceneExplainer.warm_up
+
+    def slow_warm_up(self: SceneExplainer) -> None:
+        warming.set()
+        release.wait(30)
+        warm_up(self)
+
+    monkeypatch.setattr(SceneExplainer, "warm_up", slow_warm_up)
+    builder = threading.Thread(target=handler.prepare)
+    builder.start()
+    try:
+        assert warming.wait(30)
+        started = time.monotonic()
+        with pytest.raises(PolicyError, match=r"^explainer_warming_up: "):
+            handler(ExplainRequest(scene=make_stack_scene(3)))
+        assert time.monotonic() - started < 5  # refused, not held until the build ends
+    finally:
+        release.set()
+        builder.join(30)
+    assert handler(ExplainRequest(scene=make_stack_scene(3))).object

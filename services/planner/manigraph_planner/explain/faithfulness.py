@@ -23,10 +23,9 @@ from dataclasses import dataclass
 
 import torch
 from torch import Tensor
-from torch_geometric.explain.algorithm.utils import clear_masks, set_masks
 
+from manigraph_planner.explain.masked_forward import MaskedNet
 from manigraph_planner.explain.masks import MaskExplanation
-from manigraph_planner.gnn.models import PolicyNet
 from manigraph_planner.policies.gnn import best_compatible_pair
 
 __all__ = ["Faithfulness", "faithfulness"]
@@ -55,9 +54,10 @@ class Faithfulness:
 
 
 def faithfulness(
-    net: PolicyNet, x: Tensor, num_objects: int, result: MaskExplanation
+    net: MaskedNet, x: Tensor, num_objects: int, result: MaskExplanation
 ) -> Faithfulness:
-    """The figures for ``result``, an explanation of ``net``'s decision on the graph with node
+    """The figures for ``result``, an explanation of ``net``'s (the explainer's masked copy
+    of the policy network) decision on the graph with node
     features ``x`` (objects first) and edges ``result.edge_index``.
 
     Shapes:
@@ -83,7 +83,7 @@ def faithfulness(
 
 
 def _decision(
-    net: PolicyNet,
+    net: MaskedNet,
     x: Tensor,
     num_objects: int,
     edge_index: Tensor,
@@ -92,12 +92,8 @@ def _decision(
 ) -> tuple[int, int] | None:
     """The decision (node indices) on the masked graph, by the policy's own rule; categories
     come from the unmasked graph, as the policy's decoder reads them."""
-    set_masks(net, edge_mask, edge_index, apply_sigmoid=False)
-    try:
-        with torch.no_grad():
-            logits = net(x * feature_mask, edge_index)
-    finally:
-        clear_masks(net)
+    with torch.no_grad():
+        logits = net(x * feature_mask, edge_index, edge_mask)
     found = best_compatible_pair(
         logits[:num_objects].log_softmax(0),
         logits[num_objects:].log_softmax(0),

@@ -10,7 +10,12 @@ from manigraph_planner.decisions import DecisionHistory
 from manigraph_planner.explain.config import ExplainerConfig
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.errors import ManigraphError, PolicyError
-from manigraph_shared.messages import Action, ExplainRequest, Explanation
+from manigraph_shared.messages import (
+    EXPLAINER_WARMING_UP,
+    Action,
+    ExplainRequest,
+    Explanation,
+)
 
 if TYPE_CHECKING:
     from manigraph_planner.explain.scene_explainer import SceneExplainer
@@ -29,9 +34,12 @@ class ExplainHandler:
         history: the planner's recent decisions and their scenes.
         config: the mask optimisation's settings.
 
-    The explainer itself (a message-passing copy of the network, and PyG with it: ~2 s of
-    imports on two cores) is built on first use or by :meth:`prepare`, never before the
-    planner answers its first scene.
+    The explainer itself (a frozen copy of the network that scales messages by edge masks
+    as dense algebra, :mod:`~manigraph_planner.explain.masked_forward`: no PyG import) is
+    built, and warmed by one small explanation, by :meth:`prepare`, which the planner runs
+    beside its first decisions (tens of milliseconds), or on first use. A request that comes
+    while :meth:`prepare` is at it is refused ``explainer_warming_up`` at once (the client
+    asks again), rather than held until the build is done.
     """
 
     def __init__(
@@ -59,9 +67,10 @@ class ExplainHandler:
         return not self.problem
 
     def prepare(self) -> None:
-        """Build the explainer now, if the policy can be explained (safe from any thread)."""
+        """Build and warm the explainer now, if the policy can be explained (safe from any
+        thread)."""
         if self.available:
-            self._explainer()
+            self._explainer(wait=True)
 
     def __call__(self, request: ExplainRequest) -> Explanation:
         if self.problem:
@@ -72,7 +81,9 @@ class ExplainHandler:
         limits = self.config or ExplainerConfig()
         if request.scene is not None:
             limits.check_size(request.scene)
-            return self._explainer().explain_scene(request.scene, request.seed, wait=False)
+            return self._explainer(wait=False).explain_scene(
+                request.scene, request.seed, wait=False
+            )
         if request.wants_latest:
             found = self.history.latest()
             if found is None:
@@ -89,7 +100,7 @@ class ExplainHandler:
                 )
         scene, action = found
         limits.check_size(scene)
-        return self._explainer().explain(
+        return self._explainer(wait=False).explain(
             scene, action.object_id, action.goal_id, action.decision_id, request.seed, wait=False
         )
 
@@ -99,16 +110,28 @@ class ExplainHandler:
         if found is None:
             return None
         scene, _ = found
-        return self._explainer().explain(
+        return self._explainer(wait=True).explain(
             scene, action.object_id, action.goal_id, action.decision_id
         )
 
-    def _explainer(self) -> SceneExplainer:
+    def _explainer(self, wait: bool) -> SceneExplainer:
+        """The explainer, built (and warmed) here if nobody has yet; with ``wait`` False,
+        refused ``explainer_warming_up`` while another thread is building it."""
         if self.problem:
             raise PolicyError(self.problem)
-        with self._building:
+        if self.explainer is not None:
+            return self.explainer
+        if not self._building.acquire(blocking=wait):
+            raise PolicyError(
+                f"{EXPLAINER_WARMING_UP}: the explainer is being built; ask again in a moment"
+            )
+        try:
             if self.explainer is None:
                 from manigraph_planner.explain.scene_explainer import SceneExplainer
 
-                self.explainer = SceneExplainer(self.policy, self.config)
+                explainer = SceneExplainer(self.policy, self.config)
+                explainer.warm_up()
+                self.explainer = explainer
             return self.explainer
+        finally:
+            self._building.release()

@@ -45,18 +45,16 @@ same seed, graph and network give the same explanation.
 
 from __future__ import annotations
 
-import copy
 import math
 import time
 from dataclasses import dataclass
 
 import torch
 from torch import Tensor
-from torch_geometric.explain.algorithm.utils import clear_masks, set_masks
 
 from manigraph_planner.explain.config import ExplainerConfig, Objective
+from manigraph_planner.explain.masked_forward import MaskedNet
 from manigraph_planner.gnn.models import PolicyNet
-from manigraph_planner.gnn.models.build import with_message_passing
 from manigraph_shared.errors import PolicyError
 
 __all__ = ["MaskExplainer", "MaskExplanation"]
@@ -111,8 +109,7 @@ class MaskExplainer:
 
     def __init__(self, net: PolicyNet, config: ExplainerConfig | None = None) -> None:
         self.config = config or ExplainerConfig()
-        self.net = copy.deepcopy(with_message_passing(net)).eval()
-        self.net.requires_grad_(False)
+        self.net = MaskedNet(net)
 
     def explain(
         self,
@@ -123,6 +120,7 @@ class MaskExplainer:
         goal_index: int,
         seed: int | None = None,
         deadline: float | None = None,
+        steps: int | None = None,
     ) -> MaskExplanation:
         """Explain the choice of node ``object_index`` and node ``goal_index``.
 
@@ -133,6 +131,7 @@ class MaskExplainer:
             object_index, goal_index: the chosen nodes (``goal_index >= num_objects``).
             seed: overrides the config's seed.
             deadline: ``time.monotonic()`` after which the optimisation is abandoned.
+            steps: overrides the config's steps (the warm-up's two).
 
         Shapes:
             - **x:** :math:`(N, F)`; **edge_index:** :math:`(2, E)`
@@ -144,6 +143,7 @@ class MaskExplainer:
         num_nodes = int(x.shape[0])
         _check_indices(num_nodes, num_objects, object_index, goal_index, int(edge_index.shape[1]))
         cfg = self.config
+        steps = cfg.steps if steps is None else steps
         generator = torch.Generator().manual_seed(cfg.seed if seed is None else seed)
         num_edges, num_features = int(edge_index.shape[1]), int(x.shape[1])
         std = torch.nn.init.calculate_gain("relu") * math.sqrt(2.0 / (2 * num_nodes))
@@ -159,50 +159,44 @@ class MaskExplainer:
         feature_logits = (torch.randn(num_features, generator=generator) * 0.1).requires_grad_()
         edge_budget = min(cfg.edge_budget, num_edges)
         feature_budget = min(cfg.feature_budget, num_features)
-        optimiser = torch.optim.Adam([edge_logits, feature_logits], lr=cfg.learning_rate)
+        optimiser = _Adam([edge_logits, feature_logits], cfg.learning_rate)
         x = x.detach().to(torch.float32)
         loss_value = float("nan")
         with torch.inference_mode(False), torch.enable_grad():
-            try:
-                for step in range(cfg.steps):
-                    if deadline is not None and time.monotonic() > deadline:
-                        raise PolicyError(
-                            f"explain_deadline: gave up after {step} of {cfg.steps} steps "
-                            f"({num_nodes} nodes, {num_edges} edges)"
-                        )
-                    optimiser.zero_grad()
-                    edge_mask = torch.where(candidates, edge_logits, closed).sigmoid()
-                    feature_mask = feature_logits.sigmoid()
-                    set_masks(self.net, edge_mask, edge_index, apply_sigmoid=False)
-                    choice = (self._margins if pair else self._log_choice)(
-                        x * feature_mask, edge_index, num_objects, object_index, goal_index
+            for step in range(steps):
+                if deadline is not None and time.monotonic() > deadline:
+                    raise PolicyError(
+                        f"explain_deadline: gave up after {step} of {steps} steps "
+                        f"({num_nodes} nodes, {num_edges} edges)"
                     )
-                    if pair:
-                        set_masks(self.net, 1.0 - edge_mask, edge_index, apply_sigmoid=False)
-                        rest = self._margins(
-                            x * (1.0 - feature_mask),
-                            edge_index,
-                            num_objects,
-                            object_index,
-                            goal_index,
-                        )
-                        fit = torch.nn.functional.softplus(-choice).sum()
-                        fit = fit + cfg.complement_weight * torch.nn.functional.softplus(rest).sum()
-                    else:
-                        fit = -choice
-                    edge_mass = edge_mask[candidates].sum()
-                    over = (edge_mass - edge_budget).relu() + (
-                        feature_mask.sum() - feature_budget
-                    ).relu()
-                    undecided = _binary_entropy(edge_mask[candidates]) + _binary_entropy(
-                        feature_mask
+                optimiser.zero_grad()
+                edge_mask = torch.where(candidates, edge_logits, closed).sigmoid()
+                feature_mask = feature_logits.sigmoid()
+                choice = (self._margins if pair else self._log_choice)(
+                    x * feature_mask, edge_index, edge_mask, num_objects, object_index, goal_index
+                )
+                if pair:
+                    rest = self._margins(
+                        x * (1.0 - feature_mask),
+                        edge_index,
+                        1.0 - edge_mask,
+                        num_objects,
+                        object_index,
+                        goal_index,
                     )
-                    loss = fit + cfg.budget_weight * over + cfg.entropy_weight * undecided
-                    loss.backward()
-                    optimiser.step()
-                    loss_value = float(loss.detach())
-            finally:
-                clear_masks(self.net)
+                    fit = torch.nn.functional.softplus(-choice).sum()
+                    fit = fit + cfg.complement_weight * torch.nn.functional.softplus(rest).sum()
+                else:
+                    fit = -choice
+                edge_mass = edge_mask[candidates].sum()
+                over = (edge_mass - edge_budget).relu() + (
+                    feature_mask.sum() - feature_budget
+                ).relu()
+                undecided = _binary_entropy(edge_mask[candidates]) + _binary_entropy(feature_mask)
+                loss = fit + cfg.budget_weight * over + cfg.entropy_weight * undecided
+                loss.backward()
+                optimiser.step()
+                loss_value = float(loss.detach())
         edge_mask = torch.where(candidates, edge_logits.detach(), closed).sigmoid()
         feature_mask = feature_logits.detach().sigmoid()
         edge_order = torch.sort(edge_mask + shown.float(), descending=True, stable=True).indices
@@ -224,20 +218,32 @@ class MaskExplainer:
         )
 
     def _log_choice(
-        self, x: Tensor, edge_index: Tensor, num_objects: int, object_index: int, goal_index: int
+        self,
+        x: Tensor,
+        edge_index: Tensor,
+        edge_mask: Tensor | None,
+        num_objects: int,
+        object_index: int,
+        goal_index: int,
     ) -> Tensor:
-        """:math:`\\log p(o^*) + \\log p(g^*)` under the network's current masks."""
-        logits = self.net(x, edge_index)
+        """:math:`\\log p(o^*) + \\log p(g^*)` with messages scaled by ``edge_mask``."""
+        logits = self.net(x, edge_index, edge_mask)
         object_logp = logits[:num_objects].log_softmax(0)[object_index]
         goal_logp = logits[num_objects:].log_softmax(0)[goal_index - num_objects]
         return object_logp + goal_logp
 
     def _margins(
-        self, x: Tensor, edge_index: Tensor, num_objects: int, object_index: int, goal_index: int
+        self,
+        x: Tensor,
+        edge_index: Tensor,
+        edge_mask: Tensor | None,
+        num_objects: int,
+        object_index: int,
+        goal_index: int,
     ) -> Tensor:
         """:math:`(m_o, m_g)`: the chosen object's (goal's) logit over the best other one's
         (0 when it has no rival)."""
-        logits = self.net(x, edge_index)
+        logits = self.net(x, edge_index, edge_mask)
         return torch.stack(
             [
                 _margin(logits[:num_objects], object_index),
@@ -260,15 +266,41 @@ class MaskExplainer:
         hard_edges[kept_edges] = 1.0
         hard_features = torch.zeros(x.shape[1])
         hard_features[kept_features] = 1.0
-        set_masks(self.net, hard_edges, edge_index, apply_sigmoid=False)
-        try:
-            with torch.no_grad():
-                log_p = self._log_choice(
-                    x * hard_features, edge_index, num_objects, object_index, goal_index
-                )
-        finally:
-            clear_masks(self.net)
+        with torch.no_grad():
+            log_p = self._log_choice(
+                x * hard_features, edge_index, hard_edges, num_objects, object_index, goal_index
+            )
         return min(1.0, max(0.0, float(log_p.exp())))
+
+
+class _Adam:
+    """Adam (Kingma and Ba, 2015) with torch's defaults (betas 0.9 and 0.999, eps 1e-8), the
+    same steps as ``torch.optim.Adam``: that class imports ``torch._dynamo`` when first built,
+    a second of a fresh planner's time (the explainer is warmed right after the start)."""
+
+    def __init__(self, params: list[Tensor], lr: float) -> None:
+        self.params, self.lr, self.steps = params, lr, 0
+        self.first = [torch.zeros_like(p) for p in params]
+        self.second = [torch.zeros_like(p) for p in params]
+
+    def zero_grad(self) -> None:
+        for param in self.params:
+            param.grad = None
+
+    @torch.no_grad()
+    def step(self) -> None:
+        self.steps += 1
+        beta1, beta2 = 0.9, 0.999
+        step_size = self.lr / (1 - beta1**self.steps)
+        root_correction = math.sqrt(1 - beta2**self.steps)
+        for param, first, second in zip(self.params, self.first, self.second, strict=True):
+            if param.grad is None:
+                continue
+            grad = param.grad
+            first.lerp_(grad, 1 - beta1)
+            second.mul_(beta2).addcmul_(grad, grad, value=1 - beta2)
+            denominator = (second.sqrt() / root_correction).add_(1e-8)
+            param.addcdiv_(first, denominator, value=-step_size)
 
 
 def _margin(logits: Tensor, index: int) -> Tensor:
