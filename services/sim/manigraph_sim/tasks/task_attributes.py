@@ -15,11 +15,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from difflib import get_close_matches
 
 import numpy as np
 
 from manigraph_shared.acceptance import admits
+from manigraph_shared.errors import TaskError
 from manigraph_sim.tasks.goal_matching import Shortfall, shortfall
+from manigraph_sim.tasks.task_file_specs import RESERVED, GoalSpec, ObjectSpec
 
 AttributeValue = str | float
 #: Draws of a file's attributes tried per episode before the episode is refused.
@@ -88,6 +91,74 @@ def first_shortfall(goals: list[Wanted], objects: list[Candidate]) -> tuple[Shor
     return missing, f"goals.{goal.index}: {goal.id} cannot be filled: {why}"
 
 
+def required(goals: Sequence[GoalSpec]) -> list[Wanted]:
+    """The goals that must be filled, as the matching sees them."""
+    return [Wanted(i, g.id, g.category, g.accepts) for i, g in enumerate(goals) if not g.optional]
+
+
+def candidates(objects: Sequence[ObjectSpec], shuffle: Sequence[str]) -> list[Candidate]:
+    """The objects as the matching sees them, each attribute with every value a draw may
+    give it."""
+    possible = possible_values([o.attributes for o in objects], shuffle)
+    return [
+        Candidate(o.id, o.category, o.size, values, o.spare)
+        for o, values in zip(objects, possible, strict=True)
+    ]
+
+
+def unknown_attributes(
+    objects: Sequence[ObjectSpec], goals: Sequence[GoalSpec], shuffle: Sequence[str]
+) -> list[str]:
+    """Goals accepting, or a shuffle naming, an attribute no object carries (with the name
+    probably meant), and goals accepting an id no object has."""
+    carried = sorted({name for o in objects for name in o.attributes})
+    ids = {o.id for o in objects}
+
+    def unknown(field: str, name: str) -> str:
+        close = get_close_matches(name, carried, n=1, cutoff=0.6)
+        hint = f"; did you mean {close[0]}?" if close else ""
+        return f"{field}: no object carries an attribute {name}{hint}"
+
+    problems = []
+    for i, goal in enumerate(goals):
+        for key, value in goal.accepts.items():
+            if key == "id" and value not in ids:
+                problems.append(f"goals.{i}.accepts.id: {goal.id} accepts {value}: no such object")
+            elif key not in RESERVED and key not in carried:
+                problems.append(unknown(f"goals.{i}.accepts.{key}", key))
+    problems += [unknown(f"shuffle.{i}", n) for i, n in enumerate(shuffle) if n not in carried]
+    return problems
+
+
+def episode_attributes(
+    rng: np.random.Generator,
+    objects: Sequence[ObjectSpec],
+    shuffle: Sequence[str],
+    goals: list[Wanted],
+) -> list[dict[str, AttributeValue]]:
+    """Each object's attributes for one episode: drawn (:func:`draw`) until the objects that
+    are not spares can fill every required goal, at most :data:`MAX_DRAWS` times."""
+    listed = [o.attributes for o in objects]
+    drawing = bool(shuffle) or any(not _single(v) for a in listed for v in a.values())
+    if not drawing:
+        return [{k: _one_of(rng, v) for k, v in a.items()} for a in listed]  # no draw: single
+    missing = None
+    for _ in range(MAX_DRAWS):
+        drawn = draw(rng, listed, shuffle)
+        items = [
+            Candidate(o.id, o.category, o.size, {k: [v] for k, v in a.items()}, o.spare)
+            for o, a in zip(objects, drawn, strict=True)
+        ]
+        missing = first_shortfall(goals, items)
+        if missing is None:
+            return drawn
+    assert missing is not None
+    raise TaskError(
+        f"task file: {missing[1]} in {MAX_DRAWS} draws of the attributes for this seed; "
+        "list values that can fill every goal"
+    )
+
+
 def draw(
     rng: np.random.Generator,
     listed: Sequence[Mapping[str, AttributeValue | Sequence[AttributeValue]]],
@@ -138,6 +209,10 @@ def describe(accepts: Mapping[str, AttributeValue | Sequence[float]]) -> str:
 def names(ids: Sequence[str]) -> str:
     shown = ", ".join(ids[:NAMES_SHOWN])
     return shown + (", ..." if len(ids) > NAMES_SHOWN else "")
+
+
+def _single(value: object) -> bool:
+    return isinstance(value, str | int | float)
 
 
 def _values(value: AttributeValue | Sequence[AttributeValue]) -> list[AttributeValue]:

@@ -4,6 +4,7 @@
 name = "two blocks"                 # optional
 randomize_xy = 0.05                 # metres: the whole layout shifts by up to this, per seed
 partially_observable = false        # hide what is in a closed container until it is opened
+shuffle = ["colour"]                # per seed: permute these attributes among their objects
 
 [[objects]]                         # category: block | cover
 id = "block_0"
@@ -11,18 +12,21 @@ category = "block"
 position = [0.50, -0.10, 0.02]      # centre, metres, robot frame
 size = [0.04, 0.04, 0.04]           # full extents, metres
 jitter = 0.01                       # metres: this object shifts by up to this in x, y, per seed
+attributes = { colour = "red", label = "bolt" }  # text or numbers, what goals tell apart
 
 [[objects]]
 id = "block_1"
 category = "block"
 positions = [[0.40, -0.20, 0.02], [0.60, -0.20, 0.02]]  # one of these, chosen per seed
 spare = true                        # belongs to no goal: the goals are filled without it
+attributes = { colour = ["red", "blue"] }        # a list: one value drawn per seed
 
 [[goals]]                           # category: block | cover (what fills it)
 id = "goal_0"
 category = "block"
 position = [0.45, 0.15, 0.02]
 optional = false                    # optional goals (cover storage) need not be filled
+accepts = { colour = "red" }        # what fills it: every key must match (below)
 
 [[containers]]                      # static open-top boxes
 id = "box_0"
@@ -38,8 +42,26 @@ as one; its own ``jitter`` and ``positions`` are refused. Objects choosing among
 positions never take one another's place (a draw that cannot avoid it is refused, naming the
 object). Every required goal needs an object of its category that is not a spare.
 
-A syntax error names the line and column; a bad value names the field
-(``goals.0.position.2: ...``). Layouts that cannot happen are refused too, naming the object
+**Attributes and accepts.** An object's ``attributes`` (names: lower case, ``[a-z0-9_]``; values:
+text or numbers; ``id`` and ``size`` are the object's own fields) say what tells it apart. A
+goal's ``accepts`` says what fills it, and every key listed must match: an attribute's value
+(``{ colour = "red" }``, ``{ label = "bolt" }``; numbers within 1e-9), the object itself
+(``{ id = "part_2" }``), or its full extents (``{ size = [0.03, 0.03, 0.03] }``, within 1 mm
+on each axis). A goal without ``accepts`` takes any object of its category. A goal holding an
+object it does not accept is not filled (the episode's end event counts it as a wrong object).
+
+**Drawing per episode**, from the seed, after the positions (a file without draws keeps its
+layouts): a list value draws one of its values; then each attribute named in ``shuffle`` has
+its values permuted among the objects that carry it. A file whose required goals cannot all
+be filled at once by its objects that are not spares (a bipartite matching, each object
+filling one goal), whatever the draws give, is refused naming the goal; a draw that leaves a
+goal without an object it accepts is drawn again, up to 100 times.
+
+A syntax error names the line and column; a bad value names its line and the field
+(``line 9: goals.0.position.2: ...``), and a key that is no field suggests the one it was
+probably meant to be (``line 9: objects.1.postion: Extra inputs are not permitted; did you
+mean position?``). A file nested too deeply to read (``x = [[[...]]]``, thousands deep) is
+refused in one line. Layouts that cannot happen are refused too, naming the object
 or goal: objects that overlap one another, objects below the table, objects or goals outside
 the robot's reach (``REACH``, the skills' default workspace, after ``randomize_xy``), block
 goals closer than a block's width, and more required block (cover) goals than blocks (covers).
@@ -48,131 +70,28 @@ goals closer than a block's width, and more required block (cover) goals than bl
 from __future__ import annotations
 
 import tomllib
-from difflib import get_close_matches
 from functools import cached_property
-from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import (
-    BaseModel,
-    BeforeValidator,
-    ConfigDict,
-    Field,
-    ValidationError,
-    field_validator,
-    model_validator,
-)
+from pydantic import BaseModel, Field, ValidationError, model_validator
 
 from manigraph_shared.errors import TaskError
 from manigraph_sim.tasks import task_attributes
 from manigraph_sim.tasks.base import Task, TaskParams
 from manigraph_sim.tasks.task_file_errors import describe_errors
+from manigraph_sim.tasks.task_file_specs import (
+    BLOCK_WIDTH,
+    MAX_PROBLEMS_NAMED,
+    OVERLAP_TOLERANCE,
+    REACH,
+    AttributeName,
+    ContainerSpec,
+    GoalSpec,
+    ObjectSpec,
+    Position,
+    _Strict,
+)
 from manigraph_sim.world_model import Body, Container, Goal, Layout
-
-Coordinate = Annotated[float, Field(ge=-5.0, le=5.0)]
-Extent = Annotated[float, Field(gt=0.0, le=2.0)]
-Name = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.:\-]{1,64}$")]
-
-#: Where the robot can reach, robot frame, metres: the skills service's default workspace
-#: (services never import each other, so the bounds are repeated here). A goal or object
-#: outside it, after the layout's random shift, is a layout that cannot happen.
-REACH = ((0.1, 0.9), (-0.6, 0.6), (-0.01, 2.0))
-#: Bodies may touch (a stack's blocks share a face) but not interpenetrate by more than this.
-OVERLAP_TOLERANCE = 1e-3
-#: Layout problems named in one error; a file of 256 stacked-up blocks has 32,640 of them.
-MAX_PROBLEMS_NAMED = 10
-#: A block goal is a place for one block: two closer than this cannot both be filled.
-BLOCK_WIDTH = 0.04
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
-
-
-Position = tuple[Coordinate, Coordinate, Coordinate]
-
-
-def _no_boolean(value: object) -> object:
-    if isinstance(value, bool):
-        raise ValueError("true and false are not attribute values: give text or a number")
-    return value
-
-
-#: The contract's attribute names and values (``manigraph_shared.messages.scene``).
-AttributeName = Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]{0,31}$")]
-AttributeValue = Annotated[
-    Annotated[str, Field(min_length=1, max_length=64)] | Annotated[float, Field(ge=-1e6, le=1e6)],
-    BeforeValidator(_no_boolean),
-]
-#: Names an object's attributes may not take: a goal's ``accepts`` means the object's own.
-RESERVED = ("id", "size")
-
-
-class ObjectSpec(_Strict):
-    id: Name
-    category: Literal["block", "cover"]
-    position: Position | None = None
-    positions: list[Position] | None = Field(None, min_length=1, max_length=64)
-    size: tuple[Extent, Extent, Extent] = (0.04, 0.04, 0.04)
-    jitter: float = Field(0.0, ge=0.0, le=0.2, description="metres, uniform in x and y")
-    spare: bool = False
-    #: Each a value, or a list of values to draw one from per episode.
-    attributes: dict[
-        AttributeName, AttributeValue | Annotated[list[AttributeValue], Field(min_length=1)]
-    ] = Field(default_factory=dict, max_length=16)
-
-    @field_validator("attributes")
-    @classmethod
-    def _not_reserved(cls, attributes: dict[str, object]) -> dict[str, object]:
-        for name in RESERVED:
-            if name in attributes:
-                raise ValueError(f"{name}: is the object's own field, not an attribute")
-        return attributes
-
-    @model_validator(mode="after")
-    def _one_position(self) -> ObjectSpec:
-        if (self.position is None) == (self.positions is None):
-            raise ValueError("position: give either position or positions (a list), not both")
-        return self
-
-    @property
-    def anchor(self) -> Position:
-        """Where the object stands without randomization (its first listed position)."""
-        if self.position is not None:
-            return self.position
-        assert self.positions is not None
-        return self.positions[0]
-
-
-class GoalSpec(_Strict):
-    id: Name
-    category: Literal["block", "cover"]
-    position: tuple[Coordinate, Coordinate, Coordinate]
-    optional: bool = False
-    #: What fills it: every key must match (an attribute, ``id``, or ``size`` within 1 mm).
-    accepts: dict[AttributeName, AttributeValue | tuple[Extent, Extent, Extent]] = Field(
-        default_factory=dict, max_length=16
-    )
-
-    @field_validator("accepts")
-    @classmethod
-    def _known_forms(cls, accepts: dict[str, object]) -> dict[str, object]:
-        for key, value in accepts.items():
-            if key == "size" and not isinstance(value, tuple):
-                raise ValueError("size: give the full extents [x, y, z], metres")
-            if key == "id" and not isinstance(value, str):
-                raise ValueError("id: give an object's id")
-            if key != "size" and isinstance(value, tuple):
-                raise ValueError(f"{key}: give one value (text or a number), not a list")
-        return accepts
-
-
-class ContainerSpec(_Strict):
-    id: Name
-    centre: tuple[Coordinate, Coordinate]
-    inner: tuple[Extent, Extent]
-    wall: Extent = 0.01
-    height: Extent = 0.06
 
 
 class TaskFile(_Strict):
@@ -303,28 +222,7 @@ class TaskFile(_Strict):
         return problems
 
     def _unknown_attributes(self) -> list[str]:
-        """Goals accepting, or a shuffle naming, an attribute no object carries (with the
-        name probably meant)."""
-        carried = sorted({name for o in self.objects for name in o.attributes})
-        problems = []
-
-        def unknown(field: str, name: str) -> str:
-            close = get_close_matches(name, carried, n=1, cutoff=0.6)
-            hint = f"; did you mean {close[0]}?" if close else ""
-            return f"{field}: no object carries an attribute {name}{hint}"
-
-        for i, goal in enumerate(self.goals):
-            for key, value in goal.accepts.items():
-                if key == "id" and value not in {o.id for o in self.objects}:
-                    problems.append(
-                        f"goals.{i}.accepts.id: {goal.id} accepts {value}: no such object"
-                    )
-                elif key not in RESERVED and key not in carried:
-                    problems.append(unknown(f"goals.{i}.accepts.{key}", key))
-        for i, name in enumerate(self.shuffle):
-            if name not in carried:
-                problems.append(unknown(f"shuffle.{i}", name))
-        return problems
+        return task_attributes.unknown_attributes(self.objects, self.goals, self.shuffle)
 
     def _unsatisfiable(self) -> list[str]:
         """The first required goal the objects that are not spares cannot fill while the
@@ -335,29 +233,13 @@ class TaskFile(_Strict):
     @property
     def required(self) -> list[task_attributes.Wanted]:
         """The goals that must be filled, as the matching sees them."""
-        return [
-            task_attributes.Wanted(i, g.id, g.category, g.accepts)
-            for i, g in enumerate(self.goals)
-            if not g.optional
-        ]
+        return task_attributes.required(self.goals)
 
     @property
     def candidates(self) -> list[task_attributes.Candidate]:
-        """The objects as the matching sees them, each attribute with every value a draw
-        may give it."""
-        possible = task_attributes.possible_values(
-            [o.attributes for o in self.objects], self.shuffle
-        )
-        return [
-            task_attributes.Candidate(o.id, o.category, o.size, values, o.spare)
-            for o, values in zip(self.objects, possible, strict=True)
-        ]
-
-    @property
-    def draws_attributes(self) -> bool:
-        """Some attribute is drawn per episode (a list value, or a shuffle)."""
-        listed = any(isinstance(v, list) for o in self.objects for v in o.attributes.values())
-        return listed or bool(self.shuffle)
+        """The objects as the matching sees them, each attribute with every value a draw may
+        give it."""
+        return task_attributes.candidates(self.objects, self.shuffle)
 
     def support_of(self, index: int) -> int | None:
         """The object that object ``index`` rests on (same x, y within 1 mm, the highest one
@@ -530,26 +412,7 @@ class FileTask(Task):
         """Each object's attributes for this episode (drawn after the positions, so a file
         without draws keeps its layouts)."""
         spec = self.spec
-        listed = [o.attributes for o in spec.objects]
-        if not spec.draws_attributes:
-            return [dict(a) for a in listed]  # type: ignore[arg-type]  # no lists: values
-        missing = None
-        for _ in range(task_attributes.MAX_DRAWS):
-            drawn = task_attributes.draw(rng, listed, spec.shuffle)
-            candidates = [
-                task_attributes.Candidate(
-                    o.id, o.category, o.size, {k: [v] for k, v in a.items()}, o.spare
-                )
-                for o, a in zip(spec.objects, drawn, strict=True)
-            ]
-            missing = task_attributes.first_shortfall(spec.required, candidates)
-            if missing is None:
-                return drawn
-        assert missing is not None
-        raise TaskError(
-            f"task file: {missing[1]} in {task_attributes.MAX_DRAWS} draws of the attributes "
-            "for this seed; list values that can fill every goal"
-        )
+        return task_attributes.episode_attributes(rng, spec.objects, spec.shuffle, spec.required)
 
     def _offset(self, index: int, offsets: list[np.ndarray]) -> np.ndarray:
         base = self.spec.support_of(index)
