@@ -20,6 +20,7 @@ from pathlib import Path
 
 from manigraph_tools.access import policy_table
 from manigraph_tools.contract_doc import field_tables, flow_block, key_table
+from manigraph_tools.registry_doc import registry_table
 
 #: Block name -> the Markdown it holds. A new generated block registers its generator here.
 GENERATORS: dict[str, Callable[[], str]] = {
@@ -27,6 +28,7 @@ GENERATORS: dict[str, Callable[[], str]] = {
     "fields": field_tables,
     "flow": flow_block,
     "policy-table": policy_table,
+    "registries": registry_table,
 }
 
 _MARKER = re.compile(r"^<!-- ([a-z][a-z0-9-]*):(start|end) -->$", re.M)

@@ -1,0 +1,66 @@
+"""The registry table of docs/architecture.md, generated from the registries themselves.
+
+Each swappable part is an entry of one :class:`~manigraph_shared.registry.Registry`; this
+module imports the packages that fill each registry (a registry fills as its package's modules
+register their entries) and lists what is there, so the page cannot drift from the code
+(``tests/test_readme.py`` checks every generated block).
+"""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+
+from manigraph_shared.registry import Registry
+
+#: (registry, the module that declares it, the package whose import fills it), in the order
+#: an episode meets them.
+REGISTRIES: tuple[tuple[str, str, str], ...] = (
+    ("BACKENDS", "manigraph_sim.backends", "manigraph_sim.backends"),
+    ("TASKS", "manigraph_sim.tasks.base", "manigraph_sim.tasks"),
+    ("DRIVERS", "manigraph_skills.drivers.registry", "manigraph_skills.drivers"),
+    ("POLICIES", "manigraph_planner.policies.base", "manigraph_planner.policies"),
+    ("TASK_EXPERTS", "manigraph_planner.policies.base", "manigraph_planner.policies"),
+    ("POLICY_FILE_LOADERS", "manigraph_planner.policies.base", "manigraph_planner.policies"),
+    ("HEADS", "manigraph_planner.gnn.models.config", "manigraph_planner.gnn.models"),
+    ("ARCHITECTURES", "manigraph_planner.gnn.models.backbone", "manigraph_planner.gnn.models"),
+    ("SOURCES", "manigraph_planner.training.sources", "manigraph_planner.training.sources"),
+    ("BATCH_LAYOUTS", "manigraph_planner.training.batch_layouts", "manigraph_planner.training"),
+    ("RECIPES", "manigraph_planner.training.recipes", "manigraph_planner.training.recipes"),
+    ("FORMATS", "manigraph_tools.interop.formats", "manigraph_tools.interop.formats"),
+    ("BASELINES", "manigraph_lab.rl.baselines", "manigraph_lab.rl.baselines"),
+)
+
+
+def _where(module_name: str) -> str:
+    """The module's file, from the repository root (``services/sim/...``)."""
+    path = Path(importlib.import_module(module_name).__file__ or module_name)
+    parts = path.parts
+    for root in ("services", "shared", "tools", "lab"):
+        if root in parts:
+            index = len(parts) - 1 - parts[::-1].index(root)
+            return "/".join(parts[index:])
+    return path.name
+
+
+def _options(registry: Registry[object]) -> str:
+    names = []
+    for name in registry:
+        options = registry.entry(name).options
+        label = options.__name__ if options is not None else "none"
+        if label not in names:
+            names.append(label)
+    return ", ".join(f"`{n}`" if n != "none" else n for n in names) or "none"
+
+
+def registry_table() -> str:
+    """One row per registry: where it is declared, its entries and their options classes."""
+    rows = ["| registry | where | entries | options |", "|---|---|---|---|"]
+    for attribute, module_name, filler in REGISTRIES:
+        importlib.import_module(filler)
+        registry: Registry[object] = getattr(importlib.import_module(module_name), attribute)
+        entries = ", ".join(registry.names()) or "(none)"
+        rows.append(
+            f"| `{attribute}` | `{_where(module_name)}` | {entries} | {_options(registry)} |"
+        )
+    return "\n".join(rows)
