@@ -10,6 +10,7 @@ import json
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from manigraph_lab.sweep import SweepOptions, add_sweep_options
 from manigraph_planner.threads import add_threads_option, use_threads
@@ -22,6 +23,9 @@ from manigraph_shared.options import (
     options_from_args,
 )
 
+if TYPE_CHECKING:
+    from manigraph_lab.demos import DemoProtocol
+
 
 def _demos_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", type=Path, default=Path("data/demos.mcap"))
@@ -29,21 +33,44 @@ def _demos_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--blocks", type=int, nargs="+", default=[3, 4])
     parser.add_argument("--trajectories", type=int, default=20)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--task-file",
+        type=Path,
+        help="demonstrate your own TOML layout instead of --tasks (docs/task-files.md), by the "
+        "expert that solves any task file",
+    )
 
 
 def _demos_run(args: argparse.Namespace) -> int:
     from manigraph_lab.demos import DemoProtocol, record_demos
 
     protocol = DemoProtocol(tuple(args.tasks), tuple(args.blocks), args.trajectories, args.seed)
+    if args.task_file is not None:
+        protocol = _task_file_protocol(args.task_file, protocol)
     # Each task's own expert (planner's TASK_EXPERTS), ``expert`` for the paper's tasks.
     summary = record_demos(None, protocol, args.output, sys.stderr)
     print(json.dumps(summary))
     return 0
 
 
+def _task_file_protocol(path: Path, protocol: DemoProtocol) -> DemoProtocol:
+    """``protocol``'s episodes drawn from the task file at ``path`` (a bad file stops here,
+    naming the field, before any episode)."""
+    from dataclasses import replace
+
+    from manigraph_sim.tasks.task_file import parse_task_file
+    from manigraph_tools.episode_plan import EpisodeOptions
+
+    episodes = EpisodeOptions(task_file=path)
+    text = episodes.task_text()
+    assert text is not None
+    blocks = parse_task_file(text).blocks
+    return replace(protocol, blocks=(blocks,), task_file=text, task_file_name=episodes.label())
+
+
 demos_command = Command(
     help="record expert demonstrations as MCAP (default: the paper's 20 box pack/unpack runs; "
-    "each task by its registered expert)",
+    "each task by its registered expert; --task-file: your layout, by the generic expert)",
     configure=_demos_configure,
     run=_demos_run,
 )

@@ -5,6 +5,10 @@ A demonstration log holds, per step, the ``Scene`` the expert decided on and its
 written by :class:`~manigraph_shared.demonstrations.DemonstrationLog`, the writer the
 demonstration page (``manigraph demo-ui``) uses too. A log recorded from a running stack
 (``manigraph up --record``) has the same channels, so a user's own runs are training data too.
+
+With a task file (``--task-file``) every episode is a seeded draw of that layout, demonstrated
+by the ``expert`` policy, which solves any task file (objects matched to the goals that
+accept them; ``manigraph_planner.policies.matching``).
 """
 
 from __future__ import annotations
@@ -31,8 +35,23 @@ class DemoProtocol:
     #: The dishwasher task's dishes and preference (other tasks ignore them).
     objects: int | None = None
     preference: str | None = None
+    #: A task file's TOML text: every episode draws that layout (``tasks`` and ``blocks``
+    #: are then unused); ``task_file_name`` names the episodes.
+    task_file: str | None = None
+    task_file_name: str = "task-file"
 
     def requests(self) -> list[EpisodeRequest]:
+        if self.task_file is not None:
+            return [
+                EpisodeRequest(
+                    episode_id=f"demo-{i:03d}-{self.task_file_name}",
+                    task="file",
+                    blocks=self.blocks[0] if self.blocks else 1,
+                    seed=self.seed + i,
+                    task_file=self.task_file,
+                )
+                for i in range(self.trajectories)
+            ]
         combos = [(t, k) for t in self.tasks for k in self.blocks]
         return [
             EpisodeRequest(

@@ -181,3 +181,14 @@ def test_the_shipped_block_checkpoints_load_with_the_papers_spec(name: str) -> N
     net, info = load_checkpoint(REPO / "checkpoints" / name)
     assert net.config.feature_spec is FEATURE_SPEC
     assert "task" not in info.feature_spec
+
+
+def test_a_task_policy_takes_only_pairs_whose_goal_accepts_the_object(tmp_path: Path) -> None:
+    path, _ = task_checkpoint(tmp_path)
+    policy = load_policy(str(path))
+    assert {d.pair for d in policy.ranked(COLOURS)} == {
+        ("block_0", "red_slot"),
+        ("block_0", "any_slot"),
+        ("block_1", "any_slot"),
+        ("block_1", "part"),
+    }

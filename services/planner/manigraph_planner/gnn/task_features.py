@@ -28,6 +28,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
+import torch
+from torch import Tensor
+
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject
 
@@ -164,6 +167,34 @@ class TaskFeatures:
                     f"scene: goal {goal.id} accepts by {key!r}, which this policy was not "
                     f"trained on (it knows {', '.join(sorted(known))})"
                 )
+
+    def admits(self, objects: Tensor, goals: Tensor) -> Tensor:
+        """``admits[k, l]``: goal node ``l`` accepts object node ``k``, read off the task
+        columns alone (``accepts`` as ``manigraph_shared.acceptance`` matches it: every
+        attribute a goal asks for equal, sizes within 1 mm); categories are not checked.
+
+        Shapes:
+            - **objects:** :math:`(K, F)`, **goals:** :math:`(L, F)`: graph state rows
+            - **output:** :math:`(K, L)` bool
+        """
+        ok = torch.ones(objects.shape[0], goals.shape[0], dtype=torch.bool)
+        start = 5
+        size_tolerance = 1.5e-3 * self.size_scale
+        gap = (objects[:, None, start : start + 3] - goals[None, :, start : start + 3]).abs()
+        ok &= (goals[None, :, start + 3] > 0.5) | (gap <= size_tolerance).all(dim=2)
+        start += len(SIZE_COLUMNS)
+        for attribute in self.attributes:
+            width = len(attribute.columns)
+            have = objects[:, start : start + width - 1]
+            want = goals[:, start : start + width - 1]
+            any_value = goals[None, :, start + width - 1] > 0.5
+            if attribute.numeric:
+                same = (have[:, None, 0] - want[None, :, 0]).abs() <= 1e-6
+            else:
+                same = (have @ want.T) > 0.5
+            ok &= any_value | same
+            start += width
+        return ok
 
     def to_dict(self) -> dict[str, Any]:
         return {

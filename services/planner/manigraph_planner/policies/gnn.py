@@ -53,6 +53,9 @@ class GNNPolicy(Policy):
     the paper's decoder would send a block to a cover's storage place, an action PickAndPlace
     can never complete (e.g. box rearrangement before the second box is opened). Ties go to
     the node that comes first (scene order), so decisions are deterministic.
+    A policy with a task's feature spec also takes only pairs whose goal accepts the object,
+    as the scene's own columns say (``TaskFeatures.admits``):
+    the task file states that rule; which pair of those comes first is what was learned.
     Sets torch to one thread: a single small graph is latency-bound, and the planner shares
     a 2-core machine with the simulator. For the same reason the network runs its dense path
     for one complete graph (:meth:`PolicyNet.forward_complete`) rather than PyG message
@@ -80,6 +83,14 @@ class GNNPolicy(Policy):
         (``PolicyError`` for a value outside the checkpoint's vocabulary, naming it)."""
         return scene_to_graph(scene, self.net.config.feature_spec)
 
+    def admitted(self, graph: GraphState) -> Tensor | None:
+        """Which (object, goal) node pairs the task's accepts allow, or None: any."""
+        task = self.net.config.feature_spec.task
+        if task is None:
+            return None
+        k = graph.num_objects
+        return task.admits(graph.x[:k], graph.x[k:])
+
     def node_logits(self, graph: GraphState) -> Tensor:
         """The network's node logits for ``graph``, a complete graph like every graph state,
         computed by the dense path (:meth:`PolicyNet.forward_complete`): same parameters and
@@ -98,7 +109,7 @@ class GNNPolicy(Policy):
         k = graph.num_objects
         if k == 0 or k == graph.num_nodes:
             return None
-        return decision_from_logits(graph, self.node_logits(graph))
+        return decision_from_logits(graph, self.node_logits(graph), self.admitted(graph))
 
     def ranked(self, scene: Scene) -> list[Decision]:
         """Every compatible pair by ``log p(o) + log p(g)``, most likely first (the first is
@@ -109,14 +120,21 @@ class GNNPolicy(Policy):
             return []
         logits = self.node_logits(graph)
         pairs = ranked_compatible_pairs(
-            logits[:k].log_softmax(0), logits[k:].log_softmax(0), graph.x[:k, 0], graph.x[k:, 0]
+            logits[:k].log_softmax(0),
+            logits[k:].log_softmax(0),
+            graph.x[:k, 0],
+            graph.x[k:, 0],
+            self.admitted(graph),
         )
         return [Decision(graph.object_ids[o], graph.goal_ids[g]) for o, g in pairs]
 
 
-def decision_from_logits(graph: GraphState, node_logits: Tensor) -> Decision | None:
+def decision_from_logits(
+    graph: GraphState, node_logits: Tensor, admitted: Tensor | None = None
+) -> Decision | None:
     """The most likely compatible (object, goal) pair of ``graph`` under ``node_logits``
-    (see :class:`GNNPolicy`); None when the graph has no compatible pair.
+    (see :class:`GNNPolicy`); None when the graph has no compatible pair. ``admitted``
+    (:math:`(K, L)` bool, optional): the pairs a task's accepts allow.
 
     Shapes:
         - **node_logits:** :math:`(N,)`, objects first, as in ``graph``
@@ -127,6 +145,7 @@ def decision_from_logits(graph: GraphState, node_logits: Tensor) -> Decision | N
         node_logits[k:].log_softmax(0),
         graph.x[:k, 0],
         graph.x[k:, 0],
+        admitted,
     )
     if pair is None:
         return None
@@ -135,14 +154,16 @@ def decision_from_logits(graph: GraphState, node_logits: Tensor) -> Decision | N
 
 
 def best_compatible_pair(
-    object_logp: Tensor, goal_logp: Tensor, object_codes: Tensor, goal_codes: Tensor
+    object_logp: Tensor,
+    goal_logp: Tensor,
+    object_codes: Tensor,
+    goal_codes: Tensor,
+    admitted: Tensor | None = None,
 ) -> tuple[int, int] | None:
     """Argmax of ``object_logp[o] + goal_logp[g]`` over category-compatible pairs (paper codes:
-    block 1 fills block-goal 2, cover 0 fills cover-goal 3). The first maximal pair wins; None
-    when no pair is compatible."""
-    compatible = goal_codes.round().unsqueeze(0) == _GOAL_CODE_FOR[
-        object_codes.round().long()
-    ].unsqueeze(1)
+    block 1 fills block-goal 2, cover 0 fills cover-goal 3), and ``admitted`` ones where
+    given. The first maximal pair wins; None when no pair is compatible."""
+    compatible = _compatible(object_codes, goal_codes, admitted)
     if not bool(compatible.any()):
         return None
     scores = object_logp.unsqueeze(1) + goal_logp.unsqueeze(0)
@@ -152,14 +173,16 @@ def best_compatible_pair(
 
 
 def ranked_compatible_pairs(
-    object_logp: Tensor, goal_logp: Tensor, object_codes: Tensor, goal_codes: Tensor
+    object_logp: Tensor,
+    goal_logp: Tensor,
+    object_codes: Tensor,
+    goal_codes: Tensor,
+    admitted: Tensor | None = None,
 ) -> list[tuple[int, int]]:
     """Every category-compatible (object, goal) index pair, by ``object_logp[o] +
     goal_logp[g]`` from the most likely; equal scores keep row-major order, so the first pair
     is :func:`best_compatible_pair`'s."""
-    compatible = goal_codes.round().unsqueeze(0) == _GOAL_CODE_FOR[
-        object_codes.round().long()
-    ].unsqueeze(1)
+    compatible = _compatible(object_codes, goal_codes, admitted)
     scores = (object_logp.unsqueeze(1) + goal_logp.unsqueeze(0)).flatten()
     order = torch.sort(scores, descending=True, stable=True).indices
     width = goal_logp.shape[0]
@@ -169,6 +192,14 @@ def ranked_compatible_pairs(
 
 #: Object category code -> the code of the goals it can fill (paper: cover 0 -> 3, block 1 -> 2).
 _GOAL_CODE_FOR = torch.tensor([3.0, 2.0])
+
+
+def _compatible(object_codes: Tensor, goal_codes: Tensor, admitted: Tensor | None) -> Tensor:
+    """``(K, L)``: categories that fit, and the task's accepts where ``admitted`` is given."""
+    compatible = goal_codes.round().unsqueeze(0) == _GOAL_CODE_FOR[
+        object_codes.round().long()
+    ].unsqueeze(1)
+    return compatible if admitted is None else compatible & admitted
 
 
 def load_gnn_policy(path: Path) -> Policy:
