@@ -250,3 +250,24 @@ def test_accepts_and_shuffle_name_only_attributes_that_objects_carry() -> None:
         )
     with pytest.raises(TaskError, match=r"true and false are not attribute values"):
         parse_task_file(COLOURS.replace('label = "bolt"', "shiny = true"))
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (('label = "bolt"', "label = [[1]]"), "objects.0.attributes.label: give text or a number"),
+        (('label = "bolt"', 'label = ""'), "objects.0.attributes.label: text values have 1 to 64"),
+        (('label = "bolt"', "label = 1e9"), "objects.0.attributes.label: numbers lie within"),
+        (('label = "bolt"', "label = []"), "objects.0.attributes.label: a list of values holds"),
+        (
+            ('accepts = { colour = "red" }', 'accepts = { colour = ["red"] }'),
+            "line 15: goals.0.accepts.colour: a list is only for size = [x, y, z]",
+        ),
+    ],
+)
+def test_a_bad_attribute_value_gets_one_message_naming_its_line(
+    edit: tuple[str, str], message: str
+) -> None:
+    with pytest.raises(TaskError) as caught:
+        parse_task_file(COLOURS.replace(*edit))
+    assert message in str(caught.value) and "union" not in str(caught.value)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PlainValidator, field_validator, model_validator
 
 Coordinate = Annotated[float, Field(ge=-5.0, le=5.0)]
 Extent = Annotated[float, Field(gt=0.0, le=2.0)]
@@ -31,18 +31,51 @@ class _Strict(BaseModel):
 Position = tuple[Coordinate, Coordinate, Coordinate]
 
 
-def _no_boolean(value: object) -> object:
-    if isinstance(value, bool):
-        raise ValueError("true and false are not attribute values: give text or a number")
-    return value
-
-
-#: The contract's attribute names and values (``manigraph_shared.messages.scene``).
+#: The contract's attribute names and values (``manigraph_shared.messages.scene``): text of
+#: 1-64 characters or a number within +-1e6; a list draws one per episode (at most 64).
 AttributeName = Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]{0,31}$")]
-AttributeValue = Annotated[
-    Annotated[str, Field(min_length=1, max_length=64)] | Annotated[float, Field(ge=-1e6, le=1e6)],
-    BeforeValidator(_no_boolean),
-]
+MAX_LISTED_VALUES = 64
+
+
+def attribute_value(value: object) -> str | float:
+    """One attribute value, checked as the contract will check it (one clear message, where a
+    union of types would give one per type)."""
+    if isinstance(value, str):
+        if not 1 <= len(value) <= 64:
+            raise ValueError("text values have 1 to 64 characters")
+        return value
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        if not abs(value) <= 1e6:  # NaN fails too
+            raise ValueError("numbers lie within -1e6 to 1e6")
+        return float(value)
+    raise ValueError("give text or a number (true and false are not attribute values)")
+
+
+def listed_values(value: object) -> str | float | list[str | float]:
+    """An object's attribute: one value, or a list of values to draw one from."""
+    if isinstance(value, list):
+        if not 1 <= len(value) <= MAX_LISTED_VALUES:
+            raise ValueError(f"a list of values holds 1 to {MAX_LISTED_VALUES}")
+        return [attribute_value(v) for v in value]
+    return attribute_value(value)
+
+
+def accepted_value(value: object) -> str | float | tuple[float, float, float]:
+    """What a goal accepts under one key: a value, or full extents (for ``size``)."""
+    if isinstance(value, list):
+        if len(value) != 3 or not all(
+            isinstance(v, int | float) and not isinstance(v, bool) and 0 < v <= 2 for v in value
+        ):
+            raise ValueError(
+                "a list is only for size = [x, y, z] (full extents, each in (0, 2] metres); "
+                "other keys take one value"
+            )
+        return (float(value[0]), float(value[1]), float(value[2]))
+    return attribute_value(value)
+
+
+ListedValue = Annotated[str | float | list[str | float], PlainValidator(listed_values)]
+AcceptedValue = Annotated[str | float | tuple[float, float, float], PlainValidator(accepted_value)]
 #: Names an object's attributes may not take: a goal's ``accepts`` means the object's own.
 RESERVED = ("id", "size")
 
@@ -56,9 +89,7 @@ class ObjectSpec(_Strict):
     jitter: float = Field(0.0, ge=0.0, le=0.2, description="metres, uniform in x and y")
     spare: bool = False
     #: Each a value, or a list of values to draw one from per episode.
-    attributes: dict[
-        AttributeName, AttributeValue | Annotated[list[AttributeValue], Field(min_length=1)]
-    ] = Field(default_factory=dict, max_length=16)
+    attributes: dict[AttributeName, ListedValue] = Field(default_factory=dict, max_length=16)
 
     @field_validator("attributes")
     @classmethod
@@ -89,9 +120,7 @@ class GoalSpec(_Strict):
     position: tuple[Coordinate, Coordinate, Coordinate]
     optional: bool = False
     #: What fills it: every key must match (an attribute, ``id``, or ``size`` within 1 mm).
-    accepts: dict[AttributeName, AttributeValue | tuple[Extent, Extent, Extent]] = Field(
-        default_factory=dict, max_length=16
-    )
+    accepts: dict[AttributeName, AcceptedValue] = Field(default_factory=dict, max_length=16)
 
     @field_validator("accepts")
     @classmethod
