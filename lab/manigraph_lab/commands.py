@@ -64,7 +64,7 @@ def _task_file_protocol(path: Path, protocol: DemoProtocol) -> DemoProtocol:
     episodes = EpisodeOptions(task_file=path)
     text = episodes.task_text()
     assert text is not None
-    blocks = parse_task_file(text).blocks
+    blocks = parse_task_file(text, str(path)).blocks
     return replace(protocol, blocks=(blocks,), task_file=text, task_file_name=episodes.label())
 
 
@@ -107,7 +107,8 @@ def _eval_run(args: argparse.Namespace) -> int:
     if task_file is not None:
         from manigraph_sim.tasks.task_file import parse_task_file
 
-        blocks = parse_task_file(task_file).blocks  # a bad file stops here, naming the field
+        # A bad file stops here, naming the file and the field.
+        blocks = parse_task_file(task_file, str(episodes.task_file)).blocks
     spec = EvalSpec(
         "file" if task_file else episodes.task,
         blocks,

@@ -94,7 +94,7 @@ def test_the_sim_refuses_a_deeply_nested_file_at_reset_by_name(text: str) -> Non
         GeometricBackend().reset(request, 0.0)
 
 
-def test_the_eval_command_refuses_a_deeply_nested_file_in_one_line(tmp_path: Path) -> None:
+def test_the_eval_command_refuses_a_deeply_nested_file_in_one_line_naming_it(tmp_path: Path) -> None:
     deep = tmp_path / "deep.toml"
     deep.write_text(DEEP_ARRAYS)
     result = subprocess.run(
@@ -106,4 +106,4 @@ def test_the_eval_command_refuses_a_deeply_nested_file_in_one_line(tmp_path: Pat
     )
     lines = result.stderr.strip().splitlines()
     assert result.returncode != 0 and len(lines) == 1, result.stderr[-2000:]
-    assert "nested too deeply" in lines[0]
+    assert f"task file {deep}: arrays or tables nested too deeply" in lines[0]
