@@ -112,5 +112,4 @@ def test_an_object_a_goal_does_not_accept_leaves_it_empty(name: str) -> None:
     after = sim.scene(0.0)
     assert after is not None and not after.goal(goal.id).filled
     assert not after.object(body.id).filled
-    if body.size[2] == 2 * low:  # the same height: it stands in the goal, the wrong object
-        assert sim.wrong_object_goals() == {goal.id}
+    assert sim.wrong_object_goals() == {goal.id}  # a 7 cm block in a 3 cm goal too

@@ -221,12 +221,26 @@ class GeometricWorld:
         return {goal_id: filled[goal_id] for goal_id in self.goals if goal_id in filled}
 
     def wrong_objects(self) -> dict[str, str]:
-        """Goal id -> id of the body it holds but does not accept."""
-        return {
-            goal_id: body
-            for goal_id, body in self.holdings().items()
-            if not self.goals[goal_id].admits(self.bodies[body])
-        }
+        """Goal id -> id of a resting body of its category that stands in it but that it does
+        not accept: within ``goal_tolerance`` of it in x and y, the goal's centre inside the
+        body's height (so a 7 cm block in a 3 cm block's goal, its centre 2 cm higher, is
+        counted), the nearest such body."""
+        wrong: dict[str, str] = {}
+        for goal in self.goals.values():
+            standing = [
+                body
+                for body in self.resting()
+                if body.category == goal.category
+                and float(np.linalg.norm(body.position[:2] - goal.position[:2]))
+                <= self.goal_tolerance
+                and body.bottom - CONTACT_MARGIN <= goal.position[2] <= body.top + CONTACT_MARGIN
+            ]
+            if not standing:
+                continue
+            body = min(standing, key=lambda b: float(np.linalg.norm(b.position - goal.position)))
+            if not goal.admits(body):
+                wrong[goal.id] = body.id
+        return wrong
 
     def goals_filled(self) -> int:
         return len(self.occupancy())
