@@ -13,6 +13,11 @@ rejected payloads are reported individually up to ``REJECTION_REPORTS_PER_SECOND
 are counted and the count goes with the next report); after a burst the service hands freed
 heap back to the OS (``malloc_trim``), so its RSS returns to where it was.
 
+Every heartbeat also says what the service is (:mod:`manigraph_shared.service_facts`): its
+version, when it started, the emergency stop as it last heard of it, and for the planner the
+policy and its checkpoint. The same status answers a query on the heartbeat's own key at once,
+so ``manigraph status`` need not wait for the next beat.
+
 The service thread publishes a ``ServiceStatus`` heartbeat every ``HEARTBEAT_SECONDS``: a
 service whose liveliness token is there but whose heartbeats stop is *stalled* (a handler that
 never returns), and ``manigraph doctor`` reports it so. With ``MANIGRAPH_HEALTH_FILE`` set
@@ -27,6 +32,7 @@ by ``<Type>:<reason>`` and published with every heartbeat (``ServiceStatus.rejec
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import ctypes.util
 import logging
@@ -37,14 +43,25 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any, ClassVar, TypeVar
 
+import zenoh
+
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.errors import ManigraphError, MessageError
 from manigraph_shared.health import HealthFile
 from manigraph_shared.inbox import DEFAULT_CAPACITY, Inbox
-from manigraph_shared.messages import Delivery, Message, Scene, ServiceState, ServiceStatus
+from manigraph_shared.messages import (
+    Checkpoint,
+    Delivery,
+    EmergencyStop,
+    Message,
+    Scene,
+    ServiceState,
+    ServiceStatus,
+)
 from manigraph_shared.messages.status import MAX_REJECTION_KINDS
 from manigraph_shared.scene_gate import SceneGate
+from manigraph_shared.service_facts import EstopWatch, package_version
 
 M = TypeVar("M", bound=Message)
 HEARTBEAT_SECONDS = 1.0
@@ -120,6 +137,14 @@ class Service:
         self._tokens_at = time.monotonic()
         self._dropped_reported = 0
         self._activity_at_trim = 0
+        self.version = package_version(type(self).__module__)
+        self.started_at = time.time()
+        #: The emergency stop as this service last heard of it (every service listens).
+        self.estop = EstopWatch()
+        #: What the service serves, for its status (the planner sets them).
+        self.policy: str | None = None
+        self.checkpoint: Checkpoint | None = None
+        self._status_queryable: zenoh.Queryable[Any] | None = None
 
     @property
     def messages_rejected(self) -> int:
@@ -211,17 +236,39 @@ class Service:
         self.publish_status(ServiceState.ERROR, self.last_error)
 
     def publish_status(self, state: ServiceState, detail: str = "") -> None:
-        self.bus.publish(
-            ServiceStatus(
-                service=self.name,
-                state=state,
-                detail=detail[:2048],
-                messages_in=self.messages_in,
-                messages_rejected=self.messages_rejected,
-                rejections=self.rejections.snapshot(),
-                stamp=time.time(),
-            )
+        self.bus.publish(self.status(state, detail))
+
+    def status(self, state: ServiceState, detail: str = "") -> ServiceStatus:
+        """The service's status now: its health and what it is (version, uptime, stop)."""
+        return ServiceStatus(
+            service=self.name,
+            state=state,
+            detail=detail[:2048],
+            messages_in=self.messages_in,
+            messages_rejected=self.messages_rejected,
+            rejections=self.rejections.snapshot(),
+            version=self.version,
+            started_at=self.started_at,
+            policy=self.policy,
+            checkpoint=self.checkpoint,
+            estop=self.estop.state,
+            stamp=time.time(),
         )
+
+    def _serve_status(self) -> None:
+        """Answer a query on the heartbeat's key with the status now (from the Zenoh thread,
+        so even a busy service answers at once; a stalled one shows in its heartbeats)."""
+        key = self.bus.scoped(ServiceStatus.key.format(service=self.name))
+        encoding = zenoh.Encoding.APPLICATION_JSON.with_schema(ServiceStatus.type_name())
+
+        def answer(query: zenoh.Query) -> None:
+            status = self.status(ServiceState.OK, self.last_error)
+            try:
+                query.reply(key, status.encode(), encoding=encoding)
+            except zenoh.ZError as exc:  # the querier went away meanwhile
+                self.log.debug("status query not answered: %s", exc)
+
+        self._status_queryable = self.bus.session.declare_queryable(key, answer)
 
     def _rejected(self, error: ManigraphError) -> None:
         # Zenoh thread: count here, report on the service thread (bounded, see run).
@@ -266,9 +313,12 @@ class Service:
     # --- life cycle -------------------------------------------------------------------------
     def run(self) -> None:
         health = HealthFile.from_environment(self.bus.session)
+        self.started_at = time.time()
         self.publish_status(ServiceState.STARTING)
+        self.bus.subscribe(EmergencyStop, self.estop.heard)  # before a handler can act on it
         with self._turn:  # no inline handler before the service is set up
             self.setup()
+        self._serve_status()
         self.bus.declare_alive(self.name)
         self.publish_status(ServiceState.OK, "ready")
         self.log.info("ready")
@@ -299,6 +349,9 @@ class Service:
         finally:
             self._turn.acquire()  # for good: no inline handler beside or after the teardown
             health.clear()
+            if self._status_queryable is not None:
+                with contextlib.suppress(zenoh.ZError):
+                    self._status_queryable.undeclare()
             self.publish_status(ServiceState.STOPPING)
             self.teardown()
             self.log.info("stopped")

@@ -5,12 +5,19 @@ the MCAP log like every other message) and wait for the skills service to acknow
 status. Skills halts the driver and fails the skill under way with reason ``stopped``; the sim
 halts the arm; the planner decides nothing; every action is refused until ``resume``.
 
+Each stop says who sent it (``--by``, default ``user@host``); every service keeps the last
+stop it heard and reports it in its status, so ``manigraph status`` and ``doctor`` show an
+engaged stop with its reason, who and since when. While it is engaged the sim refuses new
+episodes and cuts the one under way (reason ``estop_engaged``).
+
 A service started after the stop has not seen it: send ``manigraph stop`` again.
 """
 
 from __future__ import annotations
 
 import argparse
+import getpass
+import socket
 import sys
 import threading
 import time
@@ -23,7 +30,16 @@ from manigraph_shared.messages import EmergencyStop, ServiceStatus
 ENGAGED = "emergency stop engaged"
 
 
-def send(bus: Bus, engaged: bool, reason: str, wait: float) -> bool:
+def operator() -> str:
+    """``user@host`` of this process, as well as it can be told."""
+    try:
+        user = getpass.getuser()
+    except (OSError, KeyError):  # no user entry (a container) and no $USER
+        user = "unknown"
+    return f"{user}@{socket.gethostname()}"[:128]
+
+
+def send(bus: Bus, engaged: bool, reason: str, wait: float, by: str = "") -> bool:
     """Publish the stop (or its release); True once skills has acknowledged it."""
     acknowledged = threading.Event()
 
@@ -33,12 +49,15 @@ def send(bus: Bus, engaged: bool, reason: str, wait: float) -> bool:
 
     bus.subscribe(ServiceStatus, on_status, key="manigraph/status/skills")
     time.sleep(0.05)  # let the subscription reach the router before the answer can
-    bus.publish(EmergencyStop(engaged=engaged, reason=reason, stamp=time.time()))
+    bus.publish(EmergencyStop(engaged=engaged, reason=reason, by=by, stamp=time.time()))
     return acknowledged.wait(wait)
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--reason", default="", help="why, for the log")
+    parser.add_argument("--reason", default="", help="why, for the log and `manigraph status`")
+    parser.add_argument(
+        "--by", default=None, help="who sends it, for the log and `status` (default: user@host)"
+    )
     parser.add_argument(
         "--wait", type=float, default=2.0, help="seconds to wait for skills to acknowledge"
     )
@@ -48,7 +67,7 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 def _run(args: argparse.Namespace, engaged: bool) -> int:
     reason = args.reason or ("manigraph stop" if engaged else "manigraph resume")
     with Bus.open(bus_config_from_args(args, wait_seconds=5.0)) as bus:
-        ok = send(bus, engaged, reason, args.wait)
+        ok = send(bus, engaged, reason, args.wait, by=args.by or operator())
     what = "engaged" if engaged else "released"
     if ok:
         print(f"emergency stop {what}; skills acknowledged", file=sys.stderr)

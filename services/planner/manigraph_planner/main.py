@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
@@ -51,11 +52,12 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from manigraph_planner.policies import load_policy
+    from manigraph_planner.policies import POLICIES, load_policy
     from manigraph_planner.service import PlannerService
     from manigraph_shared.errors import ConfigError, PolicyError
     from manigraph_shared.options import options_from_args
     from manigraph_shared.service import run_service
+    from manigraph_shared.service_facts import checkpoint_of
 
     options = options_from_args(PlannerOptions, args)
     cells = options.cell_list()  # a bad cell name stops here, before torch is imported
@@ -74,10 +76,16 @@ def _run(args: argparse.Namespace) -> int:
                 "explain-decisions",
                 f"only GNN policies can be explained, not '{policy.name}' (give a checkpoint)",
             )
+    registered = options.policy in POLICIES
+    checkpoint = None if registered else checkpoint_of(Path(options.policy))
     if cells is None:
         return run_service(
             lambda bus: PlannerService(
-                bus, policy, options.explain_decisions, decision_timeout=options.decision_timeout
+                bus,
+                policy,
+                options.explain_decisions,
+                decision_timeout=options.decision_timeout,
+                checkpoint=checkpoint,
             ),
             bus_config,
         )
@@ -90,6 +98,7 @@ def _run(args: argparse.Namespace) -> int:
             options.explain_decisions,
             decision_timeout=options.decision_timeout,
             decide_on_arrival=len(cells) == 1,
+            checkpoint=checkpoint,
         )
 
     return run_cell_services(planner_of, bus_config, cells)

@@ -12,6 +12,7 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import (
     Action,
+    Checkpoint,
     EmergencyStop,
     EpisodeEvent,
     ExplainRequest,
@@ -48,6 +49,7 @@ class PlannerService(Service):
             after another on Zenoh's, and with ``explain_decisions`` (an explanation, on the
             service thread, follows every decision; one queued behind a decision made on
             arrival was lost when the stack stopped right after the episode's last one).
+        checkpoint: the file ``policy`` was loaded from, and its SHA-256 (for the status).
 
     A planner process serving several cells runs one of these per cell
     (:mod:`manigraph_shared.cell_services`), sharing only ``policy``: each has its own scene
@@ -66,8 +68,11 @@ class PlannerService(Service):
         explain_decisions: bool = False,
         decision_timeout: float = 30.0,
         decide_on_arrival: bool = True,
+        checkpoint: Checkpoint | None = None,
     ) -> None:
         super().__init__(bus)
+        self.policy = policy.name
+        self.checkpoint = checkpoint
         # Explaining every decision makes each one a few hundred milliseconds of the service
         # thread's (the explanation follows its action there), so nothing is gained on arrival.
         self.decide_on_arrival = decide_on_arrival and not explain_decisions

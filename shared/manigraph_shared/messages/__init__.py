@@ -27,17 +27,19 @@ from manigraph_shared.messages.scene import (
     SceneObject,
     SceneRack,
 )
-from manigraph_shared.messages.status import ServiceState, ServiceStatus
+from manigraph_shared.messages.status import Checkpoint, EstopState, ServiceState, ServiceStatus
 
 __all__ = [
     "MAX_PAYLOAD_BYTES",
     "REFUSAL_REASONS",
     "TRAY_RACKS",
     "Action",
+    "Checkpoint",
     "Delivery",
     "EpisodeEvent",
     "EpisodePhase",
     "EpisodeRequest",
+    "EstopState",
     "GoalCategory",
     "GripperOp",
     "Message",

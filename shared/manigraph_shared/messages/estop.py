@@ -18,4 +18,7 @@ class EmergencyStop(Message, frozen=True, kw_only=True):
 
     engaged: Annotated[bool, Meta(description="true: stop now and stay stopped; false: resume")]
     reason: Annotated[str, Meta(max_length=256, description="why, for the log")] = ""
+    by: Annotated[
+        str, Meta(max_length=128, description="who sent it, e.g. `manigraph stop (ana@cell-pc)`")
+    ] = ""
     stamp: Stamp

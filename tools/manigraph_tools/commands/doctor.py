@@ -1,4 +1,4 @@
-"""`manigraph doctor`: which services are alive, missing or stalled."""
+"""`manigraph doctor`: which services are alive, missing or stalled; an engaged e-stop."""
 
 from __future__ import annotations
 
@@ -49,8 +49,8 @@ def _doctor_run(args: argparse.Namespace) -> int:
 
 
 doctor_command = Command(
-    help="list which services are alive, missing or stalled (exit 1 if any expected one is "
-    "missing or stalled)",
+    help="list which services are alive, missing or stalled, and an engaged emergency stop "
+    "(exit 1 if any expected one is missing or stalled)",
     configure=_doctor_configure,
     run=_doctor_run,
 )

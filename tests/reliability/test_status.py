@@ -1,0 +1,94 @@
+"""``manigraph status`` against a real stack: what each service is (version, uptime), the
+planner's policy and checkpoint, and a warning when two deciders share one cell."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+import time
+from importlib.metadata import version
+from pathlib import Path
+
+import pytest
+from reliability_helpers import STARTUP, start
+
+from manigraph_shared.messages import ServiceStatus
+from manigraph_tools.testing import Stack, free_port
+
+pytestmark = pytest.mark.integration
+
+CHECKPOINT = Path(__file__).resolve().parents[2] / "checkpoints" / "sage.pt"
+
+
+def status_json(stack: Stack) -> dict[str, object]:
+    result = stack.run("status", "--json", timeout=60)
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+def services_of(report: dict[str, object]) -> dict[str, dict[str, object]]:
+    return {s["service"]: s for s in report["services"]}  # type: ignore[index, union-attr]
+
+
+def test_status_names_each_service_the_planners_checkpoint_and_two_deciders(
+    running_stack: Stack, tmp_path: Path
+) -> None:
+    policy = shutil.copy(CHECKPOINT, tmp_path / "policy.pt")  # immune to retraining mid-test
+    start(running_stack, "sim", "skills", "planner", planner=["--policy", str(policy)])
+    with running_stack.client() as bus:
+        running_stack.wait_alive(bus, "sim", "skills", "planner", timeout=STARTUP)
+    before = time.time()
+    report = status_json(running_stack)
+
+    assert report["endpoint"] == [running_stack.endpoint]
+    assert (report["secure"], report["certificate_dir"]) == (False, None)
+    assert report["cells"] == [None]
+    services = services_of(report)
+    assert set(services) == {"router", "sim", "skills", "planner"}
+    assert all(s["alive"] for s in services.values())
+    for name in ("sim", "skills", "planner"):
+        assert services[name]["state"] == "ok"
+        assert services[name]["version"] == version(f"manigraph-{name}")
+        started = services[name]["started_at"]
+        assert isinstance(started, float) and started <= before
+        assert 0.0 <= services[name]["uptime_s"] <= STARTUP + 60  # type: ignore[operator]
+    digest = hashlib.sha256(Path(policy).read_bytes()).hexdigest()
+    assert report["checkpoint"] == {"path": str(policy), "sha256": digest}
+    assert services["planner"]["checkpoint"] == report["checkpoint"]
+    assert report["policy"] == services["planner"]["policy"] == "gnn-sage"
+    assert report["estop_engaged"] is False
+    assert report["warnings"] == []
+
+    # A person's click page beside the planner: two deciders for one robot.
+    output = tmp_path / "demos"
+    running_stack.start(
+        "demo-ui", "demo-ui", "--http-port", str(free_port()), "--output", str(output)
+    )
+    with running_stack.client() as bus:
+        running_stack.wait_alive(bus, "demo-ui", timeout=STARTUP)
+    report = status_json(running_stack)
+    (warning,) = report["warnings"]  # type: ignore[misc]
+    assert warning.startswith("two deciders alive in the default cell (planner, demo-ui)")
+    text = running_stack.run("status", timeout=60)
+    assert "WARNING: two deciders alive" in text.stdout
+    assert f"sha256 {digest}" in text.stdout
+
+
+def test_status_without_a_stack_says_so_naming_the_endpoint(tmp_path: Path) -> None:
+    stack = Stack(free_port(), tmp_path)
+    result = stack.run("status", "--json", timeout=60)
+    assert result.returncode == 1
+    (line,) = result.stderr.strip().splitlines()[-1:]
+    assert line.startswith(f"manigraph status: no stack at {stack.endpoint}")
+
+
+def test_a_status_of_an_older_service_still_decodes() -> None:
+    old = b'{"service":"sim","state":"ok","detail":"","messages_in":3,"stamp":1.5}'
+    status = ServiceStatus.decode(old)
+    assert (status.version, status.started_at, status.estop, status.checkpoint) == (
+        "",
+        None,
+        None,
+        None,
+    )
