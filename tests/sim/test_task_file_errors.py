@@ -94,7 +94,9 @@ def test_the_sim_refuses_a_deeply_nested_file_at_reset_by_name(text: str) -> Non
         GeometricBackend().reset(request, 0.0)
 
 
-def test_the_eval_command_refuses_a_deeply_nested_file_in_one_line_naming_it(tmp_path: Path) -> None:
+def test_the_eval_command_refuses_a_deeply_nested_file_in_one_line_naming_it(
+    tmp_path: Path,
+) -> None:
     deep = tmp_path / "deep.toml"
     deep.write_text(DEEP_ARRAYS)
     result = subprocess.run(
