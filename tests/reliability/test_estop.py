@@ -55,10 +55,14 @@ def test_actions_are_refused_while_stopped_and_accepted_after_resume(
         assert refused.state is SkillState.FAILED and refused.reason == "stopped"
         assert rejections(statuses, "skills", "Action:stopped") == 1
 
+        # The stop cut the episode under way: a new one starts after resume.
         resumed = running_stack.run("resume", timeout=30)
         assert resumed.returncode == 0, resumed.stderr
-        bus.publish(action(real, block, goal, "estop:1"))
-        done = skill.wait(lambda s: s.decision_id == "estop:1" and s.state.terminal)
+        reset(bus, "estop-2")
+        real = scene_of(scenes, "estop-2")
+        block, goal = top_block_and_free_goal(real)
+        bus.publish(action(real, block, goal, "estop-2:1"))
+        done = skill.wait(lambda s: s.decision_id == "estop-2:1" and s.state.terminal)
         assert done.state is SkillState.SUCCEEDED, done
         time.sleep(0.5)  # the recorder flushes every 100 ms
     running_stack.stop("recorder")
@@ -143,6 +147,9 @@ def test_a_stop_during_a_long_driver_call_is_reported_at_once_and_only_once(
 
         resumed = running_stack.run("resume", timeout=60)
         assert resumed.returncode == 0, resumed.stderr
-        bus.publish(action(real, block, goal, "long:1"))
-        done = skill.wait(lambda s: s.decision_id == "long:1" and s.state.terminal)
+        reset(bus, "long-2")  # the stop cut the episode under way
+        real = scene_of(scenes, "long-2")
+        block, goal = top_block_and_free_goal(real)
+        bus.publish(action(real, block, goal, "long-2:1"))
+        done = skill.wait(lambda s: s.decision_id == "long-2:1" and s.state.terminal)
         assert done.state is SkillState.SUCCEEDED, done

@@ -255,3 +255,28 @@ def test_dish_slots_are_drawn_sized_like_their_dishes(decode_protobuf: ProtobufD
         size = entities[f"goal/{goal}"]["cubes"][0]["size"]
         assert (size["x"], size["y"], size["z"]) == pytest.approx(dish.size.as_tuple())
     assert {f"object/{o.id}" for o in scene.objects} <= entities.keys()
+
+
+def test_an_engaged_emergency_stop_is_written_above_the_scene_until_released(
+    decode_protobuf: ProtobufDecoder,
+) -> None:
+    from manigraph_shared.messages import EmergencyStop
+
+    bridge = FoxgloveBridge()
+    bridge.on_message(box_scene())
+    engaged = EmergencyStop(engaged=True, reason="fence open", by="ana@cell", stamp=1.0)
+    (converted,) = bridge.on_message(engaged)
+    assert converted.topic == SCENE_TOPIC
+    entities = decoded_update(decode_protobuf, converted.message)
+    (text,) = entities["estop"]["texts"]
+    assert text["text"] == "ESTOP ENGAGED: fence open (by ana@cell)"
+    assert text["color"]["r"] > 0.9 and text["color"]["g"] < 0.1  # red
+    assert "object/block_0" in entities  # the scene is still drawn under it
+    # Every later update still shows it (each update redraws everything) ...
+    assert "estop" in decoded_update(decode_protobuf, bridge.on_message(box_scene(8))[0].message)
+    # ... until it is released.
+    released = EmergencyStop(engaged=False, reason="manigraph resume", stamp=2.0)
+    (converted,) = bridge.on_message(released)
+    assert "estop" not in decoded_update(decode_protobuf, converted.message)
+    # A stop arrives on its key like any message the view forwards.
+    assert bridge.convert(EmergencyStop.key, engaged.encode())[0].topic == SCENE_TOPIC

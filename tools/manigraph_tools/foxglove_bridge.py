@@ -2,8 +2,9 @@
 channels and what ``manigraph view`` serves live.
 
 * ``/foxglove/scene`` (``foxglove.SceneUpdate``): the latest ``Scene`` with the episode's latest
-  decision and explanation (:mod:`manigraph_tools.foxglove_scene`), on every ``Scene``,
-  ``Action`` or ``Explanation``;
+  decision and explanation, and an engaged emergency stop in words
+  (:mod:`manigraph_tools.foxglove_scene`), on every ``Scene``, ``Action``, ``Explanation`` or
+  ``EmergencyStop``;
 * ``/foxglove/tf`` (``foxglove.FrameTransforms``): the robot base in the scene frame on the
   first ``Scene``, and every link of the Panda on every ``JointState``
   (:mod:`manigraph_tools.panda_frames`).
@@ -23,6 +24,7 @@ from foxglove.messages import FrameTransforms, SceneUpdate
 from manigraph_shared.errors import MessageError
 from manigraph_shared.messages import (
     Action,
+    EmergencyStop,
     Explanation,
     JointState,
     Message,
@@ -42,7 +44,7 @@ FOXGLOVE_SCHEMAS: dict[str, Schema] = {
     TF_TOPIC: FrameTransforms.get_schema(),
 }
 #: The contract types that change what is drawn.
-DRAWN = (Scene, Action, Explanation, JointState)
+DRAWN = (Scene, Action, Explanation, JointState, EmergencyStop)
 
 
 class FoxgloveMessage(Protocol):
@@ -65,6 +67,8 @@ class FoxgloveBridge:
         self.scene: Scene | None = None
         self.action: Action | None = None
         self.explanation: Explanation | None = None
+        #: The latest emergency stop or release heard.
+        self.estop: EmergencyStop | None = None
         self._base_sent = False
         self.rejected = 0
 
@@ -97,6 +101,8 @@ class FoxgloveBridge:
             self.action = message
         elif isinstance(message, Explanation):
             self.explanation = message
+        elif isinstance(message, EmergencyStop):
+            self.estop = message
         update = self.update()
         if update is not None:
             out.insert(0, Converted(SCENE_TOPIC, update))
@@ -106,7 +112,7 @@ class FoxgloveBridge:
         """The picture now, or None before the first scene."""
         if self.scene is None:
             return None
-        return scene_update(self.scene, self.action, self._current_explanation())
+        return scene_update(self.scene, self.action, self._current_explanation(), self.estop)
 
     def _current_explanation(self) -> Explanation | None:
         """An explanation of an older decision than the latest one is not shown."""

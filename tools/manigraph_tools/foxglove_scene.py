@@ -12,7 +12,9 @@ What Foxglove's 3D panel draws, in the scene's frame:
 * **the decision**: the latest ``Action`` of the episode as an arrow from the chosen object to
   the chosen goal;
 * **the explanation**: the latest ``Explanation`` of the episode as lines between the nodes it
-  kept, thicker and more opaque the more important the edge.
+  kept, thicker and more opaque the more important the edge;
+* **the emergency stop**: while one is engaged, a red ``ESTOP ENGAGED: <reason> (by <who>)``
+  text above the scene (entity ``estop``), facing the camera.
 
 Each update carries every entity (so the last message alone rebuilds the picture, as when
 Foxglove seeks) and first deletes everything drawn before on the topic. Every entity's metadata
@@ -38,12 +40,14 @@ from foxglove.messages import (
     SceneEntityDeletion,
     SceneEntityDeletionType,
     SceneUpdate,
+    TextPrimitive,
     Timestamp,
     Vector3,
 )
 
 from manigraph_shared.messages import (
     Action,
+    EmergencyStop,
     Explanation,
     GoalCategory,
     ObjectCategory,
@@ -80,6 +84,9 @@ BOX = Color(r=0.55, g=0.45, b=0.35, a=0.6)
 GOAL_FILLED = (0.18, 0.80, 0.25)
 GOAL_FREE = (1.00, 0.55, 0.00)
 ARROW = Color(r=0.85, g=0.10, b=0.85, a=1.0)
+ESTOP = Color(r=0.95, g=0.05, b=0.05, a=1.0)
+#: Where the stop's text stands, above the scene's origin, metres.
+ESTOP_TEXT_HEIGHT = 0.45
 EDGE = (0.15, 0.45, 1.00)
 
 
@@ -230,6 +237,21 @@ class SceneEntities:
         if lines:
             self.add("explanation", lines=lines)
 
+    def stop(self, estop: EmergencyStop) -> None:
+        """The engaged emergency stop, in words above the scene."""
+        words = f"ESTOP ENGAGED: {estop.reason or 'no reason given'}"
+        if estop.by:
+            words += f" (by {estop.by})"
+        text = TextPrimitive(
+            pose=_pose((0.0, 0.0, ESTOP_TEXT_HEIGHT), ContractQuaternion()),
+            billboard=True,
+            font_size=24.0,
+            scale_invariant=True,
+            color=ESTOP,
+            text=words,
+        )
+        self.add("estop", texts=[text])
+
 
 def _x_towards(delta: tuple[float, ...], length: float) -> ContractQuaternion:
     """The rotation that turns the x axis (a Foxglove arrow's direction) onto ``delta``."""
@@ -243,10 +265,13 @@ def _x_towards(delta: tuple[float, ...], length: float) -> ContractQuaternion:
 
 
 def scene_update(
-    scene: Scene, action: Action | None = None, explanation: Explanation | None = None
+    scene: Scene,
+    action: Action | None = None,
+    explanation: Explanation | None = None,
+    estop: EmergencyStop | None = None,
 ) -> SceneUpdate:
     """Everything to draw for ``scene``; ``action`` and ``explanation`` only when they are
-    about the scene's episode."""
+    about the scene's episode; ``estop`` (the latest stop or release) when it is engaged."""
     entities = SceneEntities(scene)
     entities.boxes()
     entities.goals()
@@ -255,5 +280,7 @@ def scene_update(
         entities.decision(action)
     if explanation is not None and explanation.episode_id == scene.episode_id:
         entities.explanation(explanation)
+    if estop is not None and estop.engaged:
+        entities.stop(estop)
     clear = SceneEntityDeletion(timestamp=entities.timestamp, type=SceneEntityDeletionType.All)
     return SceneUpdate(deletions=[clear], entities=entities.entities)

@@ -6,7 +6,7 @@ import time
 from collections.abc import Callable
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.errors import BusError
+from manigraph_shared.errors import BusError, ManigraphError
 from manigraph_shared.messages import (
     EmergencyStop,
     EpisodeEvent,
@@ -17,6 +17,7 @@ from manigraph_shared.messages import (
     SkillStatus,
 )
 from manigraph_shared.service import Service
+from manigraph_shared.service_facts import stop_reason
 from manigraph_sim.backend_base import JointedArmBackend, SimBackend
 from manigraph_sim.manifest import JOINTS
 
@@ -82,11 +83,7 @@ class SimService(Service):
     def setup(self) -> None:
         # The emergency stop acts in the Zenoh thread that delivers it: the service thread may
         # be busy moving the arm, and the motion must stop now, not after it.
-        estop = getattr(self.backend, "emergency_stop", None)
-        if estop is not None:
-            self.bus.subscribe(
-                EmergencyStop, lambda message: self._on_estop(estop, message), self._rejected
-            )
+        self.bus.subscribe(EmergencyStop, self._on_estop, self._rejected)
         # Resets arrive on a Zenoh thread; hand them to the service thread and wait.
         self.bus.serve(EpisodeRequest, self._reset_from_query)
         self.on(RobotCommand, self._execute)
@@ -94,13 +91,23 @@ class SimService(Service):
         if JOINTS in self.backend.abilities:
             self.on(JointTrajectoryCommand, self._execute_trajectory)
 
-    def _on_estop(self, estop: Callable[[bool], None], message: EmergencyStop) -> None:
-        estop(message.engaged)
+    def _on_estop(self, message: EmergencyStop) -> None:
+        halt: Callable[[bool], None] | None = getattr(self.backend, "emergency_stop", None)
+        if halt is not None:
+            halt(message.engaged)
         self.log.warning(
             "emergency stop %s: %s",
             "engaged" if message.engaged else "released",
             message.reason or "(no reason)",
         )
+        if message.engaged:  # the episode under way ends, saying why, once the arm is still
+            self.call_soon(self._cut_episode, stop_reason(message.reason, message.by))
+
+    def _cut_episode(self, reason: str) -> None:
+        cut: Callable[[str], bool] | None = getattr(self.backend, "cut", None)
+        if cut is not None and cut(reason):
+            self._publish_scene()
+            self._publish_end()
 
     def _reset_from_query(self, request: EpisodeRequest) -> EpisodeEvent:
         import queue
@@ -121,6 +128,8 @@ class SimService(Service):
         return result
 
     def _reset(self, request: EpisodeRequest) -> EpisodeEvent:
+        if self.estop.engaged:  # no episode starts while the robot must not move
+            raise ManigraphError(self.estop.describe())
         event = self.backend.reset(request, time.time())
         self.log.info(
             "episode %s: %s K=%d s=%d seed %d",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import secrets
+import sys
 import time
 
 from manigraph_shared.bus import Bus
@@ -40,6 +41,9 @@ def _run_run(args: argparse.Namespace) -> int:
         wait_services(bus, ["sim", "planner", "skills"], timeout=180.0)
         summary = run_episodes(bus, plan)
     emit_json(summary, readable=not args.json)
+    if "aborted" in summary:  # an engaged emergency stop: the episodes asked for did not run
+        print(f"manigraph run: {summary['aborted']}", file=sys.stderr)
+        return 1
     return 0
 
 
