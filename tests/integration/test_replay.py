@@ -65,12 +65,15 @@ def test_a_replay_that_goes_on_without_a_decision_says_so(
     running_stack: Stack, recorded_run: Path
 ) -> None:
     running_stack.start("router")  # and no planner: no decision will come
-    result = running_stack.run(
-        "replay", str(recorded_run), "--expect-actions", "--wait-for", "--decision-timeout", "0.05"
-    )
+    base = ("replay", str(recorded_run), "--expect-actions", "--wait-for")
+    result = running_stack.run(*base, "--decision-timeout", "0.05", "--keep-going")
     assert result.returncode == 1
-    assert result.stderr.count("playing on without it") == 10
+    assert result.stderr.count("got nothing within 0.05 s") == 10
     assert json.loads(result.stdout.splitlines()[-1])["decisions_received"] == 0
+    first = running_stack.run(*base, "--decision-timeout", "0.05")  # stops at the first
+    assert first.returncode == 1
+    assert first.stderr.count("MISMATCH") == 1
+    assert "stopped at the first divergence, after 1 of the log's 10 decisions" in first.stderr
 
 
 def test_topic_filter_publishes_only_matching_keys(

@@ -1,5 +1,5 @@
 """`manigraph replay`: a recorded log back onto the bus; `--expect-actions` checks a live
-planner's decisions against it."""
+planner's decisions against it, stopping at the first that differs (`--keep-going`: all)."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from pathlib import Path
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
+from manigraph_shared.errors import ConfigError
 from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
 from manigraph_tools.commands.common import emit_json, wait_services
@@ -33,12 +34,23 @@ def _replay_configure(parser: argparse.ArgumentParser) -> None:
         "--wait-for", nargs="*", default=None, help="services that must be alive before playing"
     )
     parser.add_argument(
-        "--decision-timeout", type=float, default=5.0, help="seconds to wait for each decision"
+        "--decision-timeout",
+        type=float,
+        default=5.0,
+        help="with --expect-actions: seconds to wait for each live decision (default 5)",
+    )
+    parser.add_argument(
+        "--keep-going",
+        action="store_true",
+        help="with --expect-actions: check every decision rather than stop at the first that "
+        "differs",
     )
     add_bus_arguments(parser)
 
 
 def _replay_run(args: argparse.Namespace) -> int:
+    if args.decision_timeout <= 0:
+        raise ConfigError("decision-timeout", f"must be > 0 seconds, got {args.decision_timeout:g}")
     withhold = [Action.key] if args.expect_actions else []
     wait_for = (
         args.wait_for if args.wait_for is not None else (["planner"] if args.expect_actions else [])
@@ -48,21 +60,30 @@ def _replay_run(args: argparse.Namespace) -> int:
         if args.expect_actions:
             bus.subscribe(Action, check.receive)
         wait_services(bus, wait_for)
-        replayer = Replayer(bus, args.file, args.speed, args.topics, args.exclude, withhold)
+        replayer = Replayer(
+            bus,
+            args.file,
+            args.speed,
+            args.topics,
+            args.exclude,
+            withhold,
+            skip_start_up=args.expect_actions,
+        )
+        stop = threading.Event()
+        diverged = threading.Event()
 
         def await_live_decision(item: LoggedMessage) -> None:
-            decision_id = Action.decode(item.data, item.topic).decision_id
-            if not check.wait_for(decision_id, args.decision_timeout):
-                print(
-                    f"no decision {decision_id} within {args.decision_timeout:g} s: playing on "
-                    "without it, so later decisions may be made on other scenes",
-                    file=sys.stderr,
-                )
+            line = check.check(Action.decode(item.data, item.topic), args.decision_timeout)
+            if line is None:
+                return
+            print(f"MISMATCH {line}", file=sys.stderr, flush=True)
+            diverged.set()
+            if not args.keep_going:  # later scenes follow the recorded choice, not the live one
+                stop.set()
 
-        stop = threading.Event()
         print(f"replaying {len(replayer.messages)} messages from {args.file}", file=sys.stderr)
         try:
-            while True:
+            while not stop.is_set():
                 replayer.play(stop, on_withheld=await_live_decision)
                 if not args.loop:
                     break
@@ -70,16 +91,28 @@ def _replay_run(args: argparse.Namespace) -> int:
             stop.set()
         if not args.expect_actions:
             return 0
-        time.sleep(0.5)  # a decision the log does not have would arrive now
-        problems = check.mismatches()
-        for line in problems:
-            print(f"MISMATCH {line}", file=sys.stderr)
+        stopped_early = diverged.is_set() and not args.keep_going
+        problems = list(check.problems)
+        if not stop.is_set():
+            time.sleep(0.5)  # a decision the log does not have would arrive now
+            for line in check.unexpected():
+                print(f"MISMATCH {line}", file=sys.stderr)
+                problems.append(line)
+        if stopped_early:
+            print(
+                f"stopped at the first divergence, after {len(check.reached)} of the log's "
+                f"{len(check.expected)} decisions (--keep-going checks them all)",
+                file=sys.stderr,
+            )
         emit_json(
             {
                 "file": str(args.file),
                 "decisions_expected": len(check.expected),
+                "decisions_checked": len(check.reached),
                 "decisions_received": len(check.received),
                 "mismatches": len(problems),
+                "first_mismatch": problems[0] if problems else None,
+                "stopped_early": stopped_early,
                 "identical": not problems,
             }
         )
