@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 from foxglove.messages import FrameTransforms, SceneUpdate
 
+from manigraph_shared.colours import PALETTE
 from manigraph_shared.messages import (
     Action,
     ExplainedEdge,
@@ -280,3 +281,32 @@ def test_an_engaged_emergency_stop_is_written_above_the_scene_until_released(
     assert "estop" not in decoded_update(decode_protobuf, converted.message)
     # A stop arrives on its key like any message the view forwards.
     assert bridge.convert(EmergencyStop.key, engaged.encode())[0].topic == SCENE_TOPIC
+
+
+def test_objects_take_their_named_colour_and_goals_say_what_they_accept(
+    decode_protobuf: ProtobufDecoder,
+) -> None:
+    scene = Scene(
+        episode_id="ep-1",
+        stamp=1_700_000_000.25,
+        sequence=1,
+        objects=[
+            SceneObject(id="block_0", category=ObjectCategory.BLOCK, position=v(0.4, 0.1, 0.02),
+                        size=v(0.04, 0.04, 0.04), attributes={"colour": "blue"}),
+        ],
+        goals=[
+            SceneGoal(id="blue_bin", category=GoalCategory.BLOCK, position=v(0.3, -0.1, 0.02),
+                      accepts={"colour": "blue"}),
+            SceneGoal(id="big_row", category=GoalCategory.BLOCK, position=v(0.3, 0.1, 0.035),
+                      accepts={"size": [0.07, 0.07, 0.07]}),
+        ],
+    )  # fmt: skip
+    entities = decoded_update(decode_protobuf, scene_update(scene))
+    block = entities["object/block_0"]
+    colour = block["cubes"][0]["color"]
+    assert (colour["r"], colour["g"], colour["b"]) == pytest.approx(PALETTE["blue"])
+    assert block["texts"][0]["text"] == "colour blue"
+    assert entities["goal/blue_bin"]["texts"][0]["text"] == "accepts colour blue"
+    # A goal that accepts one size is drawn that size, and needs no words for it.
+    assert entities["goal/big_row"]["cubes"][0]["size"]["x"] == pytest.approx(0.07)
+    assert not entities["goal/big_row"].get("texts")

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import zlib
+from collections.abc import Mapping
 
 from foxglove.messages import (
     ArrowPrimitive,
@@ -45,6 +46,7 @@ from foxglove.messages import (
     Vector3,
 )
 
+from manigraph_shared.colours import colour_of, describe
 from manigraph_shared.messages import (
     Action,
     EmergencyStop,
@@ -85,6 +87,8 @@ GOAL_FILLED = (0.18, 0.80, 0.25)
 GOAL_FREE = (1.00, 0.55, 0.00)
 ARROW = Color(r=0.85, g=0.10, b=0.85, a=1.0)
 ESTOP = Color(r=0.95, g=0.05, b=0.05, a=1.0)
+#: How far above an object or goal its label stands, metres.
+LABEL_GAP = 0.015
 #: Where the stop's text stands, above the scene's origin, metres.
 ESTOP_TEXT_HEIGHT = 0.45
 EDGE = (0.15, 0.45, 1.00)
@@ -141,12 +145,42 @@ class SceneEntities:
     def objects(self) -> None:
         for item in self.scene.objects:
             alpha = 1.0 if item.visible else 0.35
-            if item.category is ObjectCategory.COVER:
+            named = colour_of(item.attributes)
+            if named is not None:  # the task's own colour (a colour-sort block is red)
+                r, g, b = named
+                colour = Color(r=r, g=g, b=b, a=alpha)
+            elif item.category is ObjectCategory.COVER:
                 r, g, b = COVER
                 colour = Color(r=r, g=g, b=b, a=alpha)
             else:  # blocks and dishes: a colour of their own, stable per id
                 colour = block_colour(item.id, alpha)
-            self.add(f"object/{item.id}", cubes=[self._cube(item, colour)])
+            texts = [self._label(item.position.as_tuple(), item.size.z, item.attributes)]
+            self.add(
+                f"object/{item.id}",
+                cubes=[self._cube(item, colour)],
+                texts=[t for t in texts if t is not None],
+            )
+
+    def _label(
+        self,
+        position: tuple[float, float, float],
+        height: float,
+        words: Mapping[str, object],
+        prefix: str = "",
+    ) -> TextPrimitive | None:
+        """What the task tells an object by (``colour red``), or what a goal accepts, written
+        just above it; None when there is nothing to say."""
+        if not words:
+            return None
+        x, y, z = position
+        return TextPrimitive(
+            pose=_pose((x, y, z + height / 2 + LABEL_GAP), ContractQuaternion()),
+            billboard=True,
+            font_size=12.0,
+            scale_invariant=True,
+            color=Color(r=1.0, g=1.0, b=1.0, a=1.0),
+            text=prefix + describe(words),
+        )
 
     def _cube(self, item: SceneObject, colour: Color) -> CubePrimitive:
         x, y, z = item.size.as_tuple()
@@ -165,13 +199,17 @@ class SceneEntities:
         for goal in self.scene.goals:
             r, g, b = GOAL_FILLED if goal.filled else GOAL_FREE
             alpha = 0.3 if goal.visible else 0.12
-            x, y, z = sizes[goal.category]
+            wanted = goal.accepts.get("size")
+            # A goal that accepts one size is drawn that size (a size-sort row).
+            x, y, z = wanted if isinstance(wanted, list) else sizes[goal.category]
             cube = CubePrimitive(
                 pose=_pose(goal.position.as_tuple(), goal.orientation),
                 size=Vector3(x=x, y=y, z=z),
                 color=Color(r=r, g=g, b=b, a=alpha),
             )
-            self.add(f"goal/{goal.id}", cubes=[cube])
+            accepts = {k: v for k, v in goal.accepts.items() if k != "size"}
+            label = self._label(goal.position.as_tuple(), z, accepts, "accepts ")
+            self.add(f"goal/{goal.id}", cubes=[cube], texts=[label] if label else [])
 
     def boxes(self) -> None:
         outer_x, outer_y, thickness = _size_of(self.scene, ObjectCategory.COVER)
