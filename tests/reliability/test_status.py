@@ -14,7 +14,8 @@ import pytest
 from reliability_helpers import STARTUP, start
 
 from manigraph_shared.messages import ServiceStatus
-from manigraph_tools.testing import Stack, free_port
+from manigraph_tools.certs import make_certificates
+from manigraph_tools.testing import Stack, free_port, stack
 
 pytestmark = pytest.mark.integration
 
@@ -92,3 +93,24 @@ def test_a_status_of_an_older_service_still_decodes() -> None:
         None,
         None,
     )
+
+
+def test_status_on_a_secure_stack_names_its_certificates_and_each_service(
+    tmp_path: Path,
+) -> None:
+    certs = tmp_path / "certs"
+    make_certificates(certs)
+    with stack(tmp_path, tls_dir=certs) as running:
+        start(running, "sim", "skills")
+        with running.client() as bus:
+            running.wait_alive(bus, "sim", "skills", timeout=STARTUP)
+            # The router grants a client the status query, and each service its answer.
+            (reply,) = list(bus.session.get(ServiceStatus.key.format(service="sim"), timeout=10))
+            assert reply.ok is not None, reply.err
+            assert ServiceStatus.decode(reply.ok.payload.to_bytes()).service == "sim"
+        report = status_json(running)
+    assert report["endpoint"] == [running.endpoint]
+    assert (report["secure"], report["certificate_dir"]) == (True, str(certs))
+    services = services_of(report)
+    assert services["sim"]["version"] == version("manigraph-sim")
+    assert services["skills"]["state"] == "ok"

@@ -131,6 +131,18 @@ GRANTS: tuple[Grant, ...] = (
         (ServiceStatus.key.replace("{service}", "{identity}"),),
         "each service its own heartbeat",
     ),
+    Grant(
+        SERVICES,
+        SERVE,
+        (ServiceStatus.key.replace("{service}", "{identity}"),),
+        "each service answers status queries for itself (`manigraph status`)",
+    ),
+    Grant(
+        IDENTITIES,
+        QUERY,
+        (ServiceStatus.key_pattern(), cell_key(ServiceStatus.key_pattern(), "*")),
+        "asking the services' status is reading",
+    ),
     Grant(SERVICES, ANNOUNCE, (f"{ALIVE_PREFIX}/{{identity}}",), "each service its own token"),
     Grant(
         (ROUTER,),

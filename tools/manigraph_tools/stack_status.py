@@ -27,7 +27,7 @@ import zenoh
 
 from manigraph_shared.bus import ALIVE_PREFIX, Bus
 from manigraph_shared.bus_config import BusConfig
-from manigraph_shared.cells import PREFIX, RESERVED
+from manigraph_shared.cells import PREFIX, RESERVED, cell_key
 from manigraph_shared.errors import MessageError
 from manigraph_shared.messages import EstopState, ServiceStatus
 
@@ -215,15 +215,21 @@ def gather(
             if where is not None:
                 tokens[where] += 1
     left = max(0.05, deadline - time.monotonic())
-    replies = bus.session.get(
-        status_keys,
-        target=zenoh.QueryTarget.ALL,
-        consolidation=zenoh.ConsolidationMode.NONE,
-        timeout=left,
-    )
-    for reply in replies:
-        if reply.ok is not None:
-            keep(str(reply.ok.key_expr), reply.ok.payload.to_bytes())
+    # One query per cell (concrete keys: what a secure router's access control grants).
+    queried = {cell_key(ServiceStatus.key_pattern(), cell) for cell, _ in tokens}
+    pending = [
+        bus.session.get(
+            key,
+            target=zenoh.QueryTarget.ALL,
+            consolidation=zenoh.ConsolidationMode.NONE,
+            timeout=left,
+        )
+        for key in sorted(queried | {ServiceStatus.key_pattern()})
+    ]
+    for replies in pending:
+        for reply in replies:
+            if reply.ok is not None:
+                keep(str(reply.ok.key_expr), reply.ok.payload.to_bytes())
     wanted = {where for where in tokens if where[1] not in NO_STATUS}
     while time.monotonic() < deadline:  # heartbeats stand in for answers not come
         with lock:
