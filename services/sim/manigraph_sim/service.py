@@ -124,7 +124,15 @@ class SimService(Service):
             raise BusError("sim busy: its inbox is full, try the reset again")
         result = answer.get(timeout=30)
         if isinstance(result, BaseException):
-            raise result
+            # Raised from here, the exception's traceback holds this frame, which would hold
+            # the exception: a cycle that kept the bus's answering frame, and with it the Zenoh
+            # query, alive until the garbage collector ran. The querier got the error reply at
+            # once but its query ended only at its timeout (10 s or 30 s). Without the local,
+            # the query ends when the reply is sent.
+            try:
+                raise result
+            finally:
+                del result
         return result
 
     def _reset(self, request: EpisodeRequest) -> EpisodeEvent:
