@@ -97,7 +97,8 @@ def _eval_configure(parser: argparse.ArgumentParser) -> None:
 
 def _eval_run(args: argparse.Namespace) -> int:
     from manigraph_lab.evaluate import EvalSpec, evaluate
-    from manigraph_planner.policies import load_policy
+    from manigraph_planner.policies import POLICIES, load_policy
+    from manigraph_shared.results import checkpoint_field, rounded
     from manigraph_tools.episode_plan import EpisodeOptions
 
     options = options_from_args(EvalOptions, args)
@@ -122,7 +123,10 @@ def _eval_run(args: argparse.Namespace) -> int:
         preference=episodes.preference,
     )
     progress = None if episodes.json else sys.stderr
-    summary = evaluate(load_policy(options.policy), spec, progress)
+    policy = load_policy(options.policy)
+    checkpoint = None if options.policy in POLICIES else checkpoint_field(options.policy)
+    summary = rounded(evaluate(policy, spec, progress, checkpoint))
+    assert isinstance(summary, dict)
     if episodes.json:
         print(json.dumps(summary))
     else:

@@ -43,8 +43,14 @@ class EvalSpec:
         ]
 
 
-def evaluate(policy: Policy, spec: EvalSpec, progress: TextIO | None = None) -> dict[str, object]:
-    """Play ``spec``'s episodes; ``progress``: stream for a bar, drawn only on a terminal."""
+def evaluate(
+    policy: Policy,
+    spec: EvalSpec,
+    progress: TextIO | None = None,
+    checkpoint: dict[str, object] | None = None,
+) -> dict[str, object]:
+    """Play ``spec``'s episodes; ``progress``: stream for a bar, drawn only on a terminal;
+    ``checkpoint``: the policy's file (``results.checkpoint_field``), named in the summary."""
     records: list[EpisodeRecord] = []
     started = time.perf_counter()
     decisions = 0
@@ -57,7 +63,7 @@ def evaluate(policy: Policy, spec: EvalSpec, progress: TextIO | None = None) -> 
             bar.status(f"success {sum(r.success for r in records) / len(records):.3f}")
             bar.update()
     seconds = time.perf_counter() - started
-    return summarize(policy.name, spec, records, seconds, decisions)
+    return summarize(policy.name, spec, records, seconds, decisions, checkpoint)
 
 
 def success_rate(policy: Policy, spec: EvalSpec, progress: TextIO | None = None) -> float:
@@ -66,7 +72,12 @@ def success_rate(policy: Policy, spec: EvalSpec, progress: TextIO | None = None)
 
 
 def summarize(
-    policy: str, spec: EvalSpec, records: list[EpisodeRecord], seconds: float, decisions: int
+    policy: str,
+    spec: EvalSpec,
+    records: list[EpisodeRecord],
+    seconds: float,
+    decisions: int,
+    checkpoint: dict[str, object] | None = None,
 ) -> dict[str, object]:
     count = len(records)
     failures: dict[str, int] = {}
@@ -76,6 +87,7 @@ def summarize(
                 failures[step.reason or "unknown"] = failures.get(step.reason or "unknown", 0) + 1
     return {
         "policy": policy,
+        **(checkpoint or {}),
         "task": spec.task,
         **({"task_file": spec.task_file_name} if spec.task_file is not None else {}),
         "blocks": spec.blocks,

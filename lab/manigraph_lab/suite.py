@@ -36,6 +36,7 @@ from manigraph_lab.sweep import (
 )
 from manigraph_planner.policies import load_policy
 from manigraph_shared.progress import Progress
+from manigraph_shared.results import checkpoint_field, rounded
 
 
 @dataclass(frozen=True)
@@ -202,9 +203,18 @@ def run_suite(
         "episodes": episodes,
         "results": results,
         "curves": {a: {str(k): v for k, v in c.items()} for a, c in curves.items()},
+        # Each (architecture, seed) policy by its file and SHA-256; a failed training has none.
+        "checkpoints": {
+            arch: {
+                str(seed): field["checkpoint"]
+                for seed in seeds
+                if (field := checkpoint_field(checkpoint_path(out, arch, seed)))
+            }
+            for arch in archs
+        },
         **({"failures": failures} if failures else {}),
     }
-    (out / "suite.json").write_text(json.dumps(summary, indent=1))
+    (out / "suite.json").write_text(json.dumps(rounded(summary), indent=1))
     if failures:
         raise SweepError(failures, len(jobs))
     return summary

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import re
+from hashlib import sha256
 from pathlib import Path
 
 import pytest
@@ -40,3 +42,12 @@ def test_suite_on_validation_seeds_without_the_curve(tmp_path: Path) -> None:
     assert "from seed 1000" in (tmp_path / "generalization.md").read_text()
     assert not (tmp_path / "success_vs_k.png").exists()
     assert summary["curves"] == {"gcn": {}}
+    # Each policy by its file and digest; every float to 4 decimals at most.
+    written = (tmp_path / "suite.json").read_text()
+    checkpoint = tmp_path / "checkpoints" / "gcn-seed0.pt"
+    assert json.loads(written)["checkpoints"] == {
+        "gcn": {
+            "0": {"path": str(checkpoint), "sha256": sha256(checkpoint.read_bytes()).hexdigest()}
+        }
+    }
+    assert all(len(n.split(".")[1]) <= 4 for n in re.findall(r"\d+\.\d+", written))

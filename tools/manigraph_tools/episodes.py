@@ -40,6 +40,7 @@ from manigraph_tools.episode_plan import (
     read_task_file,
     summarize,
 )
+from manigraph_tools.served_policy import served_policy
 
 #: Importers of the plan's names from here (``up``, ``demo-ui``, cells) keep working.
 __all__ = [
@@ -140,6 +141,7 @@ def run_episodes(bus: Bus, plan: EpisodePlan, progress: TextIO = sys.stderr) -> 
     Ctrl-C ends the run early with the episodes finished so far."""
     watch = ServiceWatch(bus, plan.services)
     events = EpisodeProgress(bus)
+    policy = served_policy(bus)  # the summary names what decided (and its checkpoint)
     results: list[EpisodeResult] = []
     interrupted = False
     try:
@@ -159,7 +161,7 @@ def run_episodes(bus: Bus, plan: EpisodePlan, progress: TextIO = sys.stderr) -> 
                 break
     except KeyboardInterrupt:
         interrupted = True
-    summary = summarize(plan, results)
+    summary = {**policy, **summarize(plan, results)}
     if results and results[-1].reason.startswith(ESTOP_ENGAGED):
         summary["aborted"] = results[-1].reason
     if interrupted:

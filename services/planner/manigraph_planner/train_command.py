@@ -17,6 +17,11 @@ from pathlib import Path
 
 from manigraph_planner.threads import add_threads_option, use_threads
 from manigraph_shared.cli import Command
+from manigraph_shared.results import rounded
+
+#: Where a checkpoint goes without ``-o``: untracked (.gitignore), so training never
+#: overwrites the shipped policies in ``checkpoints/``.
+RUNS = Path("runs")
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
@@ -52,7 +57,13 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         help="draw fresh copies every N epochs (default: 10; gcn: 0, never)",
     )
     add_threads_option(parser)
-    parser.add_argument("-o", "--output", type=Path, help="checkpoint (default checkpoints/)")
+    parser.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        help=f"checkpoint file to write (default {RUNS}/<arch>-seed<seed>.pt; "
+        f"dishwasher: {RUNS}/dishwasher-<arch>-seed<seed>.pt)",
+    )
 
 
 def _heads(args: argparse.Namespace) -> str:
@@ -82,7 +93,7 @@ def _run(args: argparse.Namespace) -> int:
     from manigraph_planner.gnn import save_checkpoint
     from manigraph_planner.training.dataset import load_demonstrations
     from manigraph_planner.training.recipes import augmentation_for
-    from manigraph_planner.training.trainer import TrainConfig, default_output, train
+    from manigraph_planner.training.trainer import TrainConfig, train
 
     # TrainConfig checks the architecture (ModelConfig) and takes the defaults of its recipe
     # (training.recipes); each raises a ConfigError naming the field.
@@ -98,7 +109,7 @@ def _run(args: argparse.Namespace) -> int:
     demos = load_demonstrations(args.demos)
     config = config.for_task(demos.feature_spec)  # a task's columns, generic augmentation
     net, metrics = train(demos, config, progress=sys.stderr)  # a bar on a terminal only
-    output = args.output or default_output(args.arch, args.seed)
+    output = args.output or RUNS / f"{args.arch}-seed{args.seed}.pt"
     output.parent.mkdir(parents=True, exist_ok=True)
     save_checkpoint(
         output,
@@ -108,7 +119,7 @@ def _run(args: argparse.Namespace) -> int:
         metrics=metrics,
     )
     features = list(demos.feature_spec.names)
-    print(json.dumps({"checkpoint": str(output), **metrics, "features": features}))
+    print(json.dumps(rounded({"checkpoint": str(output), **metrics, "features": features})))
     return 0
 
 
@@ -131,7 +142,7 @@ def _train_dishwasher(args: argparse.Namespace) -> int:
     )
     demos = load_dish_demonstrations(args.demos)
     net, metrics = train_dish(demos, config)
-    output = args.output or Path("checkpoints") / f"dishwasher-{args.arch}-seed{args.seed}.pt"
+    output = args.output or RUNS / f"dishwasher-{args.arch}-seed{args.seed}.pt"
     output.parent.mkdir(parents=True, exist_ok=True)
     save_checkpoint(
         output,
@@ -140,7 +151,7 @@ def _train_dishwasher(args: argparse.Namespace) -> int:
         data_hash=demos.data_hash,
         metrics={**metrics, "episodes": demos.episodes},
     )
-    print(json.dumps({"checkpoint": str(output), "heads": "dishwasher", **metrics}))
+    print(json.dumps(rounded({"checkpoint": str(output), "heads": "dishwasher", **metrics})))
     return 0
 
 

@@ -1,4 +1,5 @@
-"""What every command prints: one JSON line, and for people a readable line first."""
+"""What every command prints: one JSON line (floats to ``results.FLOAT_DIGITS`` decimals),
+and for people a readable line first."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import sys
 import time
 
 from manigraph_shared.bus import Bus
+from manigraph_shared.results import rounded
 
 
 def emit_json(summary: dict[str, object], readable: bool = False) -> None:
@@ -21,7 +23,7 @@ def emit_json(summary: dict[str, object], readable: bool = False) -> None:
             file=sys.stderr,
             flush=True,
         )
-    print(json.dumps(summary), flush=True)
+    print(json.dumps(rounded(summary)), flush=True)
 
 
 def wait_services(bus: Bus, names: list[str], timeout: float = 60.0) -> None:
