@@ -1,22 +1,32 @@
 """The subcommands ``manigraph_tools`` registers (``manigraph.commands`` entry points), one
-module each: router, record, replay, doctor, keys, run, status, up."""
+module each: router, record, replay, doctor, keys, run, status, up.
 
-from manigraph_tools.commands.doctor import doctor_command
-from manigraph_tools.commands.keys import keys_command
-from manigraph_tools.commands.record import record_command
-from manigraph_tools.commands.replay import replay_command
-from manigraph_tools.commands.router import router_command
-from manigraph_tools.commands.run import run_command
-from manigraph_tools.commands.status import status_command
-from manigraph_tools.commands.up import up_command
+Each is imported when it is asked for, not with the package: ``manigraph status`` should not
+wait for the recorder's, the replayer's and ``up``'s imports (a third of a second, more on a
+busy machine) before it can answer."""
 
-__all__ = [
-    "doctor_command",
-    "keys_command",
-    "record_command",
-    "replay_command",
-    "router_command",
-    "run_command",
-    "status_command",
-    "up_command",
-]
+from __future__ import annotations
+
+from importlib import import_module
+from typing import Any
+
+#: Each command's object -> the module of this package that defines it.
+_MODULES = {
+    "doctor_command": "doctor",
+    "keys_command": "keys",
+    "record_command": "record",
+    "replay_command": "replay",
+    "router_command": "router",
+    "run_command": "run",
+    "status_command": "status",
+    "up_command": "up",
+}
+
+__all__ = sorted(_MODULES)
+
+
+def __getattr__(name: str) -> Any:
+    module = _MODULES.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(import_module(f"{__name__}.{module}"), name)

@@ -34,7 +34,8 @@ def _run(args: argparse.Namespace) -> int:
         bus = Bus.open(config)
     except Exception as exc:  # no router at all: say so, naming the endpoint
         where = ", ".join(config.connect)
-        print(f"manigraph status: no stack at {where}: {exc}", file=sys.stderr)
+        why = str(exc) if where in str(exc) else f"no stack at {where}: {exc}"
+        print(f"manigraph status: {why}", file=sys.stderr)
         return 1
     with bus:
         status = stack_status.gather(bus, config, wait=args.wait, started=started)
