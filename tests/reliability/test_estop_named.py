@@ -52,7 +52,7 @@ def test_a_stopped_stack_shows_the_stop_and_refuses_run_until_resumed(
     assert "ESTOP ENGAGED: fence open (by ana" in running_stack.run("doctor", timeout=60).stdout
 
     run = running_stack.run("run", "--episodes", "3", timeout=120)
-    assert run.returncode == 1, run.stderr
+    assert run.returncode != 0, run.stderr
     summary = last_json(run.stdout)
     assert summary["episodes"] == 1  # the run ends at the first refusal
     (result,) = summary["results"]  # type: ignore[misc]
@@ -98,7 +98,7 @@ def test_a_stop_mid_episode_ends_it_with_estop_engaged(running_stack: Stack) -> 
                 run.wait()
     assert end.reason == "estop_engaged: mid (by test)"
     assert end.success is False and end.goals_filled < end.goals_total
-    assert run.returncode == 1, stderr
+    assert run.returncode != 0, stderr
     summary = last_json(stdout)
     assert summary["episodes"] == 1
     assert summary["results"][0]["reason"] == end.reason  # type: ignore[index]

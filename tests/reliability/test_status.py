@@ -79,7 +79,7 @@ def test_status_names_each_service_the_planners_checkpoint_and_two_deciders(
 def test_status_without_a_stack_says_so_naming_the_endpoint(tmp_path: Path) -> None:
     stack = Stack(free_port(), tmp_path)
     result = stack.run("status", "--json", timeout=60)
-    assert result.returncode == 1
+    assert result.returncode != 0
     (line,) = result.stderr.strip().splitlines()[-1:]
     assert line.startswith(f"manigraph status: no stack at {stack.endpoint}")
 

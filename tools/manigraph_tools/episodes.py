@@ -15,7 +15,7 @@ the run needs, and an episode is failed, with a named reason, and the run goes o
 
 An engaged emergency stop ends the run instead: the sim refuses the reset at once, or cuts the
 episode under way, with reason ``estop_engaged: <why> (by <who>)``; that episode is the run's
-last, and the summary names the reason under ``aborted`` (``manigraph run`` then exits 1).
+last, and the summary names the reason under ``aborted`` (``manigraph run`` then fails).
 
 Before each episode the client waits (up to ``recover_timeout`` seconds) until every service is
 back, so a service restarted by a supervisor (or by hand) takes the next episode.

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import argparse
 import secrets
-import sys
 import time
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
+from manigraph_shared.errors import ManigraphError
 from manigraph_shared.options import add_option_arguments, options_from_args
 from manigraph_tools.commands.common import emit_json, wait_services
 from manigraph_tools.episode_plan import EpisodeOptions, EpisodePlan
@@ -42,8 +42,7 @@ def _run_run(args: argparse.Namespace) -> int:
         summary = run_episodes(bus, plan)
     emit_json(summary, readable=not args.json)
     if "aborted" in summary:  # an engaged emergency stop: the episodes asked for did not run
-        print(f"manigraph run: {summary['aborted']}", file=sys.stderr)
-        return 1
+        raise ManigraphError(str(summary["aborted"]))  # one line, the runtime exit status
     return 0
 
 
