@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 
 from manigraph_shared.messages import Scene
 
@@ -29,15 +30,27 @@ class SceneCache:
         scene = self._scene
         return scene.sequence if scene is not None and scene.episode_id == episode_id else None
 
-    def wait_for(self, episode_id: str, sequence: int, timeout: float) -> Scene | None:
+    def wake(self) -> None:
+        """Have every :meth:`wait_for` look at its ``give_up`` again (something changed)."""
+        with self._changed:
+            self._changed.notify_all()
+
+    def wait_for(
+        self,
+        episode_id: str,
+        sequence: int,
+        timeout: float,
+        give_up: Callable[[], bool] | None = None,
+    ) -> Scene | None:
         """The newest scene of ``episode_id`` at least as new as ``sequence``, or the newest
-        scene at all once ``timeout`` passes (the skill then reports what it sees)."""
+        scene at all once ``timeout`` passes or ``give_up()`` is true (checked at each
+        scene and each :meth:`wake`); the skill then reports what it sees."""
 
         def fresh() -> bool:
             scene = self._scene
-            return (
-                scene is not None and scene.episode_id == episode_id and scene.sequence >= sequence
-            )
+            if scene is not None and scene.episode_id == episode_id and scene.sequence >= sequence:
+                return True
+            return give_up is not None and give_up()
 
         with self._changed:
             self._changed.wait_for(fresh, timeout)
