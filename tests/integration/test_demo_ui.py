@@ -257,6 +257,51 @@ def test_a_block_stacking_demonstration_clicked_in_chromium_trains_a_policy(
     assert decision is not None and decision.object_id in {o.id for o in scene.objects}
 
 
+@needs_chromium
+@pytest.mark.timeout(1200)
+def test_a_late_answer_to_a_goal_click_keeps_the_object_selected_since(
+    world: Stack, open_page: Any
+) -> None:
+    """On a busy machine the answer to a goal click can come after the person has selected
+    the next object. That selection, and the goal click after it, must go through: the late
+    answer used to clear it, so the next goal went out without an object (issue 45)."""
+    person, _ = open_page("--task", "stack", "--blocks", "3", "--seed", "3")
+    person.start_episode()
+    scene = person.state()["scene"]
+    blocks = sorted(scene["objects"], key=lambda o: -o["z"])  # the top block first
+    goals = sorted(scene["goals"], key=lambda g: g["z"])  # the lowest goal first
+    bodies: list[dict[str, Any]] = []
+    held: list[Any] = []
+
+    def hold_the_first(route: Any) -> None:
+        bodies.append(route.request.post_data_json)
+        if len(bodies) == 1:
+            held.append(route)  # answered when the test says so
+        else:
+            route.continue_()
+
+    person.page.route("**/api/action", hold_the_first)
+    person.move(blocks[0]["id"], goals[0]["id"])
+    # From the click on, the page does not say "ready": its click is on its way.
+    assert person.page.locator("#robot-state").get_attribute("data-ready") == "false"
+    person.click_thing(blocks[1]["id"])  # the next object, before the first click's answer
+    deadline = time.monotonic() + WAIT_MS / 1000
+    while not held:
+        assert time.monotonic() < deadline, "the goal click never left the page"
+        person.page.wait_for_timeout(50)
+    with person.page.expect_response("**/api/action", timeout=WAIT_MS):
+        held[0].continue_()
+    person.wait_message(f"{blocks[0]['id']} -> {goals[0]['id']}: done")
+    person.wait_ready()  # the state after the first click: the answer has been read
+    assert person.page.locator("#selection").get_attribute("data-object") == blocks[1]["id"]
+    person.click_thing(goals[1]["id"])
+    person.wait_message(f"{blocks[1]['id']} -> {goals[1]['id']}: done")
+    assert [(b.get("object_id"), b.get("goal_id")) for b in bodies] == [
+        (blocks[0]["id"], goals[0]["id"]),
+        (blocks[1]["id"], goals[1]["id"]),
+    ]
+
+
 def _dish_plan(scene: dict[str, Any], rng: random.Random) -> tuple[list, list]:
     """Bowls into free top bowl slots, plates into free bottom plate slots (top-bottom)."""
     dishes = {

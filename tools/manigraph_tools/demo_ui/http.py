@@ -184,7 +184,13 @@ class _Handler(BaseHTTPRequestHandler):
                 self._json(HTTPStatus.OK, {"ok": True, "episode_id": episode_id})
             elif path == "/api/action":
                 action = app.act(click_from_json(body))
-                self._json(HTTPStatus.OK, {"ok": True, "decision_id": action.decision_id})
+                # The session's version once the click is in: the page says "ready" again
+                # only from a state at least this new (an older one predates the click).
+                version = app.session.version
+                self._json(
+                    HTTPStatus.OK,
+                    {"ok": True, "decision_id": action.decision_id, "version": version},
+                )
             else:
                 self._error(HTTPStatus.NOT_FOUND, f"{path}: no such action")
         except (BadRequest, ClickRefused) as exc:

@@ -1,6 +1,13 @@
 // The demonstration page: draws the live Scene, turns clicks into requests. No build step.
 // The server decides everything (what a click means, whether it is allowed); the page only
 // remembers the selected object and orientation between two clicks.
+//
+// A click's answer may come late (a busy machine), after the person has already selected the
+// next object. So a goal click takes the selection with it when it is sent, and its answer
+// never clears a selection made since: it only gives the selection back if the click was
+// refused and nothing else was selected meanwhile. Nor does the page say "ready" while a
+// click is on its way or on a state older than a click's answer: it waits for the server's
+// state after that click.
 "use strict";
 
 const SVG = "http://www.w3.org/2000/svg";
@@ -17,6 +24,10 @@ const page = {
   bounds: null, // {episode, top: box, side: box} grown over the episode, metres
   formFilled: false,
   recorded: null, // demonstrations recorded, as last seen
+  sending: 0, // clicks sent and not answered yet
+  // The session version the last accepted click's answer named: a state older than that
+  // predates the click (0: none; a new event stream, e.g. a restarted server, starts over).
+  clickVersion: 0,
 };
 
 const $ = (id) => document.getElementById(id);
@@ -40,7 +51,10 @@ async function post(path, body) {
 
 function listen() {
   const events = new EventSource("/api/events");
-  events.onopen = () => setConnection("live", "live");
+  events.onopen = () => {
+    page.clickVersion = 0;
+    setConnection("live", "live");
+  };
   events.onerror = () => setConnection("lost", "connection lost, retrying…");
   events.onmessage = (event) => {
     page.state = JSON.parse(event.data);
@@ -68,14 +82,20 @@ function clickObject(id) {
 }
 
 async function clickGoal(id) {
-  const reply = await post("/api/action", {
-    object_id: page.selected,
-    goal_id: id,
-    orientation_index: page.orientation,
-  });
-  if (reply.ok) {
-    page.selected = null;
-    page.orientation = null;
+  const click = { object_id: page.selected, goal_id: id, orientation_index: page.orientation };
+  page.selected = null; // taken by this click: the next object may be selected at once
+  page.orientation = null;
+  renderSelection();
+  renderOrientations();
+  drawViews();
+  const reply = await sendAction(click);
+  if (!reply.ok) {
+    // Refused: the person may try another goal with the same object, unless they have
+    // moved on to another one (or another orientation) meanwhile.
+    if (page.selected === null && click.object_id && objectInScene(click.object_id)) {
+      page.selected = click.object_id;
+    }
+    if (page.orientation === null) page.orientation = click.orientation_index;
     renderSelection();
     renderOrientations();
     drawViews();
@@ -83,7 +103,25 @@ async function clickGoal(id) {
 }
 
 async function clickTray(tray) {
-  await post("/api/action", { tray_action: tray });
+  await sendAction({ tray_action: tray });
+}
+
+// The robot is not "ready" from the click until the page has seen the state after it.
+async function sendAction(body) {
+  page.sending += 1;
+  renderRobot();
+  const reply = await post("/api/action", body);
+  page.sending -= 1;
+  if (reply.ok && Number.isInteger(reply.version)) {
+    page.clickVersion = Math.max(page.clickVersion, reply.version);
+  }
+  renderRobot();
+  return reply;
+}
+
+function objectInScene(id) {
+  const scene = page.state && page.state.scene;
+  return !scene || scene.objects.some((o) => o.id === id);
 }
 
 async function startEpisode(event) {
@@ -120,9 +158,7 @@ function render() {
       `steps demonstrated · ${episode.refused} refused` +
       (episode.ended ? (episode.success ? " · success" : " · failed") : "")
     : "–";
-  const robot = $("robot-state");
-  robot.dataset.ready = String(state.busy === null);
-  robot.textContent = state.busy === null ? "ready: your move" : state.busy;
+  renderRobot();
   const recorded = state.recorded;
   $("recorded").textContent =
     `${recorded.demonstrations} demonstration${recorded.demonstrations === 1 ? "" : "s"} ` +
@@ -141,12 +177,20 @@ function render() {
     button.dataset.open = String(rack.open);
   }
   $("orientations").hidden = racks.length === 0;
-  if (state.scene && page.selected && !state.scene.objects.some((o) => o.id === page.selected)) {
-    page.selected = null;
-  }
+  if (page.selected && !objectInScene(page.selected)) page.selected = null;
   renderSelection();
   renderOrientations();
   drawViews();
+}
+
+function renderRobot() {
+  const state = page.state;
+  const behind = page.sending > 0 || (state !== null && state.version < page.clickVersion);
+  const busy = behind ? "your click is on its way to the robot" : state?.busy;
+  const robot = $("robot-state");
+  if (busy === undefined) return; // no state yet: the page's "–"
+  robot.dataset.ready = String(busy === null);
+  robot.textContent = busy === null ? "ready: your move" : busy;
 }
 
 function fillForm(defaults) {
