@@ -11,6 +11,8 @@ from __future__ import annotations
 import contextlib
 import functools
 import logging
+import re
+import socket
 import threading
 import time
 from collections.abc import Callable, Mapping
@@ -35,11 +37,19 @@ _ATTEMPT_MS = 2000
 _RETRY_MS = 100
 
 
+class NoStackError(BusError):
+    """Nobody listens at any endpoint a client was given: there is no stack to reach."""
+
+
 def open_session(config: BusConfig, overrides: Mapping[str, object] | None = None) -> zenoh.Session:
     """Open a session; a client retries until its router answers or ``wait_seconds`` pass.
 
+    A client with ``no_stack_after`` first checks that something listens at one of its
+    endpoints, and raises :class:`NoStackError` naming them if nothing does for that long.
     ``overrides`` are further Zenoh configuration keys (the router's access control).
     """
+    if config.mode == "client" and config.no_stack_after is not None:
+        _wait_for_a_listener(config.connect, config.no_stack_after)
     deadline = None if config.wait_seconds is None else time.monotonic() + config.wait_seconds
     attempt = 0
     while True:
@@ -57,11 +67,64 @@ def open_session(config: BusConfig, overrides: Mapping[str, object] | None = Non
         try:
             return zenoh.open(zconfig)
         except zenoh.ZError as exc:
+            why = zenoh_reason(exc)
             if config.mode == "router" or (deadline is not None and time.monotonic() > deadline):
-                raise BusError(f"cannot open a {config.describe()} session: {exc}") from None
+                raise BusError(f"cannot open a {config.describe()} session: {why}") from None
             if attempt == 1 or attempt % 5 == 0:
-                log.info("waiting for the zenoh router at %s (%s)", ",".join(config.connect), exc)
+                log.info("waiting for the zenoh router at %s (%s)", ",".join(config.connect), why)
             time.sleep(0.2)
+
+
+#: Where in its own Rust sources Zenoh raised an error: `` at /root/.cargo/.../x.rs:388.``
+_RUST_PLACE = re.compile(r"\s*\bat \S+\.rs:\d+\.?")
+
+
+def zenoh_reason(exc: BaseException) -> str:
+    """A Zenoh error's text without the Rust source place no user can act on."""
+    return _RUST_PLACE.sub("", str(exc)).strip() or type(exc).__name__
+
+
+def _socket_address(endpoint: str) -> tuple[str, int] | None:
+    """``(host, port)`` of a TCP or TLS endpoint (``tcp/127.0.0.1:7447``, ``tls/[::1]:7447``,
+    metadata after ``?`` or ``#`` ignored); None for any other kind of link."""
+    protocol, _, address = endpoint.partition("/")
+    if protocol not in ("tcp", "tls"):
+        return None
+    host, _, port = re.split(r"[?#]", address, maxsplit=1)[0].rpartition(":")
+    if not host or not port.isdigit():
+        return None
+    return host.strip("[]"), int(port)
+
+
+def _wait_for_a_listener(endpoints: tuple[str, ...], seconds: float) -> None:
+    """Return once a TCP connection to one of ``endpoints`` is accepted (a router's kernel
+    accepts it even while the router is busy); raise :class:`NoStackError` if none is for
+    ``seconds``. Endpoints of other kinds are left to Zenoh."""
+    addresses = [_socket_address(endpoint) for endpoint in endpoints]
+    if not addresses or any(address is None for address in addresses):
+        return
+    deadline = time.monotonic() + seconds
+    while True:
+        for address in addresses:
+            assert address is not None
+            left = max(0.05, deadline - time.monotonic())
+            try:
+                with socket.create_connection(address, timeout=min(left, 0.5)):
+                    return
+            except OSError:
+                pass
+        if time.monotonic() >= deadline:
+            raise NoStackError(f"no stack at {', '.join(endpoints)}{_hint(endpoints)}")
+        time.sleep(0.1)
+
+
+def _hint(endpoints: tuple[str, ...]) -> str:
+    """What to start: ``manigraph up`` where the one endpoint is on this machine."""
+    address = _socket_address(endpoints[0]) if len(endpoints) == 1 else None
+    if address is None or address[0] not in ("127.0.0.1", "localhost", "::1"):
+        return " (is its router running, and reachable from here?)"
+    secure = " --secure" if endpoints[0].startswith("tls/") else ""
+    return f" (is `manigraph up{secure} --port {address[1]}` running?)"
 
 
 def _json(value: object) -> str:

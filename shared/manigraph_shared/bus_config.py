@@ -4,6 +4,10 @@ The flags are zenoh-python's usual ones (``--mode --connect --listen --config
 --no-multicast-scouting``); each has an environment variable so containers can be configured
 without a command line. Flags win over the environment.
 
+``--port N`` is the shorthand ``manigraph up --port N`` uses: the endpoint
+``tcp/127.0.0.1:N`` (``tls/127.0.0.1:N`` with ``--tls-dir``), to connect to or, for the router,
+to listen on.
+
 Mutual TLS is chosen with ``--tls-dir`` (a directory written by ``manigraph certs``) and
 ``--tls-identity`` (whose certificate this process presents); endpoints are then
 ``tls/HOST:PORT``. Without them the bus is plain TCP, meant for loopback development.
@@ -20,9 +24,13 @@ from pathlib import Path
 from manigraph_shared.cells import check_cell
 from manigraph_shared.errors import ConfigError
 
-DEFAULT_ROUTER = "tcp/127.0.0.1:7447"
-DEFAULT_TLS_ROUTER = "tls/127.0.0.1:7447"
+DEFAULT_PORT = 7447
+DEFAULT_ROUTER = f"tcp/127.0.0.1:{DEFAULT_PORT}"
+DEFAULT_TLS_ROUTER = f"tls/127.0.0.1:{DEFAULT_PORT}"
 MODES = ("client", "peer", "router")
+#: How long a one-shot client (``doctor``, ``run``, ``stop`` ...) lets nobody listen at its
+#: endpoint before it says there is no stack; ``--wait-seconds`` waits longer instead.
+NO_STACK_SECONDS = 0.5
 
 ENV = {
     "mode": "MANIGRAPH_ZENOH_MODE",
@@ -60,6 +68,9 @@ class BusConfig:
     multicast_scouting: bool = False
     #: How long a client waits for its router; ``None`` waits forever (services do).
     wait_seconds: float | None = None
+    #: A client that finds nobody listening at any of its endpoints for this long gives up at
+    #: once, saying there is no stack; ``None``: it waits its ``wait_seconds`` for one.
+    no_stack_after: float | None = None
     #: Directory of ``manigraph certs`` output; set, every link is mutual TLS.
     tls_dir: Path | None = None
     #: Whose certificate this process presents (its common name is what access control sees).
@@ -81,6 +92,8 @@ class BusConfig:
             raise ConfigError("connect", "client mode needs at least one router endpoint")
         if self.wait_seconds is not None and self.wait_seconds < 0:
             raise ConfigError("wait_seconds", "must be >= 0")
+        if self.no_stack_after is not None and self.no_stack_after < 0:
+            raise ConfigError("no_stack_after", "must be >= 0")
         if self.config_file is not None and not self.config_file.is_file():
             raise ConfigError("config", f"no such file: {self.config_file}")
         self._check_tls()
@@ -154,11 +167,29 @@ class BusConfig:
         return f"{self.mode} {where}{who}{cell}"
 
 
+def loopback_endpoint(port: int, tls: bool = False) -> str:
+    """The endpoint ``--port`` stands for: the router of ``manigraph up --port PORT``."""
+    return f"{'tls' if tls else 'tcp'}/127.0.0.1:{port}"
+
+
 def add_bus_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("zenoh")
     group.add_argument("-m", "--mode", choices=MODES, help=f"session mode [{ENV['mode']}]")
     group.add_argument(
-        "-e", "--connect", action="append", help=f"endpoint to connect to [{ENV['connect']}]"
+        "-e",
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help="router endpoint to connect to, e.g. tcp/127.0.0.1:7447 (repeat for several; "
+        f"default {DEFAULT_ROUTER}) [{ENV['connect']}]",
+    )
+    group.add_argument(
+        "--port",
+        dest="bus_port",
+        type=int,
+        metavar="N",
+        help="shorthand for the router of `manigraph up --port N`: -e tcp/127.0.0.1:N "
+        "(tls/127.0.0.1:N with --tls-dir); the router listens there",
     )
     group.add_argument(
         "-l", "--listen", action="append", help=f"endpoint to listen on [{ENV['listen']}]"
@@ -222,9 +253,21 @@ def bus_config_from_args(
         return env.get(ENV[name]) or None
 
     chosen_mode = "router" if is_router else pick("mode") or mode or "client"
+    tls_dir = pick("tls_dir")
+    port = getattr(args, "bus_port", None)
     connect = _endpoints(pick("connect"))
     listen = _endpoints(pick("listen"))
-    tls_dir = pick("tls_dir")
+    if port is not None:
+        if not 0 < port <= 65535:
+            raise ConfigError("port", f"{port} is not in 1..65535")
+        given = "--listen" if is_router else "--connect"
+        if getattr(args, given.removeprefix("--"), None):
+            raise ConfigError("port", f"give --port or {given}, not both")
+        endpoint = loopback_endpoint(port, tls=bool(tls_dir))
+        if is_router:
+            listen = (endpoint,)
+        else:
+            connect = (endpoint,)
     default_router = DEFAULT_TLS_ROUTER if tls_dir else DEFAULT_ROUTER
     if not connect and chosen_mode == "client":
         connect = (default_router,)
@@ -233,6 +276,13 @@ def bus_config_from_args(
     no_scouting = pick("no_multicast_scouting")
     multicast = _flag_false(no_scouting, ENV["no_multicast_scouting"])
     wait = pick("wait_seconds")
+    # A one-shot client (its caller bounds the wait) says at once that nobody listens; a wait
+    # asked for with --wait-seconds is waited in full (a script starting its stack beside it).
+    no_stack_after = (
+        NO_STACK_SECONDS
+        if chosen_mode == "client" and wait is None and wait_seconds is not None
+        else None
+    )
     config = pick("config")
     chosen_identity = pick("tls_identity") or (identity_default if tls_dir else None)
     return BusConfig(
@@ -242,6 +292,7 @@ def bus_config_from_args(
         config_file=Path(str(config)) if config else None,
         multicast_scouting=multicast,
         wait_seconds=_seconds(wait, ENV["wait_seconds"]) if wait is not None else wait_seconds,
+        no_stack_after=no_stack_after,
         tls_dir=Path(str(tls_dir)) if tls_dir else None,
         tls_identity=str(chosen_identity) if chosen_identity else None,
         cell=str(cell) if (cell := pick("cell")) else None,

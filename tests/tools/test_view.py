@@ -100,7 +100,7 @@ def test_a_foxglove_client_receives_the_scene_as_a_scene_update(
 ) -> None:
     port = free_port()
     running_stack.start("router")
-    running_stack.start("view", "view", "--port", str(port))
+    running_stack.start("view", "view", "--ws-port", str(port))
     scene = a_scene()
     with running_stack.client() as bus:
         running_stack.wait_alive(bus, "view")
@@ -137,7 +137,7 @@ def test_a_cells_scene_has_its_schema_and_is_drawn_on_the_cells_own_topic(
     the contract schema, and its scene is drawn apart on ``/left/foxglove/scene``."""
     port = free_port()
     running_stack.start("router")
-    running_stack.start("view", "view", "--port", str(port))
+    running_stack.start("view", "view", "--ws-port", str(port))
     scene = a_scene()
     with running_stack.client() as bus:
         running_stack.wait_alive(bus, "view")

@@ -6,6 +6,7 @@ multicast scouting off, talks to them over a real Zenoh session, and stops them 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -102,7 +103,11 @@ class Stack:
     def run(
         self, *args: str, timeout: float = 120.0, identity: str = "client"
     ) -> subprocess.CompletedProcess[str]:
-        """Run one manigraph command to completion against this stack."""
+        """Run one manigraph command to completion against this stack; once its router,
+        if this stack started one, listens (a one-shot client says at once that nobody does,
+        and a router on a loaded machine has taken 30-90 s to start)."""
+        if "router" in self.processes:
+            self.wait_listening(timeout=180.0)
         return subprocess.run(
             [sys.executable, "-m", "manigraph_shared.cli", *args],
             capture_output=True,
@@ -111,6 +116,21 @@ class Stack:
             timeout=timeout,
             check=False,
         )
+
+    def wait_listening(self, timeout: float = 180.0) -> None:
+        """Return once something accepts connections on this stack's port; raise if the
+        router exits first or ``timeout`` passes."""
+        deadline = time.monotonic() + timeout
+        while True:
+            with contextlib.suppress(OSError):
+                socket.create_connection(("127.0.0.1", self.port), timeout=1.0).close()
+                return
+            router = self.processes.get("router")
+            if router is not None and router.poll() is not None:
+                raise AssertionError(f"router exited ({router.returncode}):\n{self.log('router')}")
+            if time.monotonic() > deadline:
+                raise AssertionError(f"nothing listens on {self.endpoint} after {timeout:.0f} s")
+            time.sleep(0.05)
 
     def log(self, name: str) -> str:
         path = self.log_dir / f"{name}.log"

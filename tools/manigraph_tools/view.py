@@ -168,7 +168,11 @@ class FoxgloveView(Service):
 def _view_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--host", default=DEFAULT_HOST, help=f"bind address ({DEFAULT_HOST})")
     parser.add_argument(
-        "--port", type=int, default=DEFAULT_PORT, help=f"WebSocket port ({DEFAULT_PORT})"
+        "--ws-port",
+        type=int,
+        default=DEFAULT_PORT,
+        help=f"port of the WebSocket Foxglove connects to (default {DEFAULT_PORT}); "
+        "--port is the stack's router port, as for every client",
     )
     parser.add_argument(
         "--print-layout",
@@ -182,10 +186,10 @@ def _view_run(args: argparse.Namespace) -> int:
     if args.print_layout:
         print(layout_json(), end="")
         return 0
-    if not 0 <= args.port <= 65535:
-        raise ConfigError("port", f"{args.port} is not in 0..65535")
+    if not 0 <= args.ws_port <= 65535:
+        raise ConfigError("ws-port", f"{args.ws_port} is not in 0..65535")
     return run_service(
-        lambda bus: FoxgloveView(bus, args.host, args.port), bus_config_from_args(args)
+        lambda bus: FoxgloveView(bus, args.host, args.ws_port), bus_config_from_args(args)
     )
 
 

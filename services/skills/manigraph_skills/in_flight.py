@@ -30,6 +30,12 @@ class ActionInFlight:
         with self._lock:
             self._decision, self._finished = decision_id, False
 
+    @property
+    def under_way(self) -> bool:
+        """Whether the worker is on a decision that has no final status yet."""
+        with self._lock:
+            return self._decision is not None and not self._finished
+
     def end(self) -> None:
         """The worker is done with the decision (whatever it reported)."""
         with self._lock:

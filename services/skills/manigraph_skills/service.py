@@ -173,7 +173,10 @@ class SkillsService(Service):
 
     def _on_liveliness(self, service: str, alive: bool) -> None:
         if service == self.robot_service and not alive:
-            self.log.warning("the robot (%s) went away: the skill under way fails", service)
+            if self.in_flight.under_way:
+                self.log.warning("the robot (%s) went away: the skill under way fails", service)
+            else:  # most often the stack shutting down: nothing fails, nothing to act on
+                self.log.debug("the robot (%s) went away between skills", service)
             self.driver.abort("robot_lost")
 
     def _refuse(self, action: Action, reason: str, detail: str) -> None:

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.bus_config import BusConfig
+from manigraph_shared.bus_config import DEFAULT_PORT, BusConfig, loopback_endpoint
 from manigraph_shared.cells import cell_names
 from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError, ManigraphError
@@ -32,6 +32,7 @@ from manigraph_tools.commands.common import emit_json
 from manigraph_tools.commands.run import episode_arguments, plan_from_args
 from manigraph_tools.episodes import EpisodePlan, run_episodes
 from manigraph_tools.supervisor import ProcessSpec, Supervisor
+from manigraph_tools.up_guide import guide
 
 
 def _skills_driver(sim_backend: str) -> str:
@@ -135,7 +136,13 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         help="with --cells: a planner process per cell instead of one for all (N copies of "
         "the policy and of torch; for comparison, docs/scaling.md)",
     )
-    parser.add_argument("--port", type=int, default=7447, help="router port on 127.0.0.1")
+    parser.add_argument(
+        "--port",
+        type=int,
+        default=DEFAULT_PORT,
+        help=f"router port on 127.0.0.1 (default {DEFAULT_PORT}); clients reach it with the "
+        "same --port N, or with the -e line printed once the stack is up",
+    )
     parser.add_argument(
         "--secure",
         action="store_true",
@@ -267,7 +274,7 @@ def _up_run(args: argparse.Namespace) -> int:
     # The options first: a run refused for them names them, whatever else is on the port.
     _refuse_busy_port(args.port)
     tls_dir = Path(tempfile.mkdtemp(prefix="manigraph-certs-")) if args.secure else None
-    endpoint = f"{'tls' if tls_dir else 'tcp'}/127.0.0.1:{args.port}"
+    endpoint = loopback_endpoint(args.port, tls=tls_dir is not None)
     bus_env = {
         "MANIGRAPH_ZENOH_MODE": "client",
         "MANIGRAPH_ZENOH_CONNECT": endpoint,
@@ -333,8 +340,16 @@ def _up_run(args: argparse.Namespace) -> int:
                     names.append("planner")
                 supervisor.wait_alive(bus, names, 180.0)
             security = "mutual TLS + access control" if tls_dir else "plain TCP"
+            lines = guide(
+                endpoint,
+                tls_dir,
+                [str(cell) for cell in cells if cell],
+                next_steps=plan is None and not human,
+            )
             print(
                 "stack is up: " + ", ".join(s.name for s in specs) + f" ({security})",
+                *lines,
+                sep="\n",
                 file=sys.stderr,
                 flush=True,
             )
