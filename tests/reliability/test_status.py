@@ -114,3 +114,29 @@ def test_status_on_a_secure_stack_names_its_certificates_and_each_service(
     services = services_of(report)
     assert services["sim"]["version"] == version("manigraph-sim")
     assert services["skills"]["state"] == "ok"
+
+
+def test_status_sees_every_cell_its_stop_and_two_planners_in_one(running_stack: Stack) -> None:
+    running_stack.start("router")
+    running_stack.start("sim-left", "sim", "--cell", "left")
+    running_stack.start("skills-left", "skills", "--cell", "left")
+    for name in ("planner-left", "planner-left-again"):
+        running_stack.start(name, "planner", "--cell", "left")
+    with running_stack.client() as bus:
+        running_stack.wait_alive(bus.in_cell("left"), "sim", "skills", "planner", timeout=STARTUP)
+    stopped = running_stack.run("stop", "--cell", "left", "--reason", "left door", timeout=60)
+    assert stopped.returncode == 0, stopped.stderr
+    report = status_json(running_stack)
+    assert report["cells"] == [None, "left"]
+    by_cell = {(s["cell"], s["service"]): s for s in report["services"]}  # type: ignore[union-attr]
+    assert set(by_cell) == {
+        (None, "router"),
+        ("left", "sim"),
+        ("left", "skills"),
+        ("left", "planner"),
+    }
+    assert report["estop_engaged"] is True
+    assert report["estop"]["cell"] == "left"  # type: ignore[index]
+    assert report["estop"]["reason"] == "left door"  # type: ignore[index]
+    (warning,) = report["warnings"]  # type: ignore[misc]
+    assert warning.startswith("two deciders alive in cell left (planner x2)")

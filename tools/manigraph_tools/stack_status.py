@@ -59,7 +59,7 @@ class ServiceReport:
     cell: Cell
     name: str
     alive: bool
-    #: How many processes hold this service's token in this cell (two planners: 2).
+    #: How many processes answered as this service in this cell (two planners: 2).
     tokens: int = 0
     status: ServiceStatus | None = None
 
@@ -192,7 +192,8 @@ def gather(
     """Who is alive in every cell, and each one's status, within about ``wait`` seconds."""
     started = time.monotonic() if started is None else started
     deadline = started + wait
-    heard: dict[tuple[Cell, str], ServiceStatus] = {}
+    #: Each (cell, service)'s statuses by process (its start time): two planners are two.
+    heard: dict[tuple[Cell, str], dict[float | None, ServiceStatus]] = {}
     lock = threading.Lock()
     status_keys = f"{PREFIX}/**/status/*"
 
@@ -205,7 +206,7 @@ def gather(
         except MessageError:
             return
         with lock:
-            heard[where] = status
+            heard.setdefault(where, {})[status.started_at] = status
 
     bus.subscribe_raw(status_keys, lambda s: keep(str(s.key_expr), s.payload.to_bytes()))
     tokens: Counter[tuple[Cell, str]] = Counter()
@@ -237,16 +238,21 @@ def gather(
                 break
         time.sleep(0.02)
     cells = list(dict.fromkeys([None, *sorted({c for c, _ in tokens if c}, key=str)]))
+    # The default cell is expected to hold a stack unless the stack is one of named cells
+    # (``up --cells N``): then only the router is there, and that is no fault.
+    only_named = len(cells) > 1 and {n for c, n in tokens if c is None} <= NO_STATUS
     reports: list[ServiceReport] = []
     with lock:
         for cell in cells:
-            names = [n for c, n in tokens if c == cell]
-            if cell is None or names:  # the default cell always, its expected services too
-                names = list(dict.fromkeys([*expected, *sorted(names)])) if cell is None else names
+            names = sorted(n for c, n in tokens if c == cell)
+            if cell is None and not only_named:
+                names = list(dict.fromkeys([*expected, *names]))
             for name in names:
-                count = tokens.get((cell, name), 0)
-                status = heard.get((cell, name)) if count else None
-                reports.append(ServiceReport(cell, name, count > 0, count, status))
+                alive = tokens.get((cell, name), 0) > 0
+                processes = heard.get((cell, name), {}) if alive else {}
+                status = max(processes.values(), key=lambda s: s.stamp) if processes else None
+                count = max(len(processes), 1) if alive else 0
+                reports.append(ServiceReport(cell, name, alive, count, status))
     return StackStatus(
         endpoint=list(config.connect),
         secure=config.tls,

@@ -14,18 +14,29 @@ can run and a new router would have to be found again by every session; its deat
 stack, naming it, instead of leaving the stack half-connected. Nor is a service that exits
 with ``CONFIG_EXIT_CODE``: it refused its options or the machine (no Vulkan device, say), and
 the same start would fail the same way.
+
+Nothing outlives the supervisor. Each child leads its own process group (so a Ctrl-C at the
+terminal reaches the supervisor alone, which stops the children in order) and is signalled as
+that group, its own children included. Each child also gets a parent-death signal (Linux
+``PR_SET_PDEATHSIG``): SIGTERM reaches it when the supervisor dies, even by SIGKILL. After the
+first stop signal, the signals of :data:`STOP_SIGNALS` no longer interrupt the stop: a second
+one hurries it (:meth:`Supervisor.hurry`) instead of aborting it midway.
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import os
 import signal
 import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import FrameType
 from typing import TextIO
 
 from manigraph_shared.bus import Bus
@@ -46,6 +57,38 @@ class ProcessSpec:
 
 #: Processes whose death stops the stack instead of being restarted.
 NOT_RESTARTED = frozenset({"router"})
+
+#: What stops a supervised stack: Ctrl-C, ``kill``/``timeout``, the terminal closing.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+#: The signal a child gets when its supervisor dies; it stops as on ``manigraph up``'s stop.
+PARENT_DEATH_SIGNAL = signal.SIGTERM
+#: After a second stop signal, how long what still runs has before it is killed.
+HURRIED_GRACE = 1.0
+
+_PR_SET_PDEATHSIG = 1
+
+
+def _prctl() -> Callable[..., int] | None:
+    """libc's ``prctl`` on Linux, looked up before any fork (a forked child only calls it)."""
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        prctl: Callable[..., int] = ctypes.CDLL(None, use_errno=True).prctl  # libc's, loaded
+    except (OSError, AttributeError):
+        return None
+    return prctl
+
+
+_PRCTL = _prctl()
+
+
+def _die_with(parent: int) -> None:
+    """In a forked child before it runs its program: ask for ``PARENT_DEATH_SIGNAL`` when the
+    thread that forked it ends; if the parent died already, go at once."""
+    if _PRCTL is not None:
+        _PRCTL(_PR_SET_PDEATHSIG, int(PARENT_DEATH_SIGNAL), 0, 0, 0)
+    if os.getppid() != parent:
+        os.kill(os.getpid(), signal.SIGKILL)
 
 
 @dataclass(frozen=True)
@@ -81,9 +124,17 @@ class Supervisor:
         #: Why the stack must stop (a router death, a service out of restarts), once known.
         self.failure: str | None = None
         self._pumps: list[threading.Thread] = []
-        self._write_lock = threading.Lock()
+        # re-entrant: a stop signal's handler may say something while the main thread writes
+        self._write_lock = threading.RLock()
         self._lock = threading.Lock()
         self._stopping = threading.Event()
+        #: Set once :meth:`stop` has ended every child: the watcher thread, which forked the
+        #: restarted ones (their parent-death signal follows that thread), may end then.
+        self._stopped = threading.Event()
+        #: Set by a second stop signal: what still runs gets ``HURRIED_GRACE``, then SIGKILL.
+        self._hurry = threading.Event()
+        self._signalled = False
+        self._output_broken = False
         self._watcher: threading.Thread | None = None
         if log_dir is not None:
             log_dir.mkdir(parents=True, exist_ok=True)
@@ -94,6 +145,7 @@ class Supervisor:
 
     def _spawn(self, spec: ProcessSpec, colour: str) -> subprocess.Popen[str]:
         env = {**os.environ, "PYTHONUNBUFFERED": "1", **spec.env}
+        parent = os.getpid()
         process = subprocess.Popen(
             spec.argv(),
             stdout=subprocess.PIPE,
@@ -102,16 +154,27 @@ class Supervisor:
             text=True,
             env=env,
             start_new_session=True,  # Ctrl-C reaches us only; we stop children in order
+            preexec_fn=lambda: _die_with(parent),
         )
         pump = threading.Thread(target=self._pump, args=(spec.name, process, colour), daemon=True)
         pump.start()
         self._pumps.append(pump)
         return process
 
-    def _say(self, text: str) -> None:
+    def _write(self, text: str) -> None:
+        """Write to the output; a closed terminal (SIGHUP) must not stop the stop, nor the
+        pumps that keep the children's pipes drained."""
         with self._write_lock:
-            self.output.write(f"{'supervisor':>10} | {text}\n")
-            self.output.flush()
+            if self._output_broken:
+                return
+            try:
+                self.output.write(text)
+                self.output.flush()
+            except (OSError, ValueError):
+                self._output_broken = True
+
+    def _say(self, text: str) -> None:
+        self._write(f"{'supervisor':>10} | {text}\n")
         if self.log_dir is not None:
             with (self.log_dir / "supervisor.log").open("a") as log:
                 log.write(text + "\n")
@@ -123,12 +186,13 @@ class Supervisor:
     def _pump(self, name: str, process: subprocess.Popen[str], colour: str) -> None:
         assert process.stdout is not None
         log_file = (self.log_dir / f"{name}.log").open("a") if self.log_dir else None
-        tty = self.output.isatty()
+        try:
+            tty = self.output.isatty()
+        except (OSError, ValueError):
+            tty = False
         label = f"\033[{colour}m{name:>10}\033[0m" if tty else f"{name:>10}"
         for line in process.stdout:
-            with self._write_lock:
-                self.output.write(f"{label} | {line}")
-                self.output.flush()
+            self._write(f"{label} | {line}")
             if log_file:
                 log_file.write(line)
                 log_file.flush()
@@ -142,13 +206,16 @@ class Supervisor:
         which wakes it from any wait (the ``up`` command turns it into a clean stop)."""
 
         def loop() -> None:
-            while not self._stopping.wait(period):
-                if self.poll() is not None:
+            # The thread lives until every child is stopped: the children it restarted get
+            # their parent-death signal when it ends.
+            interrupted = False
+            while not self._stopped.wait(period):
+                if not interrupted and self.poll() is not None:
+                    interrupted = True
                     if interrupt_main:
                         main = threading.main_thread().ident
                         assert main is not None
                         signal.pthread_kill(main, signal.SIGINT)
-                    return
 
         self._watcher = threading.Thread(target=loop, name="supervisor", daemon=True)
         self._watcher.start()
@@ -219,17 +286,43 @@ class Supervisor:
         if failure is not None:
             raise ManigraphError(failure)
 
+    # --- stopping -------------------------------------------------------------------------
+    def handle_signals(self) -> None:
+        """From the main thread: the first of ``STOP_SIGNALS`` raises ``KeyboardInterrupt``
+        (the caller's ``finally`` then calls :meth:`stop`); every later one hurries the stop
+        instead, so a Ctrl-C followed by SIGTERM or a closing terminal never leaves a child."""
+        for signum in STOP_SIGNALS:
+            signal.signal(signum, self._on_signal)
+
+    def _on_signal(self, signum: int, _frame: FrameType | None) -> None:
+        name = signal.Signals(signum).name
+        if self._signalled or self._stopping.is_set():
+            if not self._hurry.is_set():
+                self._say(f"{name}: killing what still runs in {HURRIED_GRACE:g} s")
+            self.hurry()
+            return
+        self._signalled = True
+        raise KeyboardInterrupt(name)
+
+    def hurry(self) -> None:
+        """Give every child still running ``HURRIED_GRACE`` seconds from now, then SIGKILL."""
+        self._hurry.set()
+
     def stop(self, grace: float = 10.0) -> None:
         """SIGTERM every service at once (they stop in parallel, ~0.2 s each), then the ones
         of ``STOPPED_LAST`` in that order, so the recorder logs the others' last statuses and
-        the router carries them; what has not exited after ``grace`` seconds is killed."""
+        the router carries them; what has not exited after ``grace`` seconds (after
+        :meth:`hurry`, ``HURRIED_GRACE``) is killed, its process group with it."""
         self._stopping.set()
-        with self._lock:
-            last = [c for name in STOPPED_LAST for c in self.children if c.spec.name == name]
-            first = [c for c in reversed(self.children) if c not in last]
-            _terminate([c.process for c in first], grace)
-            for child in last:
-                _terminate([child.process], grace)
+        try:
+            with self._lock:
+                last = [c for name in STOPPED_LAST for c in self.children if c.spec.name == name]
+                first = [c for c in reversed(self.children) if c not in last]
+                _terminate([c.process for c in first], grace, self._hurry)
+                for child in last:
+                    _terminate([child.process], grace, self._hurry)
+        finally:
+            self._stopped.set()
         for pump in self._pumps:
             pump.join(timeout=2)
 
@@ -238,15 +331,36 @@ class Supervisor:
 STOPPED_LAST = ("recorder", "router")
 
 
-def _terminate(processes: list[subprocess.Popen[str]], grace: float) -> None:
-    """SIGTERM ``processes`` together; kill those still running ``grace`` seconds later."""
+def _terminate(
+    processes: list[subprocess.Popen[str]], grace: float, hurry: threading.Event | None = None
+) -> None:
+    """SIGTERM ``processes`` (each as its process group) together; SIGKILL those still
+    running ``grace`` seconds later, or ``HURRIED_GRACE`` after ``hurry`` is set."""
     running = [p for p in processes if p.poll() is None]
     for process in running:
-        process.send_signal(signal.SIGTERM)
+        _signal_group(process, signal.SIGTERM)
     deadline = time.monotonic() + grace
-    for process in running:
-        try:
-            process.wait(timeout=max(0.0, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
+    hurried = False
+    while running:
+        if hurry is not None and hurry.is_set() and not hurried:
+            hurried = True
+            deadline = min(deadline, time.monotonic() + HURRIED_GRACE)
+        if time.monotonic() >= deadline:
+            for process in running:
+                _signal_group(process, signal.SIGKILL)
+                process.wait()
+            return
+        running = [p for p in running if p.poll() is None]
+        if running:
+            time.sleep(0.02)
+    for process in processes:  # a child's own children that outlived it
+        _signal_group(process, signal.SIGKILL, leader_gone=True)
+
+
+def _signal_group(process: subprocess.Popen[str], signum: int, leader_gone: bool = False) -> None:
+    """Send ``signum`` to the process group ``process`` leads (its children too); with
+    ``leader_gone``, to what is left of the group after the leader was reaped."""
+    if process.poll() is not None and not leader_gone:
+        return
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(process.pid, signum)

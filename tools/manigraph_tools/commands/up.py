@@ -31,7 +31,7 @@ from manigraph_tools.certs import IDENTITIES, make_certificates
 from manigraph_tools.commands.common import emit_json
 from manigraph_tools.commands.run import episode_arguments, plan_from_args
 from manigraph_tools.episodes import EpisodePlan, run_episodes
-from manigraph_tools.supervisor import ProcessSpec, Supervisor
+from manigraph_tools.supervisor import STOP_SIGNALS, ProcessSpec, Supervisor
 from manigraph_tools.up_guide import guide
 
 
@@ -243,9 +243,10 @@ def _interrupt(signum: int, _frame: object) -> None:
 
 def _up_run(args: argparse.Namespace) -> int:
     # Explicit handlers: a process started with SIGINT ignored (a background job of a script,
-    # some CI runners) would otherwise never see Ctrl-C, and SIGTERM should stop it the same way.
-    signal.signal(signal.SIGINT, _interrupt)
-    signal.signal(signal.SIGTERM, _interrupt)
+    # some CI runners) would otherwise never see Ctrl-C, and SIGTERM or a closing terminal
+    # should stop it the same way. Once children run, the supervisor's handlers take over.
+    for signum in STOP_SIGNALS:
+        signal.signal(signum, _interrupt)
     backends = _sim_backends()
     sim_options = (
         backends.argv(args.sim, backends.given_options(args)) if backends is not None else []
@@ -311,6 +312,8 @@ def _up_run(args: argparse.Namespace) -> int:
             planner.env["MANIGRAPH_TLS_IDENTITY"] = SHARED_PLANNER
         specs.append(planner)
     supervisor = Supervisor(args.log_dir)
+    # A first signal stops the stack in order; a second one hurries the stop, never aborts it.
+    supervisor.handle_signals()
     summary: dict[str, object] | None = None
     client = BusConfig(
         connect=(endpoint,),
