@@ -70,9 +70,9 @@ class ExpertPolicy(Policy):
 
     def _decide_accepting(self, scene: Scene, geometry: SceneGeometry) -> Decision | None:
         matching = GoalMatching(scene, geometry)
-        moves = matching.ranked_moves()
-        if moves:
-            return moves[0]
+        move = matching.first_move()
+        if move is not None:
+            return move
         return _cover_moves(
             matching.objects, matching.goals, geometry, matching.open_goals(), matching.to_place()
         )

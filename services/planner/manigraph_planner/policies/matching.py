@@ -20,7 +20,7 @@ Objects that no goal accepts (spares, distractors) are never picked. Nothing to 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from manigraph_planner.policies.base import Decision
@@ -31,7 +31,7 @@ from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, Scene
 __all__ = ["HOLD_DISTANCE", "GoalMatching", "maximum_matching_size"]
 
 #: An object whose centre is this close to a goal's (metres) rests in it.
-HOLD_DISTANCE = 0.015
+HOLD_DISTANCE = 0.02  # the physics world's goal tolerance
 #: Slack (metres) in telling which goals a goal stands on.
 SUPPORT_MARGIN = 0.002
 _CATEGORY = {ObjectCategory.BLOCK: GoalCategory.BLOCK, ObjectCategory.COVER: GoalCategory.COVER}
@@ -145,14 +145,23 @@ class GoalMatching:
         ]
         return sorted(blocks, key=lambda o: (-_height(o), o.id))
 
+    def first_move(self) -> Decision | None:
+        """The expert's decision: the first of :meth:`moves`, the rest never computed."""
+        return next(self.moves(), None)
+
     def ranked_moves(self) -> list[Decision]:
         """Every fill (rule 1), in the expert's order, then every move-out (rule 2)."""
+        return list(self.moves())
+
+    def moves(self) -> Iterator[Decision]:
+        """Rule 1's fills in the expert's order, then rule 2's move-outs, each once."""
         goals, blocks = self.open_goals(), self.to_place()
         admitted = [[j for j, o in enumerate(blocks) if goal_admits(g, o)] for g in goals]
+        fillable = [self.fillable(g) for g in goals]
         best = maximum_matching_size(admitted)
-        fills: list[Decision] = []
+        fills: set[Decision] = set()
         for row, goal in enumerate(goals):
-            if not self.fillable(goal):
+            if not fillable[row]:
                 continue
             rest = admitted[:row] + admitted[row + 1 :]
             for j in admitted[row]:
@@ -160,16 +169,16 @@ class GoalMatching:
                 if self.geometry.is_covered(block):
                     continue
                 if maximum_matching_size(rest, banned=j) == best - 1:
-                    fills.append(Decision(block.id, goal.id))
+                    fills.add(Decision(block.id, goal.id))
+                    yield Decision(block.id, goal.id)
         wrong = {self.holder[g.id].id for g in goals if g.id in self.holder}
-        moves = [
-            Decision(block.id, goal.id)
-            for block in blocks
-            if block.id in wrong and not self.geometry.is_covered(block)
-            for goal in goals
-            if self.fillable(goal) and goal_admits(goal, block)
-        ]
-        return [*fills, *(m for m in moves if m not in fills)]
+        for block in blocks:
+            if block.id not in wrong or self.geometry.is_covered(block):
+                continue
+            for row, goal in enumerate(goals):
+                move = Decision(block.id, goal.id)
+                if fillable[row] and goal_admits(goal, block) and move not in fills:
+                    yield move
 
 
 def _distance(obj: SceneObject, goal: SceneGoal) -> float:
