@@ -23,6 +23,7 @@ from mcap.writer import CompressionType, Writer
 
 from manigraph_shared.cells import cell_of, default_key
 from manigraph_shared.errors import LogError
+from manigraph_shared.mcap_index import bound_chunk_indexes
 from manigraph_shared.messages import Message, key_matches, message_type_for_key
 from manigraph_shared.messages.base import PREFIX
 
@@ -57,6 +58,8 @@ class McapLogWriter:
         path.parent.mkdir(parents=True, exist_ok=True)
         self._stream: BinaryIO = path.open("wb")
         self._writer = Writer(self._stream, compression=CompressionType.ZSTD)
+        # One chunk per flush (100 ms): its index waits for the summary on disk, not in memory.
+        self._chunk_indexes = bound_chunk_indexes(self._writer, path.parent)
         self._writer.start(profile=PROFILE, library="manigraph")
         self._channels: dict[str, int] = {}
         self._schemas: dict[str, int] = {}
@@ -125,6 +128,7 @@ class McapLogWriter:
     def close(self) -> None:
         self._writer.finish()
         self._stream.close()
+        self._chunk_indexes.close()
 
     def _channel_for(self, topic: str) -> int:
         # A cell's key (manigraph/<cell>/world/scene) has its default-cell key's schema.
@@ -217,6 +221,7 @@ def recover_log(path: Path, output: Path | None = None) -> int:
     kept = 0
     with source, target.open("wb") as sink:
         writer = Writer(sink, compression=CompressionType.ZSTD)
+        chunk_indexes = bound_chunk_indexes(writer, target.parent)
         writer.start(profile=PROFILE, library="manigraph (recovered)")
         schemas: dict[int, int] = {}
         channels: dict[int, int] = {}
@@ -240,6 +245,7 @@ def recover_log(path: Path, output: Path | None = None) -> int:
         except Exception:  # the cut: everything before it was copied
             pass
         writer.finish()
+        chunk_indexes.close()
     if output is None:
         os.replace(target, path)
     return kept
