@@ -18,6 +18,7 @@ budget is spent.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -58,6 +59,8 @@ if TYPE_CHECKING:
     from manigraph_shared.markers import MarkerMap
     from manigraph_shared.messages import CameraInfo, CompressedImage, TaskLayout
     from manigraph_sim.physics.camera import CameraConfig, TripodCamera
+
+log = logging.getLogger("manigraph.sim")
 
 #: A body whose grasp point (a block's centre, a cover's handle) is this close to the TCP
 #: while the gripper is closed is held.
@@ -186,9 +189,13 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
     def _warm_up(self) -> None:
         """Render one frame of a one-block episode: the first frame of a process compiles the
         shaders (10-40 s on a busy CPU), better before the service says it is ready than
-        inside a reset someone is waiting for."""
-        self.reset(EpisodeRequest(episode_id="warm-up", task="stack", blocks=1), 0.0)
-        self.camera_frame(0.0)
+        inside a reset someone is waiting for. It says how far it is every few seconds."""
+        from manigraph_sim.physics.warm_up import progress_while
+
+        what = "camera: warming up the renderer"
+        with progress_while(log, what, "its first frame compiles shaders, 15-40 s"):
+            self.reset(EpisodeRequest(episode_id="warm-up", task="stack", blocks=1), 0.0)
+            self.camera_frame(0.0)
         # Kept until the next episode's world exists: SAPIEN frees the compiled shaders
         # with the last scene.
         self._warm_world = self.world
