@@ -16,6 +16,7 @@ import pytest
 from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, Explanation
+from manigraph_shared.preflight import vulkan_problem
 from manigraph_tools.testing import free_port, run_up
 
 CHECKPOINTS = Path(__file__).resolve().parents[2] / "checkpoints"
@@ -187,3 +188,23 @@ def test_a_checkpoint_the_planner_cannot_read_stops_the_stack_without_restarts(
     assert "is not a readable manigraph checkpoint" in result.stderr
     assert "planner refused its configuration" in result.stderr
     assert "restarting in" not in result.stderr
+
+
+def test_a_marker_map_is_refused_without_the_camera_or_when_it_does_not_read(
+    tmp_path: Path,
+) -> None:
+    result = run_up(
+        "--markers", "examples/markers/colour-sort.toml", "--episodes", "1", check=False
+    )
+    assert result.returncode == CONFIG_EXIT_CODE
+    assert "markers: only with --scene-source camera" in result.stderr
+    bad = tmp_path / "markers.toml"
+    bad.write_text("[[markers]]\nid = 0\nobject = 'block_0'\ncategory = 'plate'\nsize = 0.03\n")
+    if vulkan_problem("the camera") is not None:
+        pytest.skip("the camera check comes first without a Vulkan device")
+    result = run_up(
+        "--sim", "physics", "--scene-source", "camera", "--markers", str(bad), "--episodes", "1",
+        check=False,
+    )  # fmt: skip
+    assert result.returncode == CONFIG_EXIT_CODE
+    assert "markers.0.category" in result.stderr and len(result.stderr.strip().splitlines()) == 1

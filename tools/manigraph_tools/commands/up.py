@@ -22,6 +22,7 @@ from manigraph_shared.cells import cell_names
 from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError, ManigraphError
 from manigraph_shared.manifest import driver_for_world, load_manifests
+from manigraph_shared.markers import load_marker_map
 from manigraph_shared.options import option_argv
 from manigraph_shared.preflight import vulkan_problem
 from manigraph_shared.registry import Registry
@@ -118,6 +119,13 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         "the physics sim's rendered camera (needs Vulkan; docs/perception.md)",
     )
     parser.add_argument(
+        "--markers",
+        default="sim",
+        help="with --scene-source camera: perception's marker map, a TOML file (ids of the "
+        "sim's printed markers, with the objects' attributes, e.g. colours: "
+        "examples/markers/colour-sort.toml; default: the sim's own map)",
+    )
+    parser.add_argument(
         "--explain-decisions",
         action="store_true",
         help="GNN policies: publish an Explanation beside every decision (lands in --record)",
@@ -178,7 +186,10 @@ def _cell_specs(
         specs.append(spec(f"planner{suffix}", _planner_argv(args, plan), where))
     specs.append(spec(f"skills{suffix}", ["skills", "--driver", _skills_driver(args.sim)], where))
     if args.scene_source == "camera":
-        specs.append(spec(f"perception{suffix}", SIM_CAMERA_PERCEPTION, where))
+        perception = [*SIM_CAMERA_PERCEPTION]
+        markers = args.markers if args.markers == "sim" else str(Path(args.markers).resolve())
+        perception[perception.index("--markers") + 1] = markers
+        specs.append(spec(f"perception{suffix}", perception, where))
     return specs
 
 
@@ -258,6 +269,10 @@ def _up_run(args: argparse.Namespace) -> int:
         if problem:
             raise ConfigError("scene-source", problem)
         sim_options += ["--camera", "--no-scenes"]
+    if args.markers != "sim":
+        if args.scene_source != "camera":
+            raise ConfigError("markers", "only with --scene-source camera (perception reads it)")
+        load_marker_map(args.markers)  # a bad file is refused here, naming its field
     plan = plan_from_args(args, args.episodes) if args.episodes is not None else None
     human = args.policy == HUMAN
     if human and plan is not None:
