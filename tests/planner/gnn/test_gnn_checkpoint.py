@@ -63,7 +63,6 @@ def test_round_trip_gives_identical_logits_and_provenance(tmp_path: Path, arch: 
         (lambda p: p["model"].update(architecture="transformer"), "model.architecture"),
         (lambda p: p["model"].update(num_layers=0), "model.num_layers"),
         (lambda p: p["model"].update(hidden_channels=32), "state_dict"),
-        (lambda p: p.update(format="something-else"), "format"),
         (lambda p: p.update(format_version=2), "format_version"),
         (lambda p: p.pop("data_hash"), "data_hash"),
         (lambda p: p.update(optimizer={}), "optimizer"),
@@ -95,15 +94,38 @@ def test_feature_spec_mismatch_says_what_each_side_has(tmp_path: Path) -> None:
         lambda path: torch.save(Path("not/a/checkpoint"), path),  # pickled code, not weights
         lambda path: torch.save([1, 2, 3], path),  # not a dict
         lambda path: torch.save({"weights": torch.zeros(3)}, path),  # wrong keys
+        lambda path: rewrite(saved(path.parent)[0], lambda p: p.update(format="other")).rename(
+            path
+        ),
+        lambda path: path.write_text("e\n"),  # torch.load: KeyError: 101
+        lambda path: path.write_text("# manigraph\n\nA README.\n"),
     ],
-    ids=["garbage", "truncated", "empty", "pickled-object", "list", "wrong-keys"],
+    ids=[
+        "garbage",
+        "truncated",
+        "empty",
+        "pickled-object",
+        "list",
+        "wrong-keys",
+        "other-format",
+        "one-letter",
+        "text",
+    ],
 )
 def test_refuses_files_that_are_not_manigraph_checkpoints(
     tmp_path: Path, make_file: Callable[[Path], object]
 ) -> None:
     path = tmp_path / "bad.pt"
     make_file(path)
-    with pytest.raises(PolicyError, match=r"^checkpoint"):
+    with pytest.raises(PolicyError, match=rf"^not a manigraph checkpoint: {path}: \w") as caught:
+        load_checkpoint(path)
+    assert "\n" not in str(caught.value) and "KeyError" not in str(caught.value)
+
+
+def test_a_text_file_is_named_as_one(tmp_path: Path) -> None:
+    path = tmp_path / "notes.pt"
+    path.write_text("e\n")
+    with pytest.raises(PolicyError, match=r"a text file, not an archive torch\.save writes$"):
         load_checkpoint(path)
 
 

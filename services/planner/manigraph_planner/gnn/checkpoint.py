@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import os
 import pickle
+import zipfile
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -40,6 +41,8 @@ from manigraph_shared.errors import ConfigError, PolicyError
 __all__ = ["CheckpointInfo", "LoadedCheckpoint", "load_checkpoint", "save_checkpoint"]
 
 FORMAT = "manigraph.gnn-policy"
+#: What the refusal of a file that is not a checkpoint at all starts with.
+NOT_A_CHECKPOINT = "not a manigraph checkpoint"
 FORMAT_VERSION = 1
 _FIELDS: dict[str, type | tuple[type, ...]] = {
     "format": str,
@@ -126,26 +129,12 @@ def load_checkpoint(path: str | os.PathLike[str], message_passing: bool = True) 
     path, built without importing PyG (:mod:`~manigraph_planner.gnn.models.layer_weights`).
 
     Raises:
-        PolicyError: the file is unreadable or not a manigraph GNN checkpoint, its
-            architecture is not registered, its feature spec differs from this code's, or
-            its weights do not fit its architecture. The message names the field.
+        PolicyError: the file is unreadable or not a manigraph GNN checkpoint at all (``not
+            a manigraph checkpoint: <path>: <why>``), its architecture is not registered,
+            its feature spec differs from this code's, or its weights do not fit its
+            architecture. The message names the field.
     """
-    try:
-        payload = torch.load(Path(path), map_location="cpu", weights_only=True)
-    except FileNotFoundError:
-        raise PolicyError(f"checkpoint: no such file: {path}") from None
-    # torch.load raises a zoo of types on garbage (UnpicklingError, RuntimeError from the zip
-    # reader, EOFError, ...); all of them mean the same thing here.
-    except Exception as exc:
-        if isinstance(exc, pickle.UnpicklingError):
-            why = "not a torch file, or it holds pickled objects beyond plain types and tensors"
-        elif isinstance(exc, EOFError):
-            why = "the file ends early: empty or truncated"
-        else:
-            why = f"{type(exc).__name__}: {_first_sentence(exc)}"
-        raise PolicyError(
-            f"checkpoint: {path} is not a readable manigraph checkpoint ({why})"
-        ) from exc
+    payload = _read_payload(Path(path))
     _check_envelope(payload, path)
     task_spec = _task_feature_spec(payload["feature_spec"], payload["model"])
     model = _model_config(payload["model"], task_spec)
@@ -170,15 +159,52 @@ def load_checkpoint(path: str | os.PathLike[str], message_passing: bool = True) 
     return LoadedCheckpoint(net, info)
 
 
+def _read_payload(path: Path) -> Any:
+    """What ``torch.save`` wrote to ``path``; a :class:`PolicyError` saying ``not a manigraph
+    checkpoint: <path>: <why>`` for anything else (torch.load's own errors on a text file,
+    such as ``KeyError: 101``, say nothing a user can act on)."""
+    if not path.exists():
+        raise PolicyError(f"checkpoint: no such file: {path}")
+    try:
+        with path.open("rb") as stream:
+            head = stream.read(512)
+    except OSError as exc:
+        raise PolicyError(f"checkpoint: cannot read {path}: {exc.strerror or exc}") from None
+    if not zipfile.is_zipfile(path):  # what torch.save writes, since torch 1.6
+        raise PolicyError(f"{NOT_A_CHECKPOINT}: {path}: {_what_it_holds(head)}")
+    # torch.load raises a zoo of types on a broken archive (UnpicklingError, RuntimeError from
+    # the zip reader, EOFError, ...); all of them mean the same thing here.
+    try:
+        return torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:
+        if isinstance(exc, pickle.UnpicklingError):
+            why = "it holds pickled objects beyond plain types and tensors"
+        elif isinstance(exc, EOFError):
+            why = "the file ends early: truncated"
+        else:
+            why = f"{type(exc).__name__}: {_first_sentence(exc)}"
+        raise PolicyError(f"{NOT_A_CHECKPOINT}: {path}: {why}") from exc
+
+
+def _what_it_holds(head: bytes) -> str:
+    """Why a file starting with ``head`` is no archive of ``torch.save``'s, in words."""
+    if not head:
+        return "the file is empty"
+    try:
+        head.decode("utf-8")
+    except UnicodeDecodeError:
+        return "its bytes are not an archive torch.save writes"
+    return "a text file, not an archive torch.save writes"
+
+
 def _check_envelope(payload: Any, path: str | os.PathLike[str]) -> None:
     if not isinstance(payload, dict):
         raise PolicyError(
-            f"checkpoint: {path} holds a {type(payload).__name__}, not a manigraph checkpoint"
+            f"{NOT_A_CHECKPOINT}: {path}: it holds a {type(payload).__name__}, not a dict"
         )
     if payload.get("format") != FORMAT:
         raise PolicyError(
-            f"checkpoint format: file has {payload.get('format')!r} but this manigraph "
-            f"expects {FORMAT!r} (not a manigraph GNN policy checkpoint)"
+            f"{NOT_A_CHECKPOINT}: {path}: its format is {payload.get('format')!r}, not {FORMAT!r}"
         )
     if payload.get("format_version") != FORMAT_VERSION:
         raise PolicyError(
