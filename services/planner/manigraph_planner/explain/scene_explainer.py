@@ -4,18 +4,15 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Sequence
 
 import torch
 from torch import Tensor
 
 from manigraph_planner.explain.config import ExplainerConfig
 from manigraph_planner.explain.masks import MaskExplainer, MaskExplanation
-from manigraph_planner.gnn.features import (
-    FEATURE_SPEC,
-    GraphState,
-    fully_connected_edge_index,
-    scene_to_graph,
-)
+from manigraph_planner.explain.sentence import sentence
+from manigraph_planner.gnn.features import FEATURE_SPEC, GraphState, fully_connected_edge_index
 from manigraph_planner.policies.base import Policy
 from manigraph_planner.policies.gnn import GNNPolicy
 from manigraph_shared.errors import PolicyError
@@ -100,7 +97,7 @@ class SceneExplainer:
                 too large, the explainer is busy or the deadline passed.
         """
         self.check_size(scene)
-        graph = scene_to_graph(scene)
+        graph = self.policy.graph(scene)  # the policy's columns: a task's attributes too
         if object_id not in graph.object_ids:
             raise PolicyError(f"object: '{object_id}' is not a visible object of the scene")
         if goal_id not in graph.goal_ids:
@@ -129,7 +126,8 @@ class SceneExplainer:
             _runner_up(logits[: graph.num_objects], object_index, graph.object_ids),
             _runner_up(logits[graph.num_objects :], goal_index - graph.num_objects, graph.goal_ids),
         )
-        return to_message(result, graph, scene, self.policy.name, decision_id, seed, rivals)
+        names = self.policy.net.config.feature_spec.names
+        return to_message(result, graph, scene, self.policy.name, decision_id, seed, rivals, names)
 
 
 def to_message(
@@ -140,9 +138,11 @@ def to_message(
     decision_id: str | None,
     seed: int,
     rivals: tuple[str | None, str | None] = (None, None),
+    names: Sequence[str] = FEATURE_SPEC.names,
 ) -> Explanation:
-    """The contract message for ``result``: node indices become the scene's ids; ``rivals``
-    (the runner-up object and goal) make the sentence contrastive."""
+    """The contract message for ``result``: node indices become the scene's ids, feature
+    columns their ``names`` (the policy's spec); ``rivals`` (the runner-up object and goal)
+    make the sentence contrastive."""
     ids = [*graph.object_ids, *graph.goal_ids]
     edges = [
         ExplainedEdge(
@@ -153,8 +153,7 @@ def to_message(
         for e in result.kept_edges.tolist()
     ]
     features = {
-        FEATURE_SPEC.names[j]: round(float(result.feature_mask[j]), 6)
-        for j in result.feature_order.tolist()
+        names[j]: round(float(result.feature_mask[j]), 6) for j in result.feature_order.tolist()
     }
     nodes = [
         ExplainedNode(id=o.id, category=o.category.value, position=o.position)
@@ -167,7 +166,7 @@ def to_message(
     ]
     chosen_object = ids[result.object_index]
     chosen_goal = ids[result.goal_index]
-    top_features = [FEATURE_SPEC.names[j] for j in result.kept_features.tolist()]
+    top_features = [names[j] for j in result.kept_features.tolist()]
     return Explanation(
         decision_id=decision_id,
         episode_id=scene.episode_id,
@@ -185,54 +184,13 @@ def to_message(
             top_features,
             rivals,
             {node: graph.x[i].tolist() for i, node in enumerate(ids)},
+            scene,
+            names,
         ),
         fidelity=result.fidelity,
         seed=seed,
         stamp=time.time(),
     )
-
-
-def sentence(
-    chosen_object: str,
-    chosen_goal: str,
-    edges: list[ExplainedEdge],
-    top_features: list[str],
-    rivals: tuple[str | None, str | None] = (None, None),
-    values: dict[str, list[float]] | None = None,
-) -> str:
-    """A contrastive reading: "block_0 was chosen rather than block_3 (for goal_8 rather than
-    goal_2), because of the relations block_0→goal_8 and goal_7→goal_8; z: block_0 0.02 vs
-    block_3 0.30, goal_8 0.34 vs goal_2 0.10 (then filled: ...)". ``values`` holds each
-    node's features (``FEATURE_SPEC`` order)."""
-    rival_object, rival_goal = rivals
-    text = f"{chosen_object} was chosen"
-    if rival_object:
-        text += f" rather than {rival_object}"
-    text += f" (for goal {chosen_goal}" + (f" rather than {rival_goal})" if rival_goal else ")")
-    relations = [f"{e.src}→{e.dst}" for e in edges]
-    if relations:
-        noun = "relation" if len(relations) == 1 else "relations"
-        text += f", because of the {noun} {_join(relations)}"
-    else:
-        text += ", on its own features"
-    for rank, name in enumerate(top_features):
-        column = FEATURE_SPEC.names.index(name)
-        pairs = [(chosen_object, rival_object), (chosen_goal, rival_goal)]
-        shown = [
-            f"{a} {_value(values, a, column)} vs {b} {_value(values, b, column)}"
-            if b
-            else f"{a} {_value(values, a, column)}"
-            for a, b in pairs
-        ]
-        lead = "; most important feature: " if rank == 0 else "; then "
-        text += f"{lead}{name}" + (f" ({', '.join(shown)})" if values else "")
-    return text[:1024]
-
-
-def _value(values: dict[str, list[float]] | None, node: str, column: int) -> str:
-    if values is None or node not in values:
-        return "?"
-    return f"{values[node][column]:.3g}"
 
 
 def _runner_up(logits: Tensor, chosen: int, ids: list[str]) -> str | None:
@@ -242,7 +200,3 @@ def _runner_up(logits: Tensor, chosen: int, ids: list[str]) -> str | None:
     others = logits.clone()
     others[chosen] = float("-inf")
     return ids[int(others.argmax())]
-
-
-def _join(items: list[str]) -> str:
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
