@@ -37,6 +37,7 @@ from manigraph_shared.messages import (
     Action,
     CameraInfo,
     CompressedImage,
+    DepthImage,
     EmergencyStop,
     EpisodeEvent,
     EpisodeRequest,
@@ -112,8 +113,13 @@ GRANTS: tuple[Grant, ...] = (
     Grant(
         ("sim", "perception"),
         PUBLISH,
-        (CompressedImage.key_pattern(), CameraInfo.key_pattern(), TaskLayout.key),
-        "a camera's images and intrinsics, the episode's layout",
+        (
+            CompressedImage.key_pattern(),
+            DepthImage.key_pattern(),
+            CameraInfo.key_pattern(),
+            TaskLayout.key,
+        ),
+        "a camera's images, depth and intrinsics, the episode's layout",
     ),
     Grant(("perception",), PUBLISH, (MarkerDetections.key_pattern(),), "what it detected"),
     Grant(("sim",), SERVE, (EpisodeRequest.key,), "the sim answers resets"),

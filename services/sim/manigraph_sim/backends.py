@@ -95,6 +95,29 @@ class PhysicsOptions(Options):
     camera_blur: int = option(
         0, help="horizontal motion blur", within=Interval(0, 32), unit="pixels"
     )
+    camera_depth: bool = option(
+        False,
+        help="with --camera: also render depth (a RealSense D400's noise, edge dropout, "
+        "holes) and publish it; the bodies then carry no markers (docs/perception.md)",
+    )
+    depth_noise: float = option(
+        1.0, help="depth noise, times a RealSense D400's", within=Interval(0, 10), unit="x"
+    )
+    camera_light: float = option(
+        1.0, help="light intensity, times the default", within=Interval(0.1, 3), unit="x"
+    )
+    camera_offset: float = option(
+        0.0,
+        help="the camera stands this far off its calibrated place",
+        within=Interval(0, 0.05),
+        unit="metres",
+    )
+    camera_tilt: float = option(
+        0.0,
+        help="the camera is turned this far off its calibrated pose",
+        within=Interval(0, 5),
+        unit="degrees",
+    )
 
 
 BACKENDS: Registry[type[SimBackend]] = Registry("backend")

@@ -235,6 +235,9 @@ class SimService(Service):
         image, info = frame
         self.bus.publish(layout)
         self.bus.publish(info)
+        depth = self.backend.camera_depth()  # type: ignore[attr-defined]
+        if depth is not None:
+            self.bus.publish(depth)  # before its image: a reader pairs them as the image comes
         self.bus.publish(image)
 
     def tick(self) -> None:

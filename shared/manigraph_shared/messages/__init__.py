@@ -102,6 +102,8 @@ __all__ += ["EmergencyStop"]
 from manigraph_shared.messages.camera import (  # noqa: E402  (appended: the camera)
     CameraInfo,
     CompressedImage,
+    DepthEncoding,
+    DepthImage,
     DetectedMarker,
     ImageFormat,
     MarkerDetections,
@@ -116,6 +118,8 @@ from manigraph_shared.messages.layout import (  # noqa: E402
 __all__ += [
     "CameraInfo",
     "CompressedImage",
+    "DepthEncoding",
+    "DepthImage",
     "DetectedMarker",
     "ImageFormat",
     "LayoutContainer",

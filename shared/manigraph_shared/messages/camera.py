@@ -44,6 +44,35 @@ class CompressedImage(Message, frozen=True, kw_only=True):
     ]
 
 
+class DepthEncoding(StrEnum):
+    #: A 16-bit single-channel PNG of millimetres along the optical axis (z, not the ray's
+    #: length); 0 is "no depth here" (a hole, an edge the sensor dropped, out of range). The
+    #: encoding of a RealSense's ``z16`` stream at its default 1 mm unit and of ROS's
+    #: ``16UC1`` depth images.
+    PNG16_MM = "png16-mm"
+
+
+class DepthImage(Message, frozen=True, kw_only=True):
+    """One depth frame, registered to the colour image of the same camera and ``sequence``
+    (same size, same intrinsics: the ``CameraInfo`` of that camera)."""
+
+    key: ClassVar[str] = "manigraph/camera/{camera}/depth"
+    delivery: ClassVar[Delivery] = Delivery.LATEST
+    publisher: ClassVar[str] = "sim (--camera --camera-depth) or an RGB-D camera driver"
+
+    camera: Annotated[Identifier, Meta(description="camera name (also its optical frame id)")]
+    stamp: Annotated[Stamp, Meta(description="when the frame was exposed")]
+    sequence: Annotated[
+        int, Meta(ge=0, description="the sequence of the colour image it belongs to")
+    ]
+    encoding: Annotated[
+        DepthEncoding, Meta(description="png16-mm: 16-bit PNG of millimetres, 0 no depth")
+    ] = DepthEncoding.PNG16_MM
+    data: Annotated[
+        bytes, Meta(max_length=MAX_IMAGE_BYTES, description="encoded depth, base64 in JSON")
+    ]
+
+
 class CameraInfo(Message, frozen=True, kw_only=True):
     """A camera's intrinsics: pinhole matrix and distortion, OpenCV conventions."""
 

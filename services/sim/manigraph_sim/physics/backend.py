@@ -57,7 +57,7 @@ from manigraph_sim.world_model import Body, Layout
 
 if TYPE_CHECKING:
     from manigraph_shared.markers import MarkerMap
-    from manigraph_shared.messages import CameraInfo, CompressedImage, TaskLayout
+    from manigraph_shared.messages import CameraInfo, CompressedImage, DepthImage, TaskLayout
     from manigraph_sim.physics.camera import CameraConfig, TripodCamera
 
 log = logging.getLogger("manigraph.sim")
@@ -98,7 +98,7 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         #: The tripod camera (``--camera``) and the markers printed on the bodies it sees.
         self.camera_config = camera
         self.camera: TripodCamera | None = None
-        if camera is not None and markers is None:
+        if camera is not None and camera.markers and markers is None:
             from manigraph_shared.markers import sim_marker_map
 
             markers = sim_marker_map()
@@ -129,11 +129,16 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         camera = None
         if options.camera:
             from manigraph_sim.physics.camera import CameraConfig
+            from manigraph_sim.physics.depth_noise import DepthNoise
 
             camera = CameraConfig(
                 hz=options.camera_hz,
                 noise_sigma=options.camera_noise,
                 blur_pixels=options.camera_blur,
+                depth=DepthNoise(scale=options.depth_noise) if options.camera_depth else None,
+                markers=not options.camera_depth,
+                light_scale=options.camera_light,
+                pose_error=(options.camera_offset, options.camera_tilt),
             )
         return cls(
             options.goal_tolerance,
@@ -179,7 +184,7 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
             from manigraph_sim.physics.camera import TripodCamera, light
 
             if self.video_config is None:
-                light(self.world.scene)
+                light(self.world.scene, self.camera_config.light_scale)
             sequence = self.camera.sequence if self.camera is not None else 0
             self.camera = TripodCamera(self.camera_config, self.world.scene)
             self.camera.sequence = sequence
@@ -269,6 +274,10 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         if self.camera is None:
             return None
         return self.camera.capture(stamp), self.camera.info(stamp)
+
+    def camera_depth(self) -> DepthImage | None:
+        """The depth frame of the last ``camera_frame`` (None without ``--camera-depth``)."""
+        return None if self.camera is None else self.camera.last_depth
 
     def joint_state(self, stamp: float) -> JointState | None:
         if self.world is None:

@@ -6,6 +6,13 @@ hardware camera, 640 x 480 with a 60 degree vertical field of view. Rendering ne
 device (Mesa lavapipe on CPU, ``scripts/install-vulkan.sh``): the first frame of a process
 compiles shaders (~10-30 s), later ones take ~0.1-0.3 s on a busy 2-core machine.
 
+With ``depth`` set, every frame also renders depth (metres along the optical axis) through a
+stereo sensor's errors (``depth_noise.py``: a RealSense D400's noise growing with distance
+squared, edge dropout, holes) into a ``DepthImage`` of the same ``sequence``. ``light_scale``
+changes the lighting; ``pose_error`` (metres, degrees) stands the camera off its nominal pose
+in a direction drawn from ``seed``, while ``CameraInfo`` and :func:`ideal_calibration` still
+give the nominal one, as a calibration that has drifted would.
+
 Frames are encoded (JPEG by default) into ``CompressedImage`` messages; ``CameraInfo``
 carries the rendered camera's exact intrinsics (no distortion); :func:`ideal_calibration`
 gives them with its exact pose, the ground truth the calibration commands are checked against
@@ -23,7 +30,9 @@ import sapien
 
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.markers import MarkerMap, MarkerSpec, marker_in_object
-from manigraph_shared.messages import CameraInfo, CompressedImage, ImageFormat
+from manigraph_shared.messages import CameraInfo, CompressedImage, DepthImage, ImageFormat
+from manigraph_shared.rotations import rotation_matrix
+from manigraph_sim.physics.depth_noise import DepthNoise, encode_depth_png, sensor_depth
 from manigraph_sim.physics.video import look_at
 
 #: Tripod in front of the table and above it, looking at the middle of the workspace.
@@ -53,6 +62,14 @@ class CameraConfig:
     #: Rendered at this many times the size and averaged down: a real sensor integrates
     #: light over each pixel, so edges fall between pixels as they should (subpixel corners).
     supersample: int = 2
+    #: Render depth through this sensor model too (None: colour only).
+    depth: DepthNoise | None = None
+    #: Print the ArUco markers on the bodies (off: plain coloured bodies, for RGB-D).
+    markers: bool = True
+    #: Multiplies the light's intensity (a lighting change: 0.5 dimmer, 1.5 brighter).
+    light_scale: float = 1.0
+    #: The rendered camera stands this far off its nominal pose: metres, degrees.
+    pose_error: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         if not (16 <= self.width <= 4096 and 16 <= self.height <= 4096):
@@ -65,6 +82,10 @@ class CameraConfig:
             raise ConfigError("camera.jpeg_quality", "must be in [1, 100]")
         if not (0 <= self.noise_sigma <= 50 and 0 <= self.blur_pixels <= 31):
             raise ConfigError("camera.noise", "sigma in [0, 50] grey levels, blur in [0, 31] px")
+        if not 0.1 <= self.light_scale <= 3:
+            raise ConfigError("camera-light", "must be in [0.1, 3] times the default light")
+        if not (0 <= self.pose_error[0] <= 0.05 and 0 <= self.pose_error[1] <= 5):
+            raise ConfigError("camera-pose-error", "at most 0.05 m and 5 degrees")
         if np.linalg.norm(np.subtract(self.eye, self.target)) < 0.05:
             raise ConfigError("camera.eye", "must be at least 5 cm from the target")
 
@@ -83,9 +104,11 @@ class TripodCamera:
             0.01,
             10.0,
         )
-        self.camera.entity.set_pose(look_at(np.array(config.eye), np.array(config.target)))
-        self.sequence = 0
         self._rng = np.random.default_rng(config.seed)
+        self.camera.entity.set_pose(_off_by(config, self._rng))
+        self.sequence = 0
+        #: The depth frame rendered with the last ``capture`` (with ``config.depth``).
+        self.last_depth: DepthImage | None = None
 
     def camera_matrix(self) -> np.ndarray:
         """K of the published image in OpenCV's convention (pixel i's centre at i; SAPIEN's
@@ -107,6 +130,17 @@ class TripodCamera:
         """The current view as an RGB uint8 image, with the configured noise and blur."""
         self.scene.update_render()
         self.camera.take_picture()
+        return self._colour()
+
+    def render_depth(self) -> np.ndarray:
+        """Depth (metres along the optical axis, 0: none) of the last picture taken, through
+        the configured sensor model (exact without one)."""
+        position = self.camera.get_picture("Position")
+        fine = np.where(position[..., 3] < 1.0, -position[..., 2], 0.0).astype(np.float64)
+        noise = self.config.depth or DepthNoise.none()
+        return sensor_depth(fine, self.config.supersample, noise, self._rng)
+
+    def _colour(self) -> np.ndarray:
         rgba = self.camera.get_picture("Color")
         rgb = (np.clip(rgba[..., :3], 0, 1) * 255).astype(np.uint8)
         if self.config.supersample > 1:
@@ -117,6 +151,13 @@ class TripodCamera:
     def capture(self, stamp: float) -> CompressedImage:
         rgb = self.render()
         message = encode_image(rgb, self.config, stamp, self.sequence)
+        if self.config.depth is not None:
+            self.last_depth = DepthImage(
+                camera=self.config.name,
+                stamp=stamp,
+                sequence=self.sequence,
+                data=encode_depth_png(self.render_depth()),
+            )
         self.sequence += 1
         return message
 
@@ -188,10 +229,28 @@ def write_calibration(path: str | Path, config: CameraConfig) -> None:
     storage.release()
 
 
-def light(scene: sapien.Scene) -> None:
-    """Even light from above (the video recorder's)."""
-    scene.set_ambient_light([0.45, 0.45, 0.45])
-    scene.add_directional_light([0.3, 0.5, -1.0], [0.8, 0.8, 0.8])
+def light(scene: sapien.Scene, scale: float = 1.0) -> None:
+    """Even light from above (the video recorder's), ``scale`` times as bright."""
+    scene.set_ambient_light([0.45 * scale] * 3)
+    scene.add_directional_light([0.3, 0.5, -1.0], [0.8 * scale] * 3)
+
+
+def _off_by(config: CameraConfig, rng: np.random.Generator) -> sapien.Pose:
+    """The camera's pose: the nominal one, moved by ``pose_error[0]`` metres and turned by
+    ``pose_error[1]`` degrees, each in a direction drawn from ``rng``."""
+    pose = look_at(np.array(config.eye, dtype=float), np.array(config.target, dtype=float))
+    offset, degrees = config.pose_error
+    if offset == 0 and degrees == 0:
+        return pose
+    shift, axis = rng.normal(size=3), rng.normal(size=3)
+    shift *= offset / np.linalg.norm(shift)
+    axis /= np.linalg.norm(axis)
+    half = np.deg2rad(degrees) / 2
+    turn = rotation_matrix(np.array([*(axis * np.sin(half)), np.cos(half)]))
+    matrix = pose.to_transformation_matrix()
+    matrix[:3, :3] = turn @ matrix[:3, :3]
+    matrix[:3, 3] += shift
+    return sapien.Pose(matrix)
 
 
 # --- printed markers --------------------------------------------------------------------------
