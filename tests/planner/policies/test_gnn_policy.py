@@ -103,5 +103,5 @@ def test_nothing_to_decide_without_visible_objects_or_goals(
 def test_load_policy_refuses_a_broken_checkpoint(tmp_path: Path) -> None:
     path = tmp_path / "broken.pt"
     path.write_bytes(b"not a checkpoint")
-    with pytest.raises(PolicyError, match=r"^checkpoint"):
+    with pytest.raises(PolicyError, match=r"^not a manigraph checkpoint: "):
         load_policy(str(path))
