@@ -169,7 +169,8 @@ def _object_colour(
     alpha = 1.0 if visible else 0.3
     named = colour_of(attributes)
     if named is not None:  # the task's own colour (a colour-sort block is drawn red)
-        return _colour(*named, alpha)
+        r, g, b = named
+        return _colour(r, g, b, alpha)
     if category is ObjectCategory.COVER:
         return _colour(0.72, 0.53, 0.32, alpha)
     hue = marker_id(entity_id) % 360 / 360
