@@ -4,11 +4,11 @@
    (an unknown task, a task file that is not TOML), from ``get`` to the end of the query (the
    iteration over its replies ends), not only to the error reply. Target: <= 50 ms (issue 45
    item 11); before the fix the query ended only at its timeout.
-2. ``forged_delay_s``: between episodes (after a one-block episode's end), ``--forged`` Actions (default 200) for episodes that
-   never start are published, then a real episode is reset and its first action published as
-   a planner would (again every 50 ms while refused ``skills_busy``). The time from the reset's
-   reply to skills accepting the real action, minus the same without forged actions. Target:
-   <= 0.2 s; it was ~3.5 s.
+2. ``forged_delay_s``: between episodes (after a one-block episode's end), ``--forged``
+   Actions (default 200) for episodes that never start are published, then a real episode is
+   reset and its first action published as a planner would (again every 50 ms while refused
+   ``skills_busy``). The time from the reset's reply to skills accepting the real action,
+   minus the same without forged actions. Target: <= 0.2 s; it was ~3.5 s.
 
 Router, geometric sim and skills on a loopback port of their own (no planner).
 
