@@ -3,6 +3,10 @@
 A package adds a subcommand with an entry point in the ``manigraph.commands`` group pointing at
 a :class:`Command`; an image that installs only the sim service therefore has ``manigraph sim``
 and the shared tools, and nothing it cannot run.
+
+A command that fails prints one line, ``manigraph <command>: <why>``, and exits with the status
+of that kind of failure (usage 2, configuration 78, runtime 1: ``manigraph_shared.errors``).
+An unknown flag is answered with the usage of the subcommand it was given to.
 """
 
 from __future__ import annotations
@@ -15,7 +19,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 
-from manigraph_shared.errors import CONFIG_EXIT_CODE, ConfigError, ManigraphError
+from manigraph_shared.errors import (
+    INTERRUPTED_EXIT_CODE,
+    RUNTIME_EXIT_CODE,
+    ManigraphError,
+)
 
 GROUP = "manigraph.commands"
 
@@ -67,21 +75,51 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def subcommand_parsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    """The parser of each subcommand ``parser`` holds, by name."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
+def parse(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
+    """``argv`` parsed; an argument no parser knows is refused by the subcommand's parser,
+    so the usage printed is that subcommand's (argparse's top level would print its own)."""
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:
+        subparser = subcommand_parsers(parser).get(args.command, parser)
+        subparser.error(f"unrecognized arguments: {' '.join(unknown)}")
+    return args
+
+
+def one_line(error: BaseException) -> str:
+    """``error``'s message on one line (a refusal is one line, whatever raised it)."""
+    text = " ".join(part.strip() for part in str(error).splitlines() if part.strip())
+    return text or type(error).__name__
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     parser = build_parser(argv)
-    args = parser.parse_args(argv)
+    args = parse(parser, argv)
     setup_logging(args.log_level)
     try:
         return int(args.run(args) or 0)
-    except ConfigError as exc:
-        print(f"manigraph {args.command}: {exc}", file=sys.stderr)
-        return CONFIG_EXIT_CODE
     except ManigraphError as exc:
-        print(f"manigraph {args.command}: {exc}", file=sys.stderr)
-        return 2
+        print(f"manigraph {args.command}: {one_line(exc)}", file=sys.stderr)
+        return exc.exit_code
     except KeyboardInterrupt:
-        return 130
+        return INTERRUPTED_EXIT_CODE
+    except Exception as exc:  # a bug, or a library's error nothing above names: still one line
+        if logging.getLogger().isEnabledFor(logging.DEBUG):
+            raise
+        print(
+            f"manigraph {args.command}: internal error: {type(exc).__name__}: {one_line(exc)} "
+            "(--log-level DEBUG shows where)",
+            file=sys.stderr,
+        )
+        return RUNTIME_EXIT_CODE
 
 
 if __name__ == "__main__":

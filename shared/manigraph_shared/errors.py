@@ -1,23 +1,57 @@
-"""The exception tree every manigraph library raises.
+"""The exception tree every manigraph library raises, and the exit status of each kind.
 
 Libraries raise these; services catch them, log them and publish a ``ServiceStatus`` so the
 failure also lands in the MCAP log. Nothing here logs or prints.
+
+A ``manigraph`` command that fails prints one line, ``manigraph <command>: <why>``, on stderr
+and exits with the status of the kind of failure (docs/running.md, "Exit codes"):
+
+====  ==============  =========================================================================
+code  kind            when
+====  ==============  =========================================================================
+0     success         the command did what it was asked
+1     runtime         it could not be done now: no stack answers, a service went away, the
+                      emergency stop is engaged, the stack stopped (:class:`BusError`,
+                      :class:`SkillError`, any other :class:`ManigraphError`). Trying again
+                      later may work.
+2     usage           the command line does not parse: an unknown flag, a missing or
+                      malformed argument (argparse's own status; it prints the subcommand's
+                      usage).
+78    configuration   what was asked for is refused: a value out of range (:class:`ConfigError`),
+                      a task or task file (:class:`TaskError`), a checkpoint or policy that
+                      cannot serve (:class:`PolicyError`), a log that cannot be read
+                      (:class:`LogError`), a request the stack refused (:class:`RequestRefused`).
+                      The same input fails again: ``up``'s supervisor does not restart it.
+130   interrupted     Ctrl-C
+====  ==============  =========================================================================
 """
 
 from __future__ import annotations
 
+from typing import ClassVar
 
-class ManigraphError(Exception):
-    """Base class for every error manigraph raises on purpose."""
-
-
+#: Exit status of a command that could not be done now (the default of every error).
+RUNTIME_EXIT_CODE = 1
+#: Exit status of a command line that does not parse (argparse's).
+USAGE_EXIT_CODE = 2
 #: Exit status of a command refused for its configuration (sysexits' EX_CONFIG): restarting
 #: the process cannot help, so the supervisor does not.
 CONFIG_EXIT_CODE = 78
+#: Exit status after Ctrl-C (128 + SIGINT).
+INTERRUPTED_EXIT_CODE = 130
+
+
+class ManigraphError(Exception):
+    """Base class for every error manigraph raises on purpose; ``exit_code``: the status a
+    command failing with it exits with (see the table above)."""
+
+    exit_code: ClassVar[int] = RUNTIME_EXIT_CODE
 
 
 class ConfigError(ManigraphError, ValueError):
     """A configuration value is missing or out of range; ``field`` names it."""
+
+    exit_code: ClassVar[int] = CONFIG_EXIT_CODE
 
     def __init__(self, field: str, problem: str) -> None:
         super().__init__(f"{field}: {problem}")
@@ -50,15 +84,21 @@ class BusError(ManigraphError):
 
 class RequestRefused(BusError):
     """A queryable answered a request with an error reply: the request itself was refused
-    (as opposed to no answer at all, a plain :class:`BusError`)."""
+    (as opposed to no answer at all, a plain :class:`BusError`), so asking again fails again."""
+
+    exit_code: ClassVar[int] = CONFIG_EXIT_CODE
 
 
 class LogError(ManigraphError):
-    """An MCAP log could not be read or written."""
+    """An MCAP log (or a dataset) given to a command could not be read or written."""
+
+    exit_code: ClassVar[int] = CONFIG_EXIT_CODE
 
 
 class TaskError(ManigraphError, ValueError):
     """A task description (name, task file, parameters) is invalid."""
+
+    exit_code: ClassVar[int] = CONFIG_EXIT_CODE
 
 
 class SkillError(ManigraphError):
@@ -71,4 +111,7 @@ class SkillError(ManigraphError):
 
 
 class PolicyError(ManigraphError):
-    """A policy could not be loaded or could not decide."""
+    """A policy could not be loaded, or cannot decide on the scenes it is given (a policy
+    for other tasks)."""
+
+    exit_code: ClassVar[int] = CONFIG_EXIT_CODE

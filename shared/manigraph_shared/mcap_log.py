@@ -176,8 +176,8 @@ def read_log(
                     log_time_ns=message.log_time,
                     data=message.data,
                 )
-        except InvalidMagic as exc:
-            raise LogError(f"{path} is not an MCAP file: {exc}") from None
+        except InvalidMagic:  # its own words list the first bytes: "invalid magic: (35, ...)"
+            raise LogError(f"not an MCAP file: {path}") from None
         except Exception:
             # The writer was killed mid-chunk: everything before that chunk was yielded.
             return
@@ -238,10 +238,10 @@ def recover_log(path: Path, output: Path | None = None) -> int:
                     sequence=message.sequence,
                 )
                 kept += 1
-        except InvalidMagic as exc:
+        except InvalidMagic:
             sink.close()
             target.unlink()
-            raise LogError(f"{path} is not an MCAP file: {exc}") from None
+            raise LogError(f"not an MCAP file: {path}") from None
         except Exception:  # the cut: everything before it was copied
             pass
         writer.finish()

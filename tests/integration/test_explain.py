@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_shared.errors import PolicyError
+from manigraph_shared.errors import CONFIG_EXIT_CODE, RUNTIME_EXIT_CODE, PolicyError
 from manigraph_shared.messages import Action, ExplainRequest, Explanation
 from manigraph_tools.testing import Stack
 
@@ -83,7 +83,7 @@ def test_explain_answers_for_the_latest_decision_and_refuses_bad_queries_quickly
 
         # Bad queries: error replies, at once (never the 5 s timeout), and it keeps serving.
         refused = running_stack.run("explain", "--decision", "nope:7", "--json", timeout=60)
-        assert refused.returncode == 2
+        assert refused.returncode == CONFIG_EXIT_CODE  # refused: asking again fails again
         assert "decision_id: 'nope:7' is not one of" in refused.stderr
         unknown = ExplainRequest(decision_id="nope:8").encode()
         for payload in (unknown, b'{"scene": {"episode_id": "e"}}', b"not json", b'{"seed": -1}'):
@@ -108,7 +108,7 @@ def test_explain_without_a_planner_fails_with_a_clear_message(running_stack: Sta
     with running_stack.client() as bus:
         running_stack.wait_alive(bus, "router")
     result = running_stack.run("explain", "--json", "--timeout", "1", timeout=60)
-    assert result.returncode == 2
+    assert result.returncode == RUNTIME_EXIT_CODE  # nobody answered: later may work
     assert "no answer within 1.0 s" in result.stderr
 
 
@@ -141,5 +141,5 @@ def test_explain_asks_again_while_the_explainer_is_busy(running_stack: Stack) ->
         assert last_json(answer.stdout)["decision_id"] == "e:0"
         assert len(asked) == 3
         refused = running_stack.run("explain", "--decision", "nope:1", "--json", timeout=60)
-        assert refused.returncode == 2 and "'nope:1' is not one of" in refused.stderr
+        assert refused.returncode == CONFIG_EXIT_CODE and "'nope:1' is not one of" in refused.stderr
         assert len(asked) == 4  # any other refusal is final: asked once

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 from mcap.reader import make_reader
 
+from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, Scene, ServiceStatus
 from manigraph_tools.testing import Stack, free_port, record_then_kill, run_up
@@ -146,7 +147,7 @@ def test_a_bad_task_file_is_refused_by_the_sim_with_the_field_named(
     bad = tmp_path / "bad.toml"
     bad.write_text('[[objects]]\nid = "a"\ncategory = "ball"\nposition = [0.5, 0, 0.02]\n')
     result = running_stack.run("run", "--task-file", str(bad), "--episodes", "1")
-    assert result.returncode == 2
+    assert result.returncode == CONFIG_EXIT_CODE  # refused by the sim: the same as eval's
     assert "objects.0.category" in result.stderr and "goals" in result.stderr
     with running_stack.client() as bus:
         assert {"sim", "planner", "skills"} <= bus.alive_services()  # nothing crashed

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_shared.errors import CONFIG_EXIT_CODE
+from manigraph_shared.errors import CONFIG_EXIT_CODE, RUNTIME_EXIT_CODE
 from manigraph_tools.supervisor import ProcessSpec, RestartPolicy, Supervisor
 from manigraph_tools.testing import free_port
 
@@ -169,7 +169,7 @@ def test_up_restarts_a_killed_service_and_the_stack_still_runs_episodes(tmp_path
         assert up.poll() is None  # the stack never stopped
 
         os.kill(_child_pid(up.pid, "router"), signal.SIGKILL)
-        assert up.wait(timeout=30) == 2
+        assert up.wait(timeout=30) == RUNTIME_EXIT_CODE
         text = out.read_text()
         assert "the stack stopped: router exited with code -9" in text
     finally:

@@ -102,7 +102,7 @@ def test_torn_file_yields_every_flushed_message(tmp_path: Path) -> None:
 def test_not_an_mcap_file_is_a_clear_error(tmp_path: Path) -> None:
     path = tmp_path / "notes.mcap"
     path.write_text("these are notes, not a log")
-    with pytest.raises(LogError, match="not an MCAP file"):
+    with pytest.raises(LogError, match=rf"^not an MCAP file: {path}$"):
         list(read_log(path))
     with pytest.raises(LogError, match="cannot open"):
         list(read_log(tmp_path / "missing.mcap"))
