@@ -28,11 +28,38 @@ if TYPE_CHECKING:
 
 
 def _demos_configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("-o", "--output", type=Path, default=Path("data/demos.mcap"))
-    parser.add_argument("--tasks", nargs="+", default=["box-pack", "box-unpack"])
-    parser.add_argument("--blocks", type=int, nargs="+", default=[3, 4])
-    parser.add_argument("--trajectories", type=int, default=20)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        default=Path("data/demos.mcap"),
+        help="the MCAP log to write (default: data/demos.mcap)",
+    )
+    parser.add_argument(
+        "--tasks",
+        nargs="+",
+        default=["box-pack", "box-unpack"],
+        metavar="TASK",
+        help="tasks to demonstrate, each by its registered expert (default: box-pack "
+        "box-unpack; `manigraph keys` and docs/running.md list the tasks)",
+    )
+    parser.add_argument(
+        "--blocks",
+        type=int,
+        nargs="+",
+        default=[3, 4],
+        metavar="K",
+        help="block counts to demonstrate each task with (default: 3 4)",
+    )
+    parser.add_argument(
+        "--trajectories",
+        type=int,
+        default=20,
+        help="demonstrations in all, spread over the tasks and block counts (default: 20)",
+    )
+    parser.add_argument(
+        "--seed", type=int, default=0, help="seed of the first demonstration (default: 0)"
+    )
     parser.add_argument(
         "--task-file",
         type=Path,
@@ -87,11 +114,13 @@ def _eval_configure(parser: argparse.ArgumentParser) -> None:
 
     add_option_arguments(parser, EvalOptions)
     # The episode flags of run and up; every episode runs to its end in-process, no timeout.
-    add_option_arguments(
-        parser.add_argument_group("episodes"),
-        EpisodeOptions,
-        defaults={"episodes": 100},
-        exclude=["timeout"],
+    episodes = parser.add_argument_group("episodes")
+    add_option_arguments(episodes, EpisodeOptions, exclude=["episodes", "timeout", "stall_timeout"])
+    episodes.add_argument(
+        "--episodes",
+        type=int,
+        default=100,
+        help="episodes to play, seeded --seed, --seed + 1, ... (default: 100)",
     )
 
 
@@ -143,12 +172,33 @@ eval_command = Command(
 
 
 def _suite_configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("-o", "--out", type=Path, default=Path("results"))
-    parser.add_argument("--archs", nargs="+", default=["gcn", "sage", "gated", "gat"])
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument(
+        "-o",
+        "--out",
+        type=Path,
+        default=Path("results"),
+        help="folder of the table, the plot, suite.json and the checkpoints (default: results)",
+    )
+    parser.add_argument(
+        "--archs",
+        nargs="+",
+        default=["gcn", "sage", "gated", "gat"],
+        metavar="ARCH",
+        help="architectures to train and evaluate (default: gcn sage gated gat)",
+    )
+    parser.add_argument(
+        "--seeds",
+        type=int,
+        nargs="+",
+        default=[0, 1, 2],
+        metavar="SEED",
+        help="training seeds, one policy each (default: 0 1 2)",
+    )
     parser.add_argument("--episodes", type=int, default=100, help="episodes per table cell")
     parser.add_argument("--curve-episodes", type=int, default=50, help="episodes per K in the plot")
-    parser.add_argument("--epochs", type=int, default=150)
+    parser.add_argument(
+        "--epochs", type=int, default=150, help="training epochs per policy (default: 150)"
+    )
     parser.add_argument(
         "--eval-seed",
         type=int,

@@ -186,11 +186,19 @@ def plot(summary: dict[str, Any], path: Path) -> None:
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("-o", "--out", type=Path, default=Path("results/dishwasher"))
+    parser.add_argument(
+        "-o",
+        "--out",
+        type=Path,
+        default=Path("results/dishwasher"),
+        help="folder of table.md and table.json (default: results/dishwasher)",
+    )
     parser.add_argument("--arch", default="sage", help="architecture: gcn, sage, gated or gat")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument(
+        "--seeds", type=int, nargs="+", default=[0, 1, 2], help="training seeds (default: 0 1 2)"
+    )
     parser.add_argument("--episodes", type=int, default=100, help="episodes per table cell")
-    parser.add_argument("--epochs", type=int, default=300)
+    parser.add_argument("--epochs", type=int, default=300, help="training epochs (default: 300)")
     parser.add_argument(
         "--checkpoints", type=Path, default=Path("checkpoints"), help="where seed 0's nets go"
     )

@@ -11,7 +11,14 @@ from manigraph_shared.cli import Command
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("-o", "--out", type=Path, default=Path("results/rl"))
+    parser.add_argument(
+        "-o",
+        "--out",
+        type=Path,
+        default=Path("results/rl"),
+        help="folder of every run, evaluation and the report; reused on a rerun "
+        "(default: results/rl)",
+    )
     parser.add_argument(
         "--baselines",
         nargs="+",
@@ -24,7 +31,13 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         "--steps-per-stage", type=int, default=2000, help="environment interactions per K"
     )
     parser.add_argument("--n-steps", type=int, default=250, help="PPO rollout length")
-    parser.add_argument("--blocks", type=int, nargs="+", default=list(range(2, 10)))
+    parser.add_argument(
+        "--blocks",
+        type=int,
+        nargs="+",
+        default=list(range(2, 10)),
+        help="stack heights K, trained as a curriculum and evaluated (default: 2 to 9)",
+    )
     parser.add_argument(
         "--il-checkpoints",
         type=Path,

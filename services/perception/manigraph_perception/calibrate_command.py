@@ -10,7 +10,9 @@ from manigraph_shared.cli import Command
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
-    sub = parser.add_subparsers(dest="step", required=True, metavar="STEP")
+    sub = parser.add_subparsers(
+        dest="step", required=True, metavar="STEP", help="intrinsics, then extrinsics"
+    )
     intrinsics = sub.add_parser(
         "intrinsics", help="camera matrix and distortion from ChArUco board images"
     )
@@ -18,7 +20,9 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     intrinsics.add_argument("--squares", default="7x5", help="squares across x down (7x5)")
     intrinsics.add_argument("--square", type=float, default=0.04, help="square side, metres")
     intrinsics.add_argument("--marker", type=float, default=0.03, help="marker side, metres")
-    intrinsics.add_argument("--dictionary", default="DICT_4X4_50")
+    intrinsics.add_argument(
+        "--dictionary", default="DICT_4X4_50", help="OpenCV ArUco dictionary of the board's markers"
+    )
     intrinsics.add_argument("-o", "--output", type=Path, required=True, help="YAML to write")
     extrinsics = sub.add_parser(
         "extrinsics", help="camera -> robot base from markers at known robot-frame positions"

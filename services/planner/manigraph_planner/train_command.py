@@ -32,7 +32,9 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         help="MCAP logs with scenes and actions, or LeRobot dataset folders (meta/info.json)",
     )
     parser.add_argument("--arch", default="sage", help="architecture: gcn, sage, gated or gat")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--seed", type=int, default=0, help="seed of the weights and the augmentation (default: 0)"
+    )
     parser.add_argument(
         "--device", default="cpu", help="cpu, cuda or cuda:N (block policies; default cpu)"
     )
