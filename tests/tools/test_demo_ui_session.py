@@ -21,9 +21,12 @@ from manigraph_shared.messages import (
     EpisodeRequest,
     Quaternion,
     Scene,
+    SceneGoal,
+    SceneObject,
     SkillState,
     SkillStatus,
     TrayAction,
+    Vector3,
 )
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN, nearest_orientation
 from manigraph_sim.geometric.backend import GeometricBackend
@@ -238,6 +241,42 @@ def test_the_page_sees_each_thing_with_its_extent_along_the_world_axes() -> None
     assert world_extent((1.0, 2.0, 3.0), world.scene().goals[0].orientation) == pytest.approx(
         [1.0, 3.0, 2.0]
     )
+
+
+def test_the_page_gets_the_task_s_colours_words_and_accepted_sizes() -> None:
+    scene = Scene(
+        episode_id="colours",
+        stamp=1.0,
+        sequence=0,
+        objects=[
+            SceneObject(
+                id="block_0",
+                category="block",
+                position=Vector3(x=0.5, y=0.0, z=0.02),
+                size=Vector3(x=0.04, y=0.04, z=0.04),
+                attributes={"colour": "red", "label": "bolt"},
+            )
+        ],
+        goals=[
+            SceneGoal(
+                id="big_red",
+                category="block",
+                position=Vector3(x=0.4, y=0.1, z=0.035),
+                accepts={"colour": "red", "size": [0.07, 0.07, 0.07]},
+            ),
+            SceneGoal(id="any", category="block", position=Vector3(x=0.4, y=-0.1, z=0.02)),
+        ],
+    )
+    view = scene_view(scene)
+    (block,) = view["objects"]  # type: ignore[misc]
+    assert block["fill"] == "#d91f1a" and block["label"] == "colour red, label bolt"
+    assert block["tag"] == "red, bolt"
+    big, any_goal = view["goals"]  # type: ignore[misc]
+    assert big["fill"] == "#d91f1a" and big["accepts"] == "colour red, size [0.07, 0.07, 0.07]"
+    assert big["tag"] == "red"  # the size is drawn, not written
+    assert big["extent"] == pytest.approx([0.07, 0.07, 0.07])  # drawn the size it accepts
+    assert any_goal["fill"] is None and any_goal["accepts"] == ""
+    assert any_goal["extent"] == pytest.approx([0.04, 0.04, 0.04])
 
 
 def test_a_dish_turned_about_the_vertical_keeps_its_orientation_on_the_page() -> None:

@@ -4,13 +4,21 @@ Every object, goal and rack keeps its id (the page sends ids back, never coordin
 object and goal also gets its **extent**: how far it reaches along the world's x, y and z
 axes, its size turned by its orientation, so the page draws a plate standing on its rim as a
 thin strip seen from above. A goal has no size in the contract; it is drawn as large as the
-objects of its category (a slot as large as the dish it takes).
+objects of its category (a slot as large as the dish it takes), or the size it accepts.
+
+A task's attributes come along for the page to draw: an object's ``fill`` is the RGB its
+``colour`` attribute names (``#rrggbb``, else null) and its ``label`` its attributes in words
+(``colour red, label bolt``); a goal's ``fill`` is the colour it accepts and its ``accepts``
+what it accepts in words (empty when it takes any object of its category). ``tag`` is the
+values alone (``red, bolt``), written under each on the page.
 """
 
 from __future__ import annotations
 
 import statistics
+from collections.abc import Mapping
 
+from manigraph_shared.colours import colour_of, describe
 from manigraph_shared.messages import Quaternion, Scene, SceneObject
 from manigraph_shared.orientations import nearest_orientation, up_axis_orientation
 from manigraph_shared.rotations import rotation_matrix
@@ -39,6 +47,28 @@ def _category_sizes(objects: list[SceneObject]) -> dict[str, tuple[float, float,
     }
 
 
+def _hex(attributes: Mapping[str, object]) -> str | None:
+    rgb = colour_of(attributes)
+    return None if rgb is None else "#" + "".join(f"{round(c * 255):02x}" for c in rgb)
+
+
+def _tag(words: Mapping[str, object]) -> str:
+    """The values alone (``red, bolt``), short enough to write under a 4 cm block; a size is
+    left out (it is drawn)."""
+    return ", ".join(
+        f"{value:g}" if isinstance(value, float) else str(value)
+        for key, value in words.items()
+        if key != "size"
+    )
+
+
+def _accepted_size(accepts: Mapping[str, object]) -> tuple[float, float, float] | None:
+    size = accepts.get("size")
+    if isinstance(size, list) and len(size) == 3:
+        return (float(size[0]), float(size[1]), float(size[2]))
+    return None
+
+
 def _xyz(v: object) -> dict[str, float]:
     x, y, z = v.as_tuple()  # type: ignore[attr-defined]
     return {"x": round(x, 4), "y": round(y, 4), "z": round(z, 4)}
@@ -57,6 +87,9 @@ def scene_view(scene: Scene) -> dict[str, object]:
             "orientation": up_axis_orientation(item.orientation),
             "filled": item.filled,
             "visible": item.visible,
+            "fill": _hex(item.attributes),
+            "label": describe(item.attributes),
+            "tag": _tag(item.attributes),
         }
         for item in scene.objects
     ]
@@ -66,12 +99,16 @@ def scene_view(scene: Scene) -> dict[str, object]:
             "category": goal.category.value,
             **_xyz(goal.position),
             "extent": world_extent(
-                sizes.get(goal.category.value, DEFAULT_EXTENT), goal.orientation
+                _accepted_size(goal.accepts) or sizes.get(goal.category.value, DEFAULT_EXTENT),
+                goal.orientation,
             ),
             "orientation": nearest_orientation(goal.orientation),
             "filled": goal.filled,
             "visible": goal.visible,
             "rack": goal.rack,
+            "fill": _hex(goal.accepts),
+            "accepts": describe(goal.accepts),
+            "tag": _tag(goal.accepts),
         }
         for goal in scene.goals
     ]

@@ -402,19 +402,26 @@ function drawItem(svg, view, item) {
   if (!item.visible) classes.push("hidden");
   if (item.kind === "object" && item.id === page.selected) classes.push("selected");
   const group = element("g", { class: classes.join(" "), "data-id": item.id }, svg);
-  element(
+  const rect = element(
     "rect",
     { x: view.u(item) - eu / 2, y: view.v(item) - ev / 2, width: eu, height: ev, rx: item.category === "bowl" ? Math.min(eu, ev) / 3 : 2 },
     group,
   );
+  // The task's own colour: an object is filled with it, a goal outlined in what it accepts.
+  if (item.fill) rect.style[item.kind === "object" ? "fill" : "stroke"] = item.fill;
   const orientation = page.state.orientations[item.orientation];
+  const words = item.kind === "object" ? item.label : item.accepts && `accepts ${item.accepts}`;
   element("title", {}, group).textContent =
     `${item.id} (${item.category}${item.kind === "goal" ? " goal" : ""}` +
-    `${item.filled ? ", filled" : ""}, ${orientation}) at ` +
+    `${item.filled ? ", filled" : ""}, ${orientation}${words ? `, ${words}` : ""}) at ` +
     `x ${item.x.toFixed(3)} y ${item.y.toFixed(3)} z ${item.z.toFixed(3)} m`;
   if (item.kind === "object" && item.visible && (view.svg === "top-view" || !item.rack)) {
     const label = element("text", { x: view.u(item), y: view.v(item) + 4, "text-anchor": "middle" }, group);
     label.textContent = item.id.replace(/^(block|cover|plate|bowl)_/, (_, kind) => kind[0]);
+  }
+  if (item.tag && item.visible && view.svg === "top-view") {
+    const caption = element("text", { class: "attributes", x: view.u(item), y: view.v(item) + ev / 2 + 14, "text-anchor": "middle" }, group);
+    caption.textContent = item.tag;
   }
   group.addEventListener("click", (event) => {
     event.stopPropagation();
