@@ -1,0 +1,261 @@
+"""RGB-D perception as a plain class: a colour image, a depth image and the calibration in,
+the ``Scene`` out, no bus (``RgbdPerception``; the service wires it).
+
+Per frame: back-project the depth into the robot base frame (``base_T_camera``), fit the
+table plane (``plane.py``) and level the points on it, cut what stands on the table into
+objects (``segment.py``), describe each (``objects.py``), match them to the layout's objects
+(``tracker.py``) and hand their poses to the same ``WorldModel`` as the ArUco pipeline
+(object permanence, ``filled`` with hysteresis, the carried-object rule, ``stale``), without
+its marker-specific resting (depth measures height directly).
+
+A frame that cannot be used (no table plane, depth of the wrong size) raises ``BadFrame``
+naming why; the caller keeps the last good Scene.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from manigraph_perception.calibration_file import Calibration
+from manigraph_perception.detection import ObjectPose
+from manigraph_perception.rgbd.objects import (
+    CHROMATIC,
+    DetectedObject,
+    ObjectConfig,
+    describe_object,
+    palette_hues,
+)
+from manigraph_perception.rgbd.plane import NoTablePlane, Plane, PlaneConfig, fit_table
+from manigraph_perception.rgbd.segment import SegmentConfig, above_table, segments
+from manigraph_perception.rgbd.tracker import Tracker
+from manigraph_perception.world_belief import WorldConfig, WorldModel
+from manigraph_shared.colours import COLOUR_KEYS
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.messages import Scene, TaskLayout
+
+log = logging.getLogger("manigraph.perception")
+
+
+class BadFrame(ValueError):
+    """A frame the pipeline cannot use; ``kind`` is its counter's name."""
+
+    def __init__(self, kind: str, reason: str) -> None:
+        super().__init__(reason)
+        self.kind = kind
+
+
+@dataclass
+class RgbdCounters:
+    frames: int = 0
+    no_plane: int = 0
+    wrong_size: int = 0
+    unmatched: int = 0
+    stale: int = 0
+
+    def summary(self) -> str:
+        return (
+            f"frames {self.frames}, no table plane {self.no_plane}, wrong size "
+            f"{self.wrong_size}, unmatched segments {self.unmatched}, stale {self.stale}"
+        )
+
+
+@dataclass
+class RgbdFrameResult:
+    """What one frame gave: the detections (levelled base frame), their matches, the plane
+    and the segmentation's labels (for pictures and tests)."""
+
+    plane: Plane
+    detections: list[DetectedObject]
+    matches: dict[str, DetectedObject]
+    labels: np.ndarray = field(repr=False)  # H x W, 0 none, i + 1: detections[i]
+
+
+class RgbdPerception:
+    """Segments, poses and tracks the objects of a layout in RGB-D frames."""
+
+    def __init__(
+        self,
+        calibration: Calibration,
+        camera: str = "front",
+        world: WorldConfig | None = None,
+        seed: int = 0,
+    ) -> None:
+        if calibration.base_T_camera is None:
+            raise ConfigError("calibration.base_T_camera", "missing: run calibrate extrinsics")
+        self.calibration = calibration
+        self.camera = camera
+        self.base_T_camera = calibration.base_T_camera
+        self.world = WorldModel(
+            WorldConfig(
+                fill_enter=(world or WorldConfig()).fill_enter,
+                fill_exit=(world or WorldConfig()).fill_exit,
+                stale_after=(world or WorldConfig()).stale_after,
+                rest=None,
+            )
+        )
+        self.plane_config = PlaneConfig()
+        self.segment_config = SegmentConfig()
+        self.object_config = ObjectConfig()
+        self.counters = RgbdCounters()
+        self.tracker: Tracker | None = None
+        self.vocabulary = palette_hues(CHROMATIC)
+        self.plane: Plane | None = None
+        self._rng = np.random.default_rng(seed)
+        h, w = calibration.height, calibration.width
+        u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+        pixels = np.stack([u, v], axis=-1).reshape(-1, 1, 2)
+        rays = cv2.undistortPoints(pixels, calibration.camera_matrix, calibration.distortion)
+        #: Per pixel, the base-frame direction of its ray scaled to unit optical depth.
+        self._rays = np.concatenate([rays.reshape(h, w, 2), np.ones((h, w, 1))], axis=2) @ (
+            self.base_T_camera[:3, :3].T
+        )
+
+    # --- the episode ------------------------------------------------------------------------
+    def set_layout(self, layout: TaskLayout) -> None:
+        if self.world.layout is not None and layout.episode_id == self.world.layout.episode_id:
+            return
+        self.world.set_layout(layout)
+        self.tracker = Tracker(layout)
+        named = {
+            str(o.attributes[key]).strip().lower()
+            for o in layout.objects
+            for key in COLOUR_KEYS
+            if key in o.attributes
+        }
+        hues = palette_hues(named)
+        self.vocabulary = hues if hues else palette_hues(CHROMATIC)
+
+    @property
+    def layout(self) -> TaskLayout | None:
+        return self.world.layout
+
+    # --- frames -----------------------------------------------------------------------------
+    def measure(self, bgr: np.ndarray, depth: np.ndarray) -> RgbdFrameResult:
+        """Plane, segments and objects of one frame (``depth`` in metres, 0: none);
+        ``BadFrame`` if it cannot be used. Needs no layout; matches only with one."""
+        size = (self.calibration.height, self.calibration.width)
+        if depth.shape != size or bgr.shape[:2] != size:
+            raise BadFrame(
+                "wrong_size",
+                f"depth {depth.shape[1]} x {depth.shape[0]} and colour {bgr.shape[1]} x "
+                f"{bgr.shape[0]}, calibrated for {size[1]} x {size[0]}",
+            )
+        valid = depth > 0
+        rows, cols = np.nonzero(valid)
+        if len(rows) < 100:
+            raise BadFrame("no_plane", f"no table plane: only {len(rows)} pixels with depth")
+        pick = self._rng.integers(0, len(rows), self.plane_config.sample)
+        sample = self._points(rows[pick], cols[pick], depth)
+        try:
+            plane = fit_table(sample, self.plane_config, self._rng, self.plane)
+        except NoTablePlane as exc:
+            raise BadFrame("no_plane", f"no table plane: {exc}") from None
+        self.plane = plane
+        # Height over the plane of every pixel's point: depth * (ray . n) + (t . n + offset).
+        origin = float(self.base_T_camera[:3, 3] @ plane.normal + plane.offset)
+        heights = depth * (self._rays @ plane.normal) + origin
+        heights[~valid] = np.nan
+        hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
+        mask = above_table(heights, depth.astype(np.float32), hsv, self.segment_config)
+        level = plane.levelling()
+        camera = level[:3, :3] @ self.base_T_camera[:3, 3] + level[:3, 3]
+        labels = np.zeros(size, np.int32)
+        detections: list[DetectedObject] = []
+        for segment in segments(mask, hsv[..., 0], self.segment_config):
+            points = self._points(segment.rows, segment.cols, depth)
+            found = describe_object(
+                points @ level[:3, :3].T + level[:3, 3],
+                segment.hue,
+                self.vocabulary,
+                camera,
+                self.object_config,
+            )
+            if found is not None:
+                detections.append(found)
+                labels[segment.rows, segment.cols] = len(detections)
+        _mark_covered(detections)
+        matches: dict[str, DetectedObject] = {}
+        if self.tracker is not None:
+            believed = {
+                object_id: belief.position for object_id, belief in self.world.beliefs.items()
+            }
+            matches = dict(self.tracker.match(detections, believed))
+            self.counters.unmatched += len(detections) - len(matches)
+        return RgbdFrameResult(plane, detections, matches, labels)
+
+    def _points(self, rows: np.ndarray, cols: np.ndarray, depth: np.ndarray) -> np.ndarray:
+        """Base-frame points of these pixels (N x 3)."""
+        return self._rays[rows, cols] * depth[rows, cols, None] + self.base_T_camera[:3, 3]
+
+    def process(
+        self, bgr: np.ndarray, depth: np.ndarray, stamp: float, now: float
+    ) -> tuple[Scene | None, RgbdFrameResult]:
+        """One frame: the Scene (None before a layout) and what was measured; ``BadFrame``
+        (counted) if the frame cannot be used."""
+        self.counters.frames += 1
+        try:
+            result = self.measure(bgr, depth)
+        except BadFrame as exc:
+            setattr(self.counters, exc.kind, getattr(self.counters, exc.kind) + 1)
+            raise
+        if self.tracker is None:
+            return None, result
+        self.world.update([self._pose(i, d) for i, d in result.matches.items()], stamp)
+        for object_id, detection in result.matches.items():
+            if object_id in self.tracker.colours:
+                self.world.attributes[object_id]["colour"] = detection.colour
+        scene = self.world.scene(stamp, now)
+        if scene is not None and scene.stale:
+            self.counters.stale += 1
+        return scene, result
+
+    def _pose(self, object_id: str, detection: DetectedObject) -> ObjectPose:
+        assert self.tracker is not None
+        size = self.tracker.sizes[object_id]
+        centre = detection.centre - np.array([0.0, 0.0, size[2] / 2])
+        if detection.covered:
+            # Only its top is measured well: keep where it is believed across the image.
+            believed = self.world.beliefs[object_id].position
+            centre[:2] = believed[:2]
+        else:
+            centre[:2] += detection.away * _far_edge_loss(detection, size) / 2
+        pose = np.eye(4)
+        c, s = np.cos(detection.yaw), np.sin(detection.yaw)
+        pose[:3, :3] = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
+        pose[:3, 3] = centre
+        return ObjectPose(object_id, pose, markers=0, reprojection_px=0.0)
+
+
+def _far_edge_loss(detection: DetectedObject, size: np.ndarray) -> float:
+    """How much of the top face's far edge (seen against the background, at a depth step)
+    the segmentation lost: the footprint's expected extent along the viewing direction
+    less the measured one (at most a quarter of the object)."""
+    c, s = np.cos(detection.yaw), np.sin(detection.yaw)
+    u = detection.away
+    expected = abs(size[0] * (c * u[0] + s * u[1])) + abs(size[1] * (-s * u[0] + c * u[1]))
+    return float(np.clip(expected - detection.extent_away, 0.0, expected / 4))
+
+
+def _mark_covered(detections: list[DetectedObject]) -> None:
+    """A detection with another standing on it (its bottom at this one's top, over it) is
+    covered, whatever its top's outline says."""
+    for lower in detections:
+        for upper in detections:
+            if (
+                upper is not lower
+                and abs(upper.bottom - lower.top) < 0.015
+                and np.linalg.norm(upper.centre[:2] - lower.centre[:2]) < 0.05
+            ):
+                lower.covered = True
+
+
+def decode_depth(data: bytes) -> np.ndarray | None:
+    """The contract's 16-bit PNG of millimetres -> metres (0: none); None if it is not one."""
+    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    if image is None or image.dtype != np.uint16 or image.ndim != 2:
+        return None
+    return image.astype(np.float64) / 1000.0

@@ -1,0 +1,169 @@
+"""Where RGB-D frames come from when not from the bus: an Intel RealSense (``pyrealsense2``,
+imported only when asked for) or a recorded MCAP file of ``CompressedImage`` + ``DepthImage``
+(a user's own recording replayed through the pipeline). Both give ``RgbdFrame``s and say
+when the camera has stopped with a ``ConfigError``, as ``sources.VideoSource`` does.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+import cv2
+import numpy as np
+
+from manigraph_perception.sources import MAX_FAILED_READS
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.messages import CameraInfo, CompressedImage, DepthImage
+
+
+@dataclass
+class RgbdFrame:
+    bgr: np.ndarray  # H x W x 3 uint8
+    depth: np.ndarray  # H x W metres, 0: none
+    stamp: float
+    sequence: int
+
+
+class RgbdSource(Protocol):
+    def read(self) -> RgbdFrame | None:
+        """The next frame, None for a dropped one; ``ConfigError`` once it has stopped."""
+
+    def close(self) -> None: ...
+
+
+def decode_pair(image: CompressedImage, depth: DepthImage) -> RgbdFrame | None:
+    """Colour and depth messages -> a frame; None if either does not decode."""
+    from manigraph_perception.rgbd.pipeline import decode_depth
+
+    bgr = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_COLOR)
+    metres = decode_depth(depth.data)
+    if bgr is None or metres is None:
+        return None
+    return RgbdFrame(bgr, metres, image.stamp, image.sequence)
+
+
+class McapRgbdSource:
+    """Recorded frames: each ``CompressedImage`` of ``camera`` paired with the ``DepthImage``
+    of the same sequence, in the file's order (at ``rate`` frames per second, 0: at once).
+    The recording's ``CameraInfo`` is in ``info`` (None if it has none)."""
+
+    def __init__(self, path: str | Path, camera: str = "front", rate: float = 0.0) -> None:
+        from manigraph_shared.mcap_log import read_log
+
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise ConfigError("camera", f"no such recording: {self.path}")
+        keys = [f"manigraph/camera/{camera}/{k}" for k in ("image", "depth", "info")]
+        self._messages = (m.decode() for m in read_log(self.path, keys))
+        self.rate = rate
+        self.info: CameraInfo | None = None
+        self._depths: dict[int, DepthImage] = {}
+        self._images: dict[int, CompressedImage] = {}
+        self._ended = False
+        self._next = 0.0
+        self.frames = 0
+
+    def read(self) -> RgbdFrame | None:
+        if self.rate > 0:
+            time.sleep(max(0.0, self._next - time.monotonic()))
+            self._next = time.monotonic() + 1 / self.rate
+        for pair in self._pairs():
+            self.frames += 1
+            return decode_pair(*pair)
+        raise ConfigError(
+            "camera", f"recording {self.path.name} ended after {self.frames} RGB-D frames"
+        )
+
+    def _pairs(self) -> Iterator[tuple[CompressedImage, DepthImage]]:
+        for message in self._messages:
+            if isinstance(message, CameraInfo):
+                self.info = message
+            elif isinstance(message, DepthImage):
+                self._depths[message.sequence] = message
+            elif isinstance(message, CompressedImage):
+                self._images[message.sequence] = message
+            else:
+                continue
+            sequence = message.sequence
+            if sequence in self._depths and sequence in self._images:
+                yield self._images.pop(sequence), self._depths.pop(sequence)
+                # Older halves whose partner never came are dropped.
+                for held in (self._images, self._depths):
+                    for old in [s for s in held if s < sequence]:
+                        del held[old]
+
+    def close(self) -> None:
+        self._messages.close()
+
+
+class RealSenseSource:
+    """An Intel RealSense D400 through ``pyrealsense2``: colour and depth at ``width`` x
+    ``height``, depth aligned to colour, in metres. ``ConfigError`` at start without the
+    package or the device, and once it stops delivering."""
+
+    def __init__(self, width: int = 640, height: int = 480, fps: int = 30) -> None:
+        try:
+            import pyrealsense2 as rs
+        except ImportError:
+            raise ConfigError(
+                "camera",
+                "realsense needs the pyrealsense2 package (pip install pyrealsense2; not a "
+                "dependency of manigraph) and a connected RealSense",
+            ) from None
+        self.rs: Any = rs
+        if not rs.context().query_devices():
+            raise ConfigError("camera", "realsense: no RealSense device connected")
+        self.pipeline = rs.pipeline()
+        config = rs.config()
+        config.enable_stream(rs.stream.color, width, height, rs.format.bgr8, fps)
+        config.enable_stream(rs.stream.depth, width, height, rs.format.z16, fps)
+        try:
+            profile = self.pipeline.start(config)
+        except RuntimeError as exc:
+            raise ConfigError("camera", f"realsense: cannot start streaming: {exc}") from None
+        self.depth_scale = profile.get_device().first_depth_sensor().get_depth_scale()
+        self.align = rs.align(rs.stream.color)
+        intrinsics = profile.get_stream(rs.stream.color).as_video_stream_profile()
+        self.intrinsics = intrinsics.get_intrinsics()
+        self.failed_in_a_row = 0
+        self.sequence = 0
+
+    def camera_matrix(self) -> np.ndarray:
+        i = self.intrinsics
+        return np.array([[i.fx, 0, i.ppx], [0, i.fy, i.ppy], [0, 0, 1]], dtype=float)
+
+    def read(self) -> RgbdFrame | None:
+        try:
+            frames = self.align.process(self.pipeline.wait_for_frames(1000))
+        except RuntimeError:
+            frames = None
+        colour = frames.get_color_frame() if frames else None
+        depth = frames.get_depth_frame() if frames else None
+        if not colour or not depth:
+            self.failed_in_a_row += 1
+            if self.failed_in_a_row >= MAX_FAILED_READS:
+                raise ConfigError("camera", "realsense stopped delivering frames")
+            return None
+        self.failed_in_a_row = 0
+        self.sequence += 1
+        metres = np.asanyarray(depth.get_data()).astype(np.float64) * self.depth_scale
+        bgr = np.asanyarray(colour.get_data()).copy()
+        return RgbdFrame(bgr, metres, time.time(), self.sequence)
+
+    def close(self) -> None:
+        self.pipeline.stop()
+
+
+def open_rgbd_source(spec: str, camera: str = "front") -> RgbdSource:
+    """``realsense`` or an ``.mcap`` recording (``ConfigError`` for anything else)."""
+    if spec == "realsense":
+        return RealSenseSource()
+    if spec.endswith(".mcap"):
+        return McapRgbdSource(spec, camera)
+    raise ConfigError(
+        "camera", f"'{spec}' is not an RGB-D source: 'bus', 'realsense' or a .mcap recording"
+    )

@@ -1,0 +1,101 @@
+"""Which layout object each detection is: identity over time without markers.
+
+The layout names the objects (id, category, size, where each starts, and maybe a colour).
+Each frame's detections are matched to them greedily, cheapest pair first, where a pair's cost
+is the distance from where the object is believed to be (``WorldModel``: object permanence,
+the carried-object rule) and a pair is ruled out when
+
+* the colours differ: the layout's colour when it names one, else the hue the object showed
+  when it was first matched (learned once per episode, from a match near its believed place);
+* the footprint differs from the layout's size by more than ``size_tolerance`` (a fully seen
+  top only);
+* the object is a covered detection's and it is further than ``covered_reach`` from its
+  belief (a covered object's centre is rough: it is not evidence of a move).
+
+An object with no detection keeps its belief (hidden under the blocks stacked on it, behind
+the gripper, carried). A detection with no object is ignored (counted).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from manigraph_perception.rgbd.objects import DetectedObject
+from manigraph_perception.rgbd.segment import hue_distance
+from manigraph_shared.colours import COLOUR_KEYS
+from manigraph_shared.messages import TaskLayout
+
+
+@dataclass(frozen=True)
+class TrackerConfig:
+    #: Hue difference (OpenCV units, 2 degrees each) that makes two colours different.
+    hue_tolerance: float = 6.0
+    size_tolerance: float = 0.015
+    covered_reach: float = 0.04
+    #: A first match further than this from the believed place teaches no hue.
+    learn_within: float = 0.03
+
+
+class Tracker:
+    def __init__(self, layout: TaskLayout, config: TrackerConfig | None = None) -> None:
+        self.config = config or TrackerConfig()
+        self.sizes = {o.id: np.array(o.size.as_tuple()) for o in layout.objects}
+        self.colours: dict[str, str] = {}
+        for o in layout.objects:
+            for key in COLOUR_KEYS:
+                value = o.attributes.get(key)
+                if isinstance(value, str):
+                    self.colours[o.id] = value.strip().lower()
+        self.hues: dict[str, float] = {}
+
+    def match(
+        self, detections: list[DetectedObject], believed: dict[str, np.ndarray]
+    ) -> list[tuple[str, DetectedObject]]:
+        """(object id, detection) pairs; ``believed``: object id -> believed centre."""
+        pairs: list[tuple[float, str, int]] = []
+        for index, detection in enumerate(detections):
+            for object_id, position in believed.items():
+                cost = self._cost(object_id, position, detection)
+                if cost is not None:
+                    pairs.append((cost, object_id, index))
+        pairs.sort()
+        taken_objects: set[str] = set()
+        taken_detections: set[int] = set()
+        out = []
+        for cost, object_id, index in pairs:
+            if object_id in taken_objects or index in taken_detections:
+                continue
+            taken_objects.add(object_id)
+            taken_detections.add(index)
+            detection = detections[index]
+            if (
+                object_id not in self.hues
+                and object_id not in self.colours
+                and cost < self.config.learn_within
+            ):
+                self.hues[object_id] = detection.hue
+            out.append((object_id, detection))
+        return out
+
+    def _cost(
+        self, object_id: str, position: np.ndarray, detection: DetectedObject
+    ) -> float | None:
+        config = self.config
+        if object_id in self.colours and self.colours[object_id] != detection.colour:
+            return None
+        if object_id in self.hues and hue_distance(self.hues[object_id], detection.hue) > (
+            config.hue_tolerance
+        ):
+            return None
+        size = self.sizes[object_id]
+        if not detection.covered:
+            footprint = np.sort(detection.size[:2])
+            if np.any(np.abs(footprint - np.sort(size[:2])) > config.size_tolerance):
+                return None
+        centre = detection.centre - np.array([0.0, 0.0, size[2] / 2])
+        distance = float(np.linalg.norm(centre - position))
+        if detection.covered and distance > config.covered_reach:
+            return None
+        return distance

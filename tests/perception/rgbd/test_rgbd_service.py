@@ -1,0 +1,142 @@
+"""The RGB-D perception service as a process on a real bus: colour + depth frames in, Scene
+out; bad frames named in its status with the age of the last good Scene, which is served
+again (stale, with its old stamp); a camera that stops, named. Frames are drawn analytically
+(``synthetic.py``), so no renderer is needed."""
+
+from __future__ import annotations
+
+import queue
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from synthetic import draw
+
+from manigraph_perception.calibration_file import load_calibration
+from manigraph_shared.messages import (
+    CompressedImage,
+    DepthImage,
+    GoalCategory,
+    LayoutGoal,
+    LayoutObject,
+    ObjectCategory,
+    Scene,
+    ServiceStatus,
+    TaskLayout,
+    Vector3,
+)
+from manigraph_sim.physics.depth_noise import encode_depth_png
+from manigraph_tools.testing import Stack, free_port, stack
+
+pytestmark = pytest.mark.integration
+
+ROOT = Path(__file__).resolve().parents[3]
+CALIBRATION = str(ROOT / "examples" / "calibration" / "sim-front.yaml")
+RED = (0.5, 0.0, 0.02)
+
+
+def _frame(bgr: np.ndarray, depth: np.ndarray, sequence: int) -> tuple[DepthImage, CompressedImage]:
+    stamp = time.time()
+    ok, png = cv2.imencode(".png", bgr)
+    assert ok
+    return (
+        DepthImage(camera="front", stamp=stamp, sequence=sequence, data=encode_depth_png(depth)),
+        CompressedImage(
+            camera="front", stamp=stamp, sequence=sequence, format="png", data=png.tobytes()
+        ),
+    )
+
+
+def _layout() -> TaskLayout:
+    v = Vector3(x=RED[0], y=RED[1], z=RED[2])
+    return TaskLayout(
+        episode_id="rgbd",
+        stamp=time.time() - 1.0,
+        objects=[
+            LayoutObject(
+                id="block_0",
+                category=ObjectCategory.BLOCK,
+                position=v,
+                size=Vector3(x=0.04, y=0.04, z=0.04),
+            )
+        ],
+        goals=[LayoutGoal(id="goal_0", category=GoalCategory.BLOCK, position=v)],
+    )
+
+
+def _status_saying(statuses: queue.Queue[ServiceStatus], words: str) -> ServiceStatus:
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:
+        status = statuses.get(timeout=10)
+        if words in status.detail:
+            return status
+    raise AssertionError(f"no status said '{words}'")
+
+
+def test_frames_become_scenes_and_bad_ones_are_named_with_the_last_scene_kept(
+    tmp_path: Path,
+) -> None:
+    calibration = load_calibration(CALIBRATION)
+    bgr, depth = draw(calibration, [(RED, 0.04, "red")])
+    with stack(tmp_path) as running:
+        running.start("router")
+        running.start(
+            "perception",
+            "perception",
+            "--pipeline",
+            "rgbd",
+            "--camera",
+            "bus",
+            "--calibration",
+            CALIBRATION,
+            "--stale-after",
+            "2",
+        )
+        with running.client() as bus:
+            running.wait_alive(bus, "perception")
+            scenes: queue.Queue[Scene] = queue.Queue()
+            statuses: queue.Queue[ServiceStatus] = queue.Queue()
+            bus.subscribe(Scene, scenes.put)
+            bus.subscribe(ServiceStatus, statuses.put, key="manigraph/status/perception")
+            bus.publish(_layout())
+            time.sleep(0.5)
+            for message in _frame(bgr, depth, 0):
+                bus.publish(message)
+            good = scenes.get(timeout=10)
+            assert good.episode_id == "rgbd" and not good.stale
+            block = good.objects[0]
+            assert np.linalg.norm(np.array(block.position.as_tuple()) - RED) < 0.005
+            assert good.goals[0].filled
+            # Depth of the wrong size: named, and the last good Scene again, stale, old stamp.
+            small_depth, image = _frame(bgr, depth[::2, ::2], 1)
+            bus.publish(small_depth)
+            bus.publish(image)
+            again = scenes.get(timeout=10)
+            assert again.stale and again.stamp == good.stamp
+            status = _status_saying(statuses, "depth 320 x 240")
+            assert "calibrated for 640 x 480" in status.detail
+            assert "last good scene" in status.detail and "s old" in status.detail
+            # A wall in front of the camera: no table plane.
+            for message in _frame(bgr, np.full_like(depth, 0.3), 2):
+                bus.publish(message)
+            _status_saying(statuses, "no table plane")
+            # The camera stops: said once nothing came for --stale-after.
+            _status_saying(statuses, "no usable frame for")
+
+
+def test_a_realsense_without_the_package_is_refused_by_name(tmp_path: Path) -> None:
+    running = Stack(free_port(), tmp_path)
+    result = running.run(
+        "perception",
+        "--pipeline",
+        "rgbd",
+        "--camera",
+        "realsense",
+        "--calibration",
+        CALIBRATION,
+        timeout=60,
+    )
+    assert result.returncode != 0
+    assert "camera: realsense needs the pyrealsense2 package" in result.stderr, result.stderr
