@@ -1,4 +1,5 @@
-"""``manigraph perception``: camera + ArUco markers -> Scene."""
+"""``manigraph perception``: camera + ArUco markers -> Scene, or an RGB-D camera -> Scene
+(``--pipeline rgbd``, no markers)."""
 
 from __future__ import annotations
 
@@ -10,15 +11,23 @@ from manigraph_shared.cli import Command
 
 def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
+        "--pipeline",
+        choices=["aruco", "rgbd"],
+        default="aruco",
+        help="aruco: markers on the objects (default); rgbd: colour + depth, no markers "
+        "(table plane, segmentation, colour; docs/perception.md)",
+    )
+    parser.add_argument(
         "--camera",
         required=True,
-        help="'bus' (images from manigraph/camera/<name>/image, e.g. the sim's --camera), a "
-        "V4L2 device (/dev/video0 or 0), a video file or a stream URL",
+        help="'bus' (images from manigraph/camera/<name>/image, e.g. the sim's --camera; with "
+        "--pipeline rgbd also .../depth), a V4L2 device (/dev/video0 or 0), a video file or a "
+        "stream URL; with --pipeline rgbd: 'realsense' or an .mcap recording to replay",
     )
     parser.add_argument(
         "--markers",
-        required=True,
-        help="marker map TOML (docs/perception.md), or 'sim' for the sim's printed markers",
+        help="--pipeline aruco: marker map TOML (docs/perception.md), or 'sim' for the sim's "
+        "printed markers",
     )
     parser.add_argument(
         "--calibration", required=True, help="OpenCV FileStorage YAML with base_T_camera"
@@ -47,6 +56,12 @@ def _run(args: argparse.Namespace) -> int:
 
     if not 0 < args.stale_after <= 60:
         raise ConfigError("stale-after", "must be in (0, 60] seconds")
+    if args.pipeline == "rgbd":
+        from manigraph_perception.rgbd.main import run_rgbd
+
+        return run_rgbd(args)
+    if args.markers is None:
+        raise ConfigError("markers", "--pipeline aruco needs a marker map (or 'sim')")
     markers = sim_marker_map() if args.markers == "sim" else load_marker_map(args.markers)
     calibration = load_calibration(args.calibration)
     perception = Perception(

@@ -84,6 +84,18 @@ SIM_CAMERA_PERCEPTION = [
 ]
 
 
+#: The same camera's colour and depth, no markers (the RGB-D pipeline).
+SIM_RGBD_PERCEPTION = [
+    "perception",
+    "--pipeline",
+    "rgbd",
+    "--camera",
+    "bus",
+    "--calibration",
+    SIM_CAMERA_PERCEPTION[-1],
+]
+
+
 def _up_configure(parser: argparse.ArgumentParser) -> None:
     episode_arguments(parser)
     parser.add_argument("--record", type=Path, help="also record everything to this MCAP file")
@@ -113,10 +125,11 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--scene-source",
-        choices=["sim", "camera"],
+        choices=["sim", "camera", "rgbd"],
         default="sim",
         help="who publishes Scene: the sim's ground truth (default) or perception reading "
-        "the physics sim's rendered camera (needs Vulkan; docs/perception.md)",
+        "the physics sim's rendered camera (needs Vulkan; docs/perception.md): its ArUco "
+        "markers (camera) or its colour and depth, no markers (rgbd)",
     )
     parser.add_argument(
         "--markers",
@@ -190,6 +203,8 @@ def _cell_specs(
         markers = args.markers if args.markers == "sim" else str(Path(args.markers).resolve())
         perception[perception.index("--markers") + 1] = markers
         specs.append(spec(f"perception{suffix}", perception, where))
+    elif args.scene_source == "rgbd":
+        specs.append(spec(f"perception{suffix}", SIM_RGBD_PERCEPTION, where))
     return specs
 
 
@@ -262,13 +277,15 @@ def _up_run(args: argparse.Namespace) -> int:
     sim_options = (
         backends.argv(args.sim, backends.given_options(args)) if backends is not None else []
     )
-    if args.scene_source == "camera":
+    if args.scene_source in ("camera", "rgbd"):
+        source = args.scene_source
         if args.sim != "physics":
-            raise ConfigError("scene-source", "camera needs --sim physics (it renders)")
-        problem = vulkan_problem("--scene-source camera (the physics sim's rendered camera)")
+            raise ConfigError("scene-source", f"{source} needs --sim physics (it renders)")
+        problem = vulkan_problem(f"--scene-source {source} (the physics sim's rendered camera)")
         if problem:
             raise ConfigError("scene-source", problem)
         sim_options += ["--camera", "--no-scenes"]
+        sim_options += ["--camera-depth"] if source == "rgbd" else []
     if args.markers != "sim":
         if args.scene_source != "camera":
             raise ConfigError("markers", "only with --scene-source camera (perception reads it)")
@@ -283,7 +300,7 @@ def _up_run(args: argparse.Namespace) -> int:
         raise ConfigError("explain-decisions", f"needs a GNN planner, not --policy {HUMAN}")
     if args.policy.endswith(".pt") and not Path(args.policy).is_file():
         raise ConfigError("policy", f"no such checkpoint file: {args.policy}")
-    if args.cells is not None and (human or args.scene_source == "camera"):
+    if args.cells is not None and (human or args.scene_source != "sim"):
         raise ConfigError("cells", f"one cell only with --policy {HUMAN} or --scene-source camera")
     if args.planner_per_cell and args.cells is None:
         raise ConfigError("planner-per-cell", "only with --cells")
