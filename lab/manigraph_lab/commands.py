@@ -247,8 +247,11 @@ def _select_configure(parser: argparse.ArgumentParser) -> None:
 
 def _select_run(args: argparse.Namespace) -> int:
     from manigraph_lab.selection import select_checkpoint
+    from manigraph_planner.policies import load_policy
 
     sweep = SweepOptions.from_args(args)
+    for candidate in args.checkpoints:  # a file that is no checkpoint: one line, before any cell
+        load_policy(str(candidate))
     use_threads(args.threads)
     chosen, table = select_checkpoint(
         args.checkpoints, args.output, args.episodes, progress=sys.stderr, sweep=sweep

@@ -12,6 +12,7 @@ An unknown flag is answered with the usage of the subcommand it was given to.
 from __future__ import annotations
 
 import argparse
+import errno
 import logging
 import os
 import sys
@@ -20,12 +21,26 @@ from dataclasses import dataclass
 from importlib.metadata import entry_points
 
 from manigraph_shared.errors import (
+    CONFIG_EXIT_CODE,
     INTERRUPTED_EXIT_CODE,
     RUNTIME_EXIT_CODE,
     ManigraphError,
 )
 
 GROUP = "manigraph.commands"
+#: ``OSError``s that mean a path given is wrong (configuration), not that the machine failed
+#: while it ran (a full disk: runtime).
+PATH_ERRORS = frozenset(
+    {
+        errno.ENOENT,
+        errno.ENOTDIR,
+        errno.EISDIR,
+        errno.EEXIST,
+        errno.EACCES,
+        errno.EPERM,
+        errno.EROFS,
+    }
+)
 
 
 @dataclass(frozen=True)
@@ -111,6 +126,10 @@ def main(argv: list[str] | None = None) -> int:
         return exc.exit_code
     except KeyboardInterrupt:
         return INTERRUPTED_EXIT_CODE
+    except OSError as exc:  # a path given that cannot be read or written, most often
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"manigraph {args.command}: {where}{exc.strerror or one_line(exc)}", file=sys.stderr)
+        return CONFIG_EXIT_CODE if exc.errno in PATH_ERRORS else RUNTIME_EXIT_CODE
     except Exception as exc:  # a bug, or a library's error nothing above names: still one line
         if logging.getLogger().isEnabledFor(logging.DEBUG):
             raise

@@ -20,7 +20,8 @@ code  kind            when
 78    configuration   what was asked for is refused: a value out of range (:class:`ConfigError`),
                       a task or task file (:class:`TaskError`), a checkpoint or policy that
                       cannot serve (:class:`PolicyError`), a log that cannot be read
-                      (:class:`LogError`), a request the stack refused (:class:`RequestRefused`).
+                      (:class:`LogError`), a request the stack refused (:class:`RequestRefused`),
+                      a path that cannot be read or written (an ``OSError`` such as ENOENT).
                       The same input fails again: ``up``'s supervisor does not restart it.
 130   interrupted     Ctrl-C
 ====  ==============  =========================================================================

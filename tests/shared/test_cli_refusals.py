@@ -152,3 +152,27 @@ def test_an_internal_error_is_one_line_and_a_runtime_failure(tmp_path: Path) -> 
         timeout=120,
     )
     assert loud.returncode != 0 and "Traceback" in loud.stderr
+
+
+def test_select_refuses_a_file_that_is_no_checkpoint_before_any_cell(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    notes = tmp_path / "notes.pt"
+    notes.write_text("# notes\n")
+    code, lines = _refusal(["select", str(notes), "-o", str(tmp_path / "kept.pt")], capsys)
+    assert code == CONFIG_EXIT_CODE
+    assert len(lines) == 1 and lines[0].startswith(
+        f"manigraph select: not a manigraph checkpoint: {notes}: "
+    )
+
+
+def test_an_output_path_that_cannot_be_written_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    target = blocker / "demos.mcap"  # under a file, not a folder
+    code, lines = _refusal(["demos", "-o", str(target), "--trajectories", "1"], capsys)
+    assert code == CONFIG_EXIT_CODE
+    assert len(lines) == 1 and lines[0].startswith("manigraph demos: "), lines
+    assert str(blocker) in lines[0] and "internal error" not in lines[0]
