@@ -90,21 +90,32 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     return parser
 
 
-def subcommand_parsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
-    """The parser of each subcommand ``parser`` holds, by name."""
+def _subparsers_action(parser: argparse.ArgumentParser) -> argparse._SubParsersAction | None:
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
-            return dict(action.choices)
-    return {}
+            return action
+    return None
+
+
+def subcommand_parsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    """The parser of each subcommand ``parser`` holds, by name."""
+    action = _subparsers_action(parser)
+    return dict(action.choices) if action is not None else {}
 
 
 def parse(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
-    """``argv`` parsed; an argument no parser knows is refused by the subcommand's parser,
-    so the usage printed is that subcommand's (argparse's top level would print its own)."""
+    """``argv`` parsed; an argument no parser knows is refused by the parser of the
+    (innermost) subcommand given, so the usage printed is that subcommand's (argparse's top
+    level would print its own)."""
     args, unknown = parser.parse_known_args(argv)
     if unknown:
-        subparser = subcommand_parsers(parser).get(args.command, parser)
-        subparser.error(f"unrecognized arguments: {' '.join(unknown)}")
+        chosen = parser
+        while (action := _subparsers_action(chosen)) is not None:
+            name = getattr(args, action.dest, None)
+            if name not in action.choices:
+                break
+            chosen = action.choices[name]
+        chosen.error(f"unrecognized arguments: {' '.join(unknown)}")
     return args
 
 
