@@ -18,16 +18,24 @@ from typing import BinaryIO
 
 from mcap.exceptions import InvalidMagic
 from mcap.reader import NonSeekingReader
-from mcap.records import Channel, Schema
+from mcap.records import Channel, Header, Schema
+from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
 from manigraph_shared.cells import cell_of, default_key
 from manigraph_shared.errors import LogError
 from manigraph_shared.mcap_index import bound_chunk_indexes
-from manigraph_shared.messages import Message, key_matches, message_type_for_key
+from manigraph_shared.messages import (
+    CONTRACT_VERSION,
+    Message,
+    key_matches,
+    message_type_for_key,
+)
 from manigraph_shared.messages.base import PREFIX
 
 PROFILE = "manigraph"
+#: The header's ``library``: this, then the contract version (``manigraph 2``).
+LIBRARY = "manigraph"
 
 
 @dataclass(frozen=True)
@@ -60,7 +68,7 @@ class McapLogWriter:
         self._writer = Writer(self._stream, compression=CompressionType.ZSTD)
         # One chunk per flush (100 ms): its index waits for the summary on disk, not in memory.
         self._chunk_indexes = bound_chunk_indexes(self._writer, path.parent)
-        self._writer.start(profile=PROFILE, library="manigraph")
+        self._writer.start(profile=PROFILE, library=f"{LIBRARY} {CONTRACT_VERSION}")
         self._channels: dict[str, int] = {}
         self._schemas: dict[str, int] = {}
         self._last_flush = time.monotonic()
@@ -187,6 +195,26 @@ def decode_log(path: Path, topics: Iterable[str] = ()) -> list[Message]:
     """The contract's messages in ``path`` (by default every ``manigraph/**`` channel; other
     channels, such as Foxglove's drawings, are not messages of the contract)."""
     return [item.decode() for item in read_log(path, list(topics) or [f"{PREFIX}/**"])]
+
+
+def contract_version(path: Path) -> int:
+    """The contract version a log was written with (its header's ``library``); 1 for logs
+    written before versions were recorded. ``LogError`` for a file that is not MCAP."""
+    try:
+        with path.open("rb") as stream:
+            header = next(iter(StreamReader(stream).records), None)  # the first record
+    except OSError as exc:
+        raise LogError(f"cannot open {path}: {exc.strerror}") from None
+    except Exception:
+        raise LogError(f"not an MCAP file: {path}") from None
+    if not isinstance(header, Header):
+        raise LogError(f"not an MCAP file: {path}")
+    prefix = f"{LIBRARY} "
+    if header.library.startswith(prefix):
+        version = header.library.removeprefix(prefix).split(" ")[0]
+        if version.isdigit():
+            return int(version)
+    return 1
 
 
 #: The 8 bytes every MCAP file starts and a finalised one ends with.

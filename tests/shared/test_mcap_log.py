@@ -8,8 +8,8 @@ import pytest
 from mcap.reader import make_reader
 
 from manigraph_shared.errors import LogError
-from manigraph_shared.mcap_log import McapLogWriter, decode_log, read_log
-from manigraph_shared.messages import Action, ServiceStatus
+from manigraph_shared.mcap_log import McapLogWriter, contract_version, decode_log, read_log
+from manigraph_shared.messages import CONTRACT_VERSION, Action, Scene, ServiceStatus
 
 
 def action(step: int) -> Action:
@@ -106,3 +106,22 @@ def test_not_an_mcap_file_is_a_clear_error(tmp_path: Path) -> None:
         list(read_log(path))
     with pytest.raises(LogError, match="cannot open"):
         list(read_log(tmp_path / "missing.mcap"))
+
+
+GOLDEN = Path(__file__).resolve().parents[1] / "golden"
+
+
+def test_a_log_names_its_contract_version_and_older_logs_still_decode(tmp_path: Path) -> None:
+    path = tmp_path / "now.mcap"
+    writer = McapLogWriter(path)
+    writer.close()
+    assert contract_version(path) == CONTRACT_VERSION == 2
+    golden = GOLDEN / "sage-stack4.mcap"
+    assert contract_version(golden) == 1  # written before versions were recorded
+    scenes = [m for m in decode_log(golden) if isinstance(m, Scene)]
+    assert scenes and all(o.attributes == {} for s in scenes for o in s.objects)
+    assert all(g.accepts == {} for s in scenes for g in s.goals)
+    text = tmp_path / "notes.txt"
+    text.write_text("# not a log\n")
+    with pytest.raises(LogError, match="not an MCAP file"):
+        contract_version(text)

@@ -1,6 +1,7 @@
 """The message contract: every type on the bus, declared once beside its key expression."""
 
 from manigraph_shared.messages.base import (
+    CONTRACT_VERSION,
     MAX_PAYLOAD_BYTES,
     Delivery,
     Message,
@@ -30,6 +31,7 @@ from manigraph_shared.messages.scene import (
 from manigraph_shared.messages.status import Checkpoint, EstopState, ServiceState, ServiceStatus
 
 __all__ = [
+    "CONTRACT_VERSION",
     "MAX_PAYLOAD_BYTES",
     "REFUSAL_REASONS",
     "TRAY_RACKS",

@@ -35,6 +35,15 @@ MAX_PAYLOAD_BYTES = 1 << 20
 
 PREFIX = "manigraph"
 
+#: The contract's version, written into every MCAP log (``mcap_log.contract_version`` reads it).
+#: Every change since 1 added fields with defaults, so a log of an older version decodes as is
+#: (the golden logs of tests/golden are version 1):
+#:
+#: * 2: objects' ``attributes`` and goals' ``accepts`` (Scene, TaskLayout); the end event's
+#:   ``goals_wrong_object``; ServiceStatus's version, start, policy, checkpoint and e-stop;
+#:   EmergencyStop's ``by``; the ``explainer_warming_up`` refusal; DepthImage.
+CONTRACT_VERSION = 2
+
 Identifier = Annotated[
     str,
     Meta(pattern=r"^[A-Za-z0-9_.:\-]{1,64}$", description="identifier, 1-64 of [A-Za-z0-9_.:-]"),
