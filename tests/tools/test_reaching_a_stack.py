@@ -141,7 +141,7 @@ def test_zenoh_reason_drops_the_rust_place() -> None:
 def test_a_client_command_with_no_stack_says_so_in_one_line() -> None:
     port = free_port()
     codes = {}
-    for command in ("run", "stop", "resume"):
+    for command in ("run", "stop", "resume", "doctor"):
         result = subprocess.run(
             [sys.executable, "-m", "manigraph_shared.cli", command, "--port", str(port)],
             capture_output=True,

@@ -36,7 +36,9 @@ def _doctor_run(args: argparse.Namespace) -> int:
     try:
         bus = Bus.open(config)
     except Exception as exc:  # no router at all: everything is missing
-        print(f"cannot reach the bus ({config.describe()}): {exc}", file=sys.stderr)
+        if not args.json:  # one line, as every client says it (the table would add nothing)
+            print(f"manigraph doctor: {exc}", file=sys.stderr)
+            return 1
         health = doctor.Health(list(args.expect), list(args.expect))
     else:
         with bus:
