@@ -248,6 +248,7 @@ def _select_configure(parser: argparse.ArgumentParser) -> None:
 def _select_run(args: argparse.Namespace) -> int:
     from manigraph_lab.selection import select_checkpoint
     from manigraph_planner.policies import load_policy
+    from manigraph_shared.results import checkpoint_field, rounded
 
     sweep = SweepOptions.from_args(args)
     for candidate in args.checkpoints:  # a file that is no checkpoint: one line, before any cell
@@ -260,7 +261,8 @@ def _select_run(args: argparse.Namespace) -> int:
         args.table.parent.mkdir(parents=True, exist_ok=True)
         args.table.write_text(table)
     print(table)
-    print(json.dumps({"checkpoint": str(args.output), "kept": str(chosen.path), **chosen.scores}))
+    kept = {**checkpoint_field(args.output), "kept": str(chosen.path), **chosen.scores}
+    print(json.dumps(rounded(kept)))
     return 0
 
 

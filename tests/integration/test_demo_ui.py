@@ -248,7 +248,7 @@ def test_a_block_stacking_demonstration_clicked_in_chromium_trains_a_policy(
 
     checkpoint = tmp_path / "blocks.pt"
     metrics = train(world, output, checkpoint, epochs=3)
-    assert metrics["checkpoint"] == str(checkpoint)
+    assert metrics["checkpoint"]["path"] == str(checkpoint)
     from manigraph_planner.policies import load_policy
 
     policy = load_policy(str(checkpoint))

@@ -83,11 +83,30 @@ def test_train_writes_into_runs_unless_given_an_output(
     capsys.readouterr()
     assert main(["train", "demos.mcap", "--arch", "gcn", "--epochs", "1"]) == 0
     line = capsys.readouterr().out.strip().splitlines()[-1]
-    assert json.loads(line)["checkpoint"] == "runs/gcn-seed0.pt"
-    assert (tmp_path / "runs" / "gcn-seed0.pt").is_file()
+    written = tmp_path / "runs" / "gcn-seed0.pt"
+    assert json.loads(line)["checkpoint"] == {
+        "path": "runs/gcn-seed0.pt",
+        "sha256": hashlib.sha256(written.read_bytes()).hexdigest(),
+    }
     assert not (tmp_path / "checkpoints").exists()
     assert all(len(n.split(".")[1]) <= FLOAT_DIGITS for n in _floats_in(line))
 
 
 def test_runs_is_ignored_by_git() -> None:
     assert "/runs/" in (REPO / ".gitignore").read_text().splitlines()
+
+
+def test_select_names_the_checkpoint_it_wrote_by_digest(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "kept.pt"
+    candidates = [str(SAGE), str(SAGE.with_name("gated.pt"))]
+    assert main(["select", *candidates, "-o", str(out), "--episodes", "1", "--no-ray"]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    chosen = json.loads(line)
+    assert chosen["checkpoint"] == {
+        "path": str(out),
+        "sha256": hashlib.sha256(out.read_bytes()).hexdigest(),
+    }
+    assert chosen["kept"] in candidates
+    assert all(len(n.split(".")[1]) <= FLOAT_DIGITS for n in _floats_in(line))

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from manigraph_planner.threads import add_threads_option, use_threads
 from manigraph_shared.cli import Command
-from manigraph_shared.results import rounded
+from manigraph_shared.results import checkpoint_field, rounded
 
 #: Where a checkpoint goes without ``-o``: untracked (.gitignore), so training never
 #: overwrites the shipped policies in ``checkpoints/``.
@@ -121,7 +121,7 @@ def _run(args: argparse.Namespace) -> int:
         metrics=metrics,
     )
     features = list(demos.feature_spec.names)
-    print(json.dumps(rounded({"checkpoint": str(output), **metrics, "features": features})))
+    print(json.dumps(rounded({**checkpoint_field(output), **metrics, "features": features})))
     return 0
 
 
@@ -153,7 +153,7 @@ def _train_dishwasher(args: argparse.Namespace) -> int:
         data_hash=demos.data_hash,
         metrics={**metrics, "episodes": demos.episodes},
     )
-    print(json.dumps(rounded({"checkpoint": str(output), "heads": "dishwasher", **metrics})))
+    print(json.dumps(rounded({**checkpoint_field(output), "heads": "dishwasher", **metrics})))
     return 0
 
 
