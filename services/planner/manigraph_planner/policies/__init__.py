@@ -1,10 +1,7 @@
 """Task policies: registered, swappable parts the planner serves."""
 
 from manigraph_planner.dishwasher import expert as _dishwasher  # noqa: F401  (registers)
-from manigraph_planner.policies import (
-    expert,  # noqa: F401  (registers its policy)
-    size_sort_expert,  # noqa: F401  (registers, with its task)
-)
+from manigraph_planner.policies import expert  # noqa: F401  (registers its policy)
 from manigraph_planner.policies.base import (
     POLICIES,
     POLICY_FILE_LOADERS,

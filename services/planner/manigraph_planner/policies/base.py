@@ -96,10 +96,19 @@ POLICY_FILE_LOADERS.add_lazy(
 )
 
 
+#: Policy names that are no longer registered -> what replaces them (said when one is named).
+RETIRED_POLICIES = {
+    "size-sort-expert": "size sort is a task file now: use --policy expert "
+    "--task-file examples/tasks/size-sort.toml",
+}
+
+
 def load_policy(spec: str) -> Policy:
     """A registered policy by name, or a policy file (checkpoint) by path."""
     if spec in POLICIES:
         return POLICIES[spec]()
+    if spec in RETIRED_POLICIES:
+        raise PolicyError(f"policy: '{spec}' is retired; {RETIRED_POLICIES[spec]}")
     path = Path(spec)
     if path.suffix not in POLICY_FILE_LOADERS:
         known = ", ".join(POLICIES)
