@@ -208,3 +208,20 @@ def test_one_peak_per_colour_even_for_a_small_share() -> None:
     assert sorted(hue_peaks(hues, SegmentConfig())) == [3.0, 17.0, 104.0]
     wrapped = np.concatenate([np.full(500, 178), np.full(500, 1)])  # red on both ends
     assert len(hue_peaks(wrapped, SegmentConfig())) == 1
+
+
+def test_the_segmentation_picture_shows_each_segment_beside_the_depth(
+    calibration: Calibration,
+) -> None:
+    from manigraph_perception.rgbd.drawing import draw_segmentation
+
+    bgr, depth = draw(calibration, [(RED, SIDE, "red"), (GREEN, SIDE, "green")])
+    perception = RgbdPerception(calibration)
+    perception.set_layout(_layout({"block_0": RED, "block_2": GREEN}))
+    result = perception.measure(bgr, depth)
+    picture = draw_segmentation(bgr, depth, result)
+    assert picture.shape == (480, 1280, 3)
+    rows, cols = np.nonzero(result.labels == 1)
+    # The segment is tinted with its colour's hue, the table around it darkened.
+    assert picture[rows, cols].mean() != bgr[rows, cols].mean()
+    assert picture[5, 5].sum() < bgr[5, 5].sum()

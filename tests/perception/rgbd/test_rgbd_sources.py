@@ -16,7 +16,7 @@ from manigraph_perception.rgbd.pipeline import RgbdPerception
 from manigraph_perception.rgbd.sources import McapRgbdSource, RealSenseSource, open_rgbd_source
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.mcap_log import McapLogWriter
-from manigraph_shared.messages import CompressedImage, DepthImage
+from manigraph_shared.messages import CameraInfo, CompressedImage, DepthImage
 from manigraph_sim.physics.depth_noise import encode_depth_png
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -36,7 +36,14 @@ def _record(path: Path, places: list[tuple[float, float, float]]) -> None:
         image = CompressedImage(
             camera="front", stamp=stamp, sequence=sequence, format="png", data=png.tobytes()
         )
-        for message in (depth_message, image):
+        info = CameraInfo(
+            camera="front",
+            stamp=stamp,
+            width=640,
+            height=480,
+            camera_matrix=[float(v) for v in CALIBRATION.camera_matrix.ravel()],
+        )
+        for message in (info, depth_message, image):
             writer.write(message.key_for(), message.encode(), int(stamp * 1e9))
     writer.close()
 
@@ -55,6 +62,7 @@ def test_a_recording_replays_frame_by_frame_through_the_pipeline(tmp_path: Path)
         (found,) = result.detections
         assert found.colour == "blue"
         assert np.linalg.norm(found.centre[:2] - place[:2]) < 0.006
+    assert source.info is not None and source.info.width == 640
     with pytest.raises(ConfigError, match="ended after 3 RGB-D frames"):
         source.read()
     source.close()

@@ -39,6 +39,8 @@ class ObjectConfig:
     #: Lowest point under this (metres): it stands on the table (the segmentation cuts the
     #: first ~1 cm above it), so its height is its top's.
     on_table: float = 0.018
+    #: Off the table, a segment less tall than this is no object.
+    min_height: float = 0.01
 
 
 @dataclass
@@ -136,6 +138,8 @@ def describe_object(
     (cx, cy), (w, h), yaw = robust_rectangle(face[:, :2])
     hull = float(cv2.contourArea(cv2.convexHull(flat)))
     bottom = float(np.percentile(z, 2))
+    if top - bottom < config.min_height and bottom > config.on_table:
+        return None  # a sliver in the air: the band of mixed hues between two objects
     if w < h:
         w, h, yaw = h, w, yaw + np.pi / 2
     # A strip, or an L (the top edges of two sides), fills little of its rectangle.

@@ -66,12 +66,14 @@ class McapRgbdSource:
         self._ended = False
         self._next = 0.0
         self.frames = 0
+        self._pairing = self._pairs()
 
     def read(self) -> RgbdFrame | None:
         if self.rate > 0:
             time.sleep(max(0.0, self._next - time.monotonic()))
             self._next = time.monotonic() + 1 / self.rate
-        for pair in self._pairs():
+        pair = next(self._pairing, None)
+        if pair is not None:
             self.frames += 1
             return decode_pair(*pair)
         raise ConfigError(
@@ -82,7 +84,8 @@ class McapRgbdSource:
         for message in self._messages:
             if isinstance(message, CameraInfo):
                 self.info = message
-            elif isinstance(message, DepthImage):
+                continue
+            if isinstance(message, DepthImage):
                 self._depths[message.sequence] = message
             elif isinstance(message, CompressedImage):
                 self._images[message.sequence] = message
@@ -90,11 +93,11 @@ class McapRgbdSource:
                 continue
             sequence = message.sequence
             if sequence in self._depths and sequence in self._images:
-                yield self._images.pop(sequence), self._depths.pop(sequence)
                 # Older halves whose partner never came are dropped.
                 for held in (self._images, self._depths):
                     for old in [s for s in held if s < sequence]:
                         del held[old]
+                yield self._images.pop(sequence), self._depths.pop(sequence)
 
     def close(self) -> None:
         self._messages.close()

@@ -1,0 +1,201 @@
+"""RGB-D perception (no markers) against the physics sim's ground truth, on colour + depth
+frames rendered by its tripod camera (needs Vulkan: scripts/install-vulkan.sh), beside the
+ArUco pipeline's speed in the same run.
+
+For each seeded episode the expert's moves are replayed by placing each block on its goal
+(a few millimetres off, as a real placement lands) and letting physics settle; every state
+is rendered (colour, and depth through the D400-like sensor model) and perceived. Printed:
+
+* pose error of the objects seen in the frame (median, p95; target median <= 5 mm) and the
+  yaw error of the tops seen whole (target median <= 3 degrees);
+* the false "filled" rate: goals perception calls filled that the sim's rule does not (and
+  the missed ones);
+* frames/s on one core at 640 x 480 (PNG decode of colour and depth, plane, segmentation,
+  objects, tracking, Scene; target >= 15) beside the ArUco pipeline on its own rendered
+  frames (``tests/perception/frames``), measured in the same run.
+
+    nice .venv/bin/python bench/bench_rgbd.py --episodes 10
+    nice .venv/bin/python bench/bench_rgbd.py --episodes 10 --depth-noise 2 \
+        --camera-offset 0.01 --camera-tilt 1
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import sapien
+
+from manigraph_perception.calibration_file import Calibration
+from manigraph_perception.pipeline import Perception
+from manigraph_perception.rgbd.pipeline import BadFrame, RgbdPerception, decode_depth
+from manigraph_shared.markers import sim_marker_map
+from manigraph_shared.messages import EpisodeRequest, TaskLayout
+from manigraph_sim.physics.backend import PhysicsBackend
+from manigraph_sim.physics.camera import CameraConfig, ideal_calibration
+from manigraph_sim.physics.depth_noise import DepthNoise
+
+ARUCO_FRAMES = Path(__file__).resolve().parents[1] / "tests" / "perception" / "frames"
+
+
+def _yaw(quaternion: np.ndarray) -> float:
+    x, y, z, w = quaternion
+    return float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=10)
+    parser.add_argument("--task", default="stack")
+    parser.add_argument("--blocks", type=int, default=4)
+    parser.add_argument("--offset", type=float, default=0.008, help="placement error, m")
+    parser.add_argument("--depth-noise", type=float, default=1.0, help="times a D400's")
+    parser.add_argument("--camera-offset", type=float, default=0.0, help="metres")
+    parser.add_argument("--camera-tilt", type=float, default=0.0, help="degrees")
+    parser.add_argument("--seed", type=int, default=100, help="first episode seed")
+    args = parser.parse_args()
+    cv2.setNumThreads(1)
+
+    config = CameraConfig(
+        format="png",
+        depth=DepthNoise(scale=args.depth_noise),
+        markers=False,
+        pose_error=(args.camera_offset, args.camera_tilt),
+    )
+    k, base_T_camera = ideal_calibration(CameraConfig())  # the nominal calibration
+    calibration = Calibration(k, base_T_camera=base_T_camera)
+    backend = PhysicsBackend(camera=config)
+    rng = np.random.default_rng(0)
+
+    errors_mm: list[float] = []
+    yaw_deg: list[float] = []
+    false_filled = empty_goals = missed = occupied_goals = bad_frames = 0
+    frames: list[tuple[bytes, bytes]] = []
+    layouts: list[TaskLayout] = []
+    for episode in range(args.episodes):
+        seed = args.seed + episode
+        request = EpisodeRequest(
+            episode_id=f"bench-{seed}", task=args.task, blocks=args.blocks, seed=seed
+        )
+        backend.reset(request, time.time())
+        perception = RgbdPerception(calibration)
+        layout = backend.layout_message(time.time())
+        assert layout is not None and backend.world is not None
+        perception.set_layout(layout)
+        layouts.append(layout)
+        world = backend.world
+        goals = sorted(layout.goals, key=lambda g: g.position.z)
+        bodies = sorted(
+            (o for o in layout.objects if o.category == "block"),
+            key=lambda o: -world.pose(o.id)[0][2],
+        )
+        for step in range(len(goals) + 1):
+            if step > 0:  # the expert's next move: a block onto the lowest open goal
+                goal, body = goals[step - 1], bodies[(step - 1) % len(bodies)]
+                if goal.category.value != "block":
+                    continue
+                off = rng.uniform(-args.offset, args.offset, 2)
+                target = [goal.position.x + off[0], goal.position.y + off[1], goal.position.z]
+                world.entities[body.id].set_pose(sapien.Pose(target))
+                world.step(60)
+            image, _ = backend.camera_frame(time.time())  # type: ignore[misc]
+            depth_message = backend.camera_depth()
+            assert depth_message is not None
+            frames.append((image.data, depth_message.data))
+            bgr = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_COLOR)
+            depth = decode_depth(depth_message.data)
+            assert depth is not None
+            try:
+                scene, result = perception.process(bgr, depth, time.time(), time.time())
+            except BadFrame:
+                bad_frames += 1
+                continue
+            assert scene is not None
+            positions = {o.id: np.array(o.position.as_tuple()) for o in scene.objects}
+            for object_id, detection in result.matches.items():
+                centre, quaternion = world.pose(object_id)
+                errors_mm.append(float(np.linalg.norm(positions[object_id] - centre)) * 1000)
+                if not detection.covered:
+                    error = np.rad2deg(detection.yaw - _yaw(quaternion))
+                    yaw_deg.append(abs((error + 45) % 90 - 45))
+            occupied = backend.occupied_goals()
+            for goal_state in scene.goals:
+                if goal_state.id in occupied:
+                    occupied_goals += 1
+                    missed += not goal_state.filled
+                else:
+                    empty_goals += 1
+                    false_filled += goal_state.filled
+    errors = np.array(errors_mm)
+    print(
+        f"{len(frames)} frames, {args.episodes} episodes of {args.task} {args.blocks} (seeds "
+        f"{args.seed}-{args.seed + args.episodes - 1}); depth noise x{args.depth_noise}, camera "
+        f"off by {args.camera_offset} m / {args.camera_tilt} deg; {bad_frames} bad frames"
+    )
+    print(
+        f"pose error, {len(errors)} objects seen: median {np.median(errors):.2f} mm, "
+        f"p95 {np.percentile(errors, 95):.2f} mm, max {errors.max():.2f} mm (target median <= 5)"
+    )
+    print(
+        f"yaw error, {len(yaw_deg)} tops seen whole: median {np.median(yaw_deg):.2f} deg, "
+        f"p95 {np.percentile(yaw_deg, 95):.2f} deg (target median <= 3)"
+    )
+    print(
+        f"false filled: {false_filled}/{empty_goals} empty goals = "
+        f"{false_filled / max(empty_goals, 1):.4f}; missed: {missed}/{occupied_goals} filled goals"
+    )
+
+    # Speed on one core, the RGB-D pipeline on its frames and the ArUco pipeline on its own.
+    os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    cv2.setNumThreads(1)
+    perception = RgbdPerception(calibration)
+    perception.set_layout(layouts[-1])
+    t = time.perf_counter()
+    for colour, depth_png in frames:
+        bgr = cv2.imdecode(np.frombuffer(colour, np.uint8), cv2.IMREAD_COLOR)
+        depth = decode_depth(depth_png)
+        assert depth is not None
+        with contextlib.suppress(BadFrame):
+            perception.process(bgr, depth, time.time(), time.time())
+    rgbd_fps = len(frames) / (time.perf_counter() - t)
+    aruco_frames = sorted(ARUCO_FRAMES.glob("stack4-*.png"))
+    aruco = Perception(sim_marker_map(), calibration)
+    aruco_layout = TaskLayout.model_validate(
+        json.loads(aruco_frames[0].with_suffix(".json").read_text())["layout"]
+    )
+    aruco.set_layout(aruco_layout)
+    encoded = [p.read_bytes() for p in aruco_frames]
+    t = time.perf_counter()
+    for _ in range(max(1, len(frames) // len(encoded))):
+        for data in encoded:
+            grey = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
+            aruco.process(grey, time.time(), time.time())
+    aruco_fps = max(1, len(frames) // len(encoded)) * len(encoded) / (time.perf_counter() - t)
+    print(
+        f"frames/s on one core at 640 x 480: RGB-D pipeline {rgbd_fps:.1f} (target >= 15), "
+        f"ArUco pipeline {aruco_fps:.1f} ({len(encoded)} rendered marker frames), same run"
+    )
+    print(f"load average: {' '.join(f'{v:.1f}' for v in os.getloadavg())}")
+    print(
+        json.dumps(
+            {
+                "pose_median_mm": round(float(np.median(errors)), 2),
+                "pose_p95_mm": round(float(np.percentile(errors, 95)), 2),
+                "yaw_median_deg": round(float(np.median(yaw_deg)), 2),
+                "false_filled_rate": round(false_filled / max(empty_goals, 1), 4),
+                "missed_filled": missed,
+                "rgbd_fps": round(rgbd_fps, 1),
+                "aruco_fps": round(aruco_fps, 1),
+            }
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()
