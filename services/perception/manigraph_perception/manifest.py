@@ -5,6 +5,7 @@ from manigraph_shared.messages import (
     Action,
     CameraInfo,
     CompressedImage,
+    DepthImage,
     JointState,
     MarkerDetections,
     Scene,
@@ -14,9 +15,10 @@ from manigraph_shared.messages import (
 
 MANIFEST = Manifest(
     service="perception",
-    summary="camera + ArUco markers",
+    summary="camera + ArUco markers, or RGB-D",
     consumes=(
         port(CompressedImage),
+        port(DepthImage),
         port(CameraInfo),
         port(TaskLayout),
         port(Action),

@@ -4,6 +4,7 @@ from manigraph_shared.manifest import WORLD_ABILITIES, Manifest, port
 from manigraph_shared.messages import (
     CameraInfo,
     CompressedImage,
+    DepthImage,
     EmergencyStop,
     EpisodeEvent,
     EpisodeRequest,
@@ -40,6 +41,7 @@ MANIFEST = Manifest(
         port(JointTrajectoryResult, JOINTS),
         port(JointState, JOINTS),
         port(CompressedImage, CAMERA),
+        port(DepthImage, CAMERA),
         port(CameraInfo, CAMERA),
         port(TaskLayout, CAMERA),
         port(ServiceStatus),
