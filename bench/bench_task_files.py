@@ -1,0 +1,110 @@
+"""Teach a task written only as a task file, and score it at twice the objects (issue #43).
+
+For each family of ``examples/tasks/`` the bench runs, as a user types them (a new process
+each, imports included):
+
+1. ``manigraph demos --task-file SMALL --trajectories 20 --seed 0 -o DEMOS``  (seeds 0-19)
+2. ``manigraph train DEMOS --arch sage --seed 0 -o MODEL``
+3. ``manigraph eval --policy MODEL --task-file LARGE --episodes 50 --seed 2000 --json``
+   (seeds 2000-2049: used for nothing else, neither training nor tuning)
+
+and prints a table: success and wrong-object goals at the larger size, and the wall time of
+each step with "teach to run" (their sum; target <= 120 s on the 2-core machine). The load
+average is printed beside it: take timings with nothing else running. Not a test.
+
+    uv run python bench/bench_task_files.py                      # every family
+    uv run python bench/bench_task_files.py --family size-sort   # one
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+TASKS = Path(__file__).resolve().parents[1] / "examples" / "tasks"
+#: family -> (the file demonstrated, the files evaluated: twice the objects and more).
+FAMILIES = {
+    "size-sort": ("size-sort.toml", ("size-sort-8.toml", "size-sort-12.toml")),
+    "colour-sort": ("colour-sort.toml", ("colour-sort-8.toml",)),
+    "kitting": ("kitting.toml", ("kitting-6.toml",)),
+    "red-tower": ("red-tower.toml", ("red-tower-8.toml",)),
+}
+
+
+def manigraph(*args: str) -> tuple[float, str]:
+    started = time.perf_counter()
+    result = subprocess.run(
+        [sys.executable, "-m", "manigraph_shared.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=1800,
+        env={**os.environ, "MANIGRAPH_LOG_LEVEL": "WARNING"},
+    )
+    seconds = time.perf_counter() - started
+    if result.returncode != 0:
+        raise SystemExit(f"manigraph {' '.join(args)} failed:\n{result.stderr[-2000:]}")
+    return seconds, result.stdout
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--family", choices=sorted(FAMILIES), action="append")
+    parser.add_argument("--episodes", type=int, default=50, help="evaluation episodes per file")
+    parser.add_argument("--arch", default="sage", help="GNN architecture (default sage)")
+    args = parser.parse_args()
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench-task-files-") as scratch:
+        out = Path(scratch)
+        for family in args.family or list(FAMILIES):
+            small, large = FAMILIES[family]
+            demos, model = out / f"{family}.mcap", out / f"{family}.pt"
+            t_demos, _ = manigraph(
+                "demos", "--task-file", str(TASKS / small), "--trajectories", "20",
+                "--seed", "0", "-o", str(demos),
+            )  # fmt: skip
+            t_train, _ = manigraph(
+                "train", str(demos), "--arch", args.arch, "--seed", "0", "-o", str(model)
+            )
+            for index, evaluated in enumerate(large):
+                t_eval, stdout = manigraph(
+                    "eval", "--policy", str(model), "--task-file", str(TASKS / evaluated),
+                    "--episodes", str(args.episodes), "--seed", "2000", "--json",
+                )  # fmt: skip
+                summary = json.loads(stdout.strip().splitlines()[-1])
+                teach = t_demos + t_train + t_eval
+                row = {
+                    "family": family,
+                    "demonstrated": small,
+                    "evaluated": evaluated,
+                    "success": summary["success_rate"],
+                    "wrong_object": summary.get("wrong_object", 0),
+                    "demos_s": round(t_demos, 1),
+                    "train_s": round(t_train, 1),
+                    "eval_s": round(t_eval, 1),
+                    "teach_to_run_s": round(teach, 1) if index == 0 else None,
+                    "load": round(os.getloadavg()[0], 2),
+                }
+                rows.append(row)
+                print(json.dumps(row), file=sys.stderr, flush=True)
+    print("| family | demonstrated | evaluated | success | wrong object | demos s | train s "
+          "| eval s | teach to run s | load |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        teach = "-" if r["teach_to_run_s"] is None else f"{r['teach_to_run_s']:.1f}"
+        print(
+            f"| {r['family']} | {r['demonstrated']} | {r['evaluated']} | {r['success']:.2f} "
+            f"| {r['wrong_object']} | {r['demos_s']:.1f} | {r['train_s']:.1f} "
+            f"| {r['eval_s']:.1f} | {teach} | {r['load']:.2f} |"
+        )
+    print(json.dumps({"rows": rows}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
