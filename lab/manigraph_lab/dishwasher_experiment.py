@@ -48,8 +48,8 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
     # Imported here: every ``manigraph`` command loads this module to build its parser, and
     # torch with PyG takes seconds (minutes on a loaded machine) to import.
     from manigraph_lab.demos import DemoProtocol, record_demos
-    from manigraph_planner.dishwasher.expert import dishwasher_expert
-    from manigraph_planner.dishwasher.training import DishTrainConfig
+    from manigraph_planner.families.dishwasher.expert import dishwasher_expert
+    from manigraph_planner.families.dishwasher.training import DishTrainConfig
 
     config.out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
@@ -101,8 +101,8 @@ def _train_and_evaluate(
     import torch
 
     from manigraph_lab.evaluate import EvalSpec, evaluate
-    from manigraph_planner.dishwasher.gnn_policy import DishwasherGNNPolicy
-    from manigraph_planner.dishwasher.training import (
+    from manigraph_planner.families.dishwasher.gnn_policy import DishwasherGNNPolicy
+    from manigraph_planner.families.dishwasher.training import (
         DishTrainConfig,
         load_dish_demonstrations,
         train_dish,

@@ -13,8 +13,8 @@ from dataclasses import replace
 
 import pytest
 
+from manigraph_planner.families.blocks.expert import ExpertPolicy
 from manigraph_planner.policies.base import Decision, Policy
-from manigraph_planner.policies.expert import ExpertPolicy
 from manigraph_planner.service import PlannerService
 from manigraph_shared.bus import Bus
 from manigraph_shared.cell_services import CellServices

@@ -8,9 +8,9 @@ import pytest
 
 from manigraph_lab.demos import DemoProtocol, record_demos
 from manigraph_lab.episode_loop import run_episode
+from manigraph_planner.families.blocks.augment import Augmentation
 from manigraph_planner.gnn import save_checkpoint
 from manigraph_planner.policies import load_policy
-from manigraph_planner.training.augment import Augmentation
 from manigraph_planner.training.dataset import load_demonstrations
 from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.mcap_log import read_log

@@ -21,8 +21,8 @@ import pytest
 import torch
 
 from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_planner.dishwasher.expert import dishwasher_expert
-from manigraph_planner.dishwasher.training import load_dish_demonstrations
+from manigraph_planner.families.dishwasher.expert import dishwasher_expert
+from manigraph_planner.families.dishwasher.training import load_dish_demonstrations
 from manigraph_planner.policies import load_policy
 from manigraph_planner.policies.gnn import GNNPolicy
 from manigraph_planner.training.dataset import count_heads, load_demonstrations

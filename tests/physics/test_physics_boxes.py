@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from manigraph_planner.policies.expert import ExpertPolicy
+from manigraph_planner.families.blocks.expert import ExpertPolicy
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest, SkillState
 from manigraph_sim.backends import create_backend

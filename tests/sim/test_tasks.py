@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from manigraph_planner.policies.expert import ExpertPolicy
+from manigraph_planner.families.blocks.expert import ExpertPolicy
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeEvent, EpisodeRequest, GripperOp, RobotCommand
 from manigraph_sim.geometric.backend import GeometricBackend

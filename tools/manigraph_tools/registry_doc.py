@@ -26,7 +26,8 @@ REGISTRIES: tuple[tuple[str, str, str], ...] = (
     ("ARCHITECTURES", "manigraph_planner.gnn.models.backbone", "manigraph_planner.gnn.models"),
     ("SOURCES", "manigraph_planner.training.sources", "manigraph_planner.training.sources"),
     ("BATCH_LAYOUTS", "manigraph_planner.training.batch_layouts", "manigraph_planner.training"),
-    ("RECIPES", "manigraph_planner.training.recipes", "manigraph_planner.training.recipes"),
+    ("FAMILIES", "manigraph_planner.families.family", "manigraph_planner.families"),
+    ("RECIPES", "manigraph_planner.families.blocks.recipes", "manigraph_planner.families"),
     ("FORMATS", "manigraph_tools.interop.formats", "manigraph_tools.interop.formats"),
     ("BASELINES", "manigraph_lab.rl.baselines", "manigraph_lab.rl.baselines"),
 )

@@ -92,9 +92,9 @@ def _run(args: argparse.Namespace) -> int:
 
             raise ConfigError("device", "the dishwasher recipe trains on the CPU only")
         return _train_dishwasher(args)
+    from manigraph_planner.families.blocks.recipes import augmentation_for
     from manigraph_planner.gnn import save_checkpoint
     from manigraph_planner.training.dataset import load_demonstrations
-    from manigraph_planner.training.recipes import augmentation_for
     from manigraph_planner.training.trainer import TrainConfig, train
 
     # TrainConfig checks the architecture (ModelConfig) and takes the defaults of its recipe
@@ -128,7 +128,7 @@ def _run(args: argparse.Namespace) -> int:
 def _train_dishwasher(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
-    from manigraph_planner.dishwasher.training import (
+    from manigraph_planner.families.dishwasher.training import (
         DishTrainConfig,
         load_dish_demonstrations,
         train_dish,

@@ -9,10 +9,10 @@ import pytest
 import torch
 
 from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_planner.dishwasher.augment import DishSample, add_dishes, counter_dishes
-from manigraph_planner.dishwasher.expert import dishwasher_expert, preferred
-from manigraph_planner.dishwasher.features import DISH_FEATURE_SPEC, TRAY_ACTIONS
-from manigraph_planner.dishwasher.training import DishDemos, load_dish_demonstrations
+from manigraph_planner.families.dishwasher.augment import DishSample, add_dishes, counter_dishes
+from manigraph_planner.families.dishwasher.expert import dishwasher_expert, preferred
+from manigraph_planner.families.dishwasher.features import DISH_FEATURE_SPEC, TRAY_ACTIONS
+from manigraph_planner.families.dishwasher.training import DishDemos, load_dish_demonstrations
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, SceneRack, Vector3
 from manigraph_shared.orientations import ORIENTATIONS
 

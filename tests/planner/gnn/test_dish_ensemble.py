@@ -7,11 +7,14 @@ from pathlib import Path
 import pytest
 import torch
 
-from manigraph_planner.dishwasher.ensemble import DishEnsembleNet
-from manigraph_planner.dishwasher.features import dish_scene_to_graph
-from manigraph_planner.dishwasher.gnn_policy import DishwasherGNNPolicy, decision_from_heads
-from manigraph_planner.dishwasher.net import DishHeads, DishPolicyNet
-from manigraph_planner.dishwasher.training import DishTrainConfig, member_seed
+from manigraph_planner.families.dishwasher.ensemble import DishEnsembleNet
+from manigraph_planner.families.dishwasher.features import dish_scene_to_graph
+from manigraph_planner.families.dishwasher.gnn_policy import (
+    DishwasherGNNPolicy,
+    decision_from_heads,
+)
+from manigraph_planner.families.dishwasher.net import DishHeads, DishPolicyNet
+from manigraph_planner.families.dishwasher.training import DishTrainConfig, member_seed
 from manigraph_planner.gnn.checkpoint import load_checkpoint, save_checkpoint
 from manigraph_planner.gnn.models import ModelConfig
 from manigraph_planner.policies import load_policy
@@ -38,7 +41,9 @@ def member(seed: int) -> DishPolicyNet:
 def rack_top_out_scene(objects: int = 4):  # type: ignore[no-untyped-def]
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=objects), 0.0)
-    backend.dishwasher.toggle("rack_top")  # type: ignore[union-attr]
+    # The backend's one world (``world``; ``dishwasher`` before the sim's families).
+    world = getattr(backend, "dishwasher", None) or backend.world
+    world.toggle("rack_top")  # type: ignore[union-attr]
     return backend.scene(1.0)
 
 
@@ -98,8 +103,8 @@ def test_training_several_members_makes_an_ensemble_whose_first_is_the_single_ne
     tmp_path: Path,
 ) -> None:
     from manigraph_lab.demos import DemoProtocol, record_demos
-    from manigraph_planner.dishwasher.expert import dishwasher_expert
-    from manigraph_planner.dishwasher.training import load_dish_demonstrations, train_dish
+    from manigraph_planner.families.dishwasher.expert import dishwasher_expert
+    from manigraph_planner.families.dishwasher.training import load_dish_demonstrations, train_dish
 
     path = tmp_path / "demos.mcap"
     record_demos(

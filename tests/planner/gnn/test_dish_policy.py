@@ -8,11 +8,14 @@ import pytest
 import torch
 
 from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_planner.dishwasher.expert import dishwasher_expert
-from manigraph_planner.dishwasher.features import DISH_FEATURE_SPEC, dish_scene_to_graph
-from manigraph_planner.dishwasher.gnn_policy import DishwasherGNNPolicy, decision_from_heads
-from manigraph_planner.dishwasher.net import DishHeads, DishPolicyNet
-from manigraph_planner.dishwasher.training import (
+from manigraph_planner.families.dishwasher.expert import dishwasher_expert
+from manigraph_planner.families.dishwasher.features import DISH_FEATURE_SPEC, dish_scene_to_graph
+from manigraph_planner.families.dishwasher.gnn_policy import (
+    DishwasherGNNPolicy,
+    decision_from_heads,
+)
+from manigraph_planner.families.dishwasher.net import DishHeads, DishPolicyNet
+from manigraph_planner.families.dishwasher.training import (
     DishTrainConfig,
     dish_loss,
     load_dish_demonstrations,
@@ -398,7 +401,7 @@ def test_the_shipped_dishwasher_checkpoints_load_and_act(preference: str) -> Non
 def test_dropping_dishes_keeps_the_demonstrated_decision(demos) -> None:  # type: ignore[no-untyped-def]
     import random
 
-    from manigraph_planner.dishwasher.augment import drop_dishes
+    from manigraph_planner.families.dishwasher.augment import drop_dishes
 
     rng = random.Random(0)
     shrunk = 0

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from manigraph_planner.families.blocks.expert import ExpertPolicy
 from manigraph_planner.policies.base import Decision
-from manigraph_planner.policies.expert import ExpertPolicy
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
 
 EXPERT = ExpertPolicy()

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import pytest
 
-from manigraph_planner.gnn.models import ARCHITECTURES
-from manigraph_planner.training.recipes import (
+from manigraph_planner.families.blocks.recipes import (
     GATED_MAX_LEVELS,
     RECIPES,
     augmentation_for,
     resample_every_for,
 )
+from manigraph_planner.gnn.models import ARCHITECTURES
 from manigraph_planner.training.trainer import TrainConfig
 from manigraph_shared.errors import ConfigError
 

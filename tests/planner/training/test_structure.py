@@ -6,11 +6,9 @@ import pytest
 import torch
 
 from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_planner.policies import load_policy
-from manigraph_planner.policies.expert import ExpertPolicy
-from manigraph_planner.training.augment import Augmentation
-from manigraph_planner.training.dataset import Sample, load_demonstrations
-from manigraph_planner.training.structure import (
+from manigraph_planner.families.blocks.augment import Augmentation
+from manigraph_planner.families.blocks.expert import ExpertPolicy
+from manigraph_planner.families.blocks.structure import (
     BLOCK,
     COVER,
     Graph,
@@ -25,6 +23,8 @@ from manigraph_planner.training.structure import (
     is_closing,
     open_box_contents,
 )
+from manigraph_planner.policies import load_policy
+from manigraph_planner.training.dataset import Sample, load_demonstrations
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
 
 GEOMETRY = SceneGeometry()

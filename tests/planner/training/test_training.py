@@ -9,10 +9,10 @@ import torch
 
 from manigraph_lab.demos import DemoProtocol, record_demos
 from manigraph_lab.evaluate import EvalSpec, evaluate
+from manigraph_planner.families.blocks.augment import Augmentation
 from manigraph_planner.gnn import load_checkpoint, save_checkpoint
 from manigraph_planner.policies import load_policy
 from manigraph_planner.policies.gnn import GNNPolicy
-from manigraph_planner.training.augment import Augmentation
 from manigraph_planner.training.dataset import load_demonstrations
 from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.errors import LogError

@@ -1,7 +1,7 @@
-"""Task policies: registered, swappable parts the planner serves."""
+"""Task policies: registered, swappable parts the planner serves. Each task family registers
+its experts (``families/<name>/``); importing this package imports them all."""
 
-from manigraph_planner.dishwasher import expert as _dishwasher  # noqa: F401  (registers)
-from manigraph_planner.policies import expert  # noqa: F401  (registers its policy)
+from manigraph_planner import families  # noqa: F401  (registers each family's experts)
 from manigraph_planner.policies.base import (
     POLICIES,
     POLICY_FILE_LOADERS,

@@ -8,6 +8,7 @@ from pathlib import Path
 import torch
 from torch import Tensor
 
+from manigraph_planner.families import family_for_heads
 from manigraph_planner.gnn.checkpoint import CheckpointInfo, load_checkpoint
 from manigraph_planner.gnn.features import GraphState, scene_to_graph
 from manigraph_planner.gnn.models import PolicyNet
@@ -204,13 +205,13 @@ def _compatible(object_codes: Tensor, goal_codes: Tensor, admitted: Tensor | Non
 
 def load_gnn_policy(path: Path) -> Policy:
     """The ``.pt`` policy file loader (registered in ``policies.base.POLICY_FILE_LOADERS``):
-    a :class:`GNNPolicy`, or a dishwasher policy for a checkpoint with ``dishwasher`` heads.
+    a :class:`GNNPolicy`, or the policy of the family whose heads the checkpoint has
+    (``PlannerFamily.policy``: the dishwasher's for ``dishwasher`` heads).
     Its network holds the weights for the dense path only: serving never imports PyG (the
     explainer rebuilds the message-passing network it needs)."""
-    from manigraph_planner.dishwasher.gnn_policy import DishwasherGNNPolicy
-    from manigraph_planner.dishwasher.net import DishPolicyNet
-
     net, info = load_checkpoint(path, message_passing=False)
-    if isinstance(net, DishPolicyNet):
-        return DishwasherGNNPolicy(net, info)
-    return GNNPolicy(net, info)
+    policy = family_for_heads(net.config.heads).part("policy")
+    if policy is None:
+        return GNNPolicy(net, info)
+    loaded: Policy = policy(net, info)
+    return loaded

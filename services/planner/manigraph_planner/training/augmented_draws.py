@@ -1,7 +1,7 @@
 """The augmented training sets of one run, each drawn while the network trains on the one before.
 
 A recipe that resamples (``resample_every``) draws a fresh augmented set every few epochs; the
-structural steps of :mod:`~manigraph_planner.training.structure` are Python, about 1.3 s a
+structural steps of :mod:`~manigraph_planner.families.blocks.structure` are Python, about 1.3 s a
 draw on this machine, 15 draws in a 150-epoch run. A thread would not help (the training loop
 and the draws both need the GIL), so after the first draw, taken in line, the others run in
 one :class:`torch.utils.data.DataLoader` worker process, one draw ahead of the trainer, which
@@ -23,7 +23,7 @@ import torch
 from torch import Tensor
 from torch.utils.data import DataLoader, IterableDataset
 
-from manigraph_planner.training.augment import Augmentation
+from manigraph_planner.families.blocks.augment import Augmentation
 from manigraph_planner.training.dataset import Sample
 
 __all__ = ["AugmentedDraws", "Draws", "InlineDraws", "PackedDraw", "draw_epochs"]

@@ -5,8 +5,8 @@ data: ``manigraph demos`` output, the demonstration page's (``manigraph demo-ui`
 recorded with ``manigraph up --record``; so is a LeRobot dataset that ``manigraph export``
 wrote (``training.sources`` says which reader takes a path). An action is paired with the
 scene whose ``episode_id`` and ``sequence`` it names (``scene_sequence``). Decisions on a
-dishwasher scene (one with racks) are the four-headed policy's (``dishwasher.training``) and
-are skipped here; :func:`count_heads` says which kind a log holds.
+scene of a family with heads of its own (``families.family_of``: the dishwasher's four) are
+its trainer's and are skipped here; :func:`count_heads` says which kind a log holds.
 
 What a node's features are is learned from the paired scenes too
 (:meth:`~manigraph_planner.gnn.task_features.TaskFeatures.learn`): the paper's five columns
@@ -24,7 +24,9 @@ from pathlib import Path
 import torch
 from torch import Tensor
 
+from manigraph_planner.families import family_of
 from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec, GraphState, scene_to_graph
+from manigraph_planner.gnn.models.config import HEADS
 from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_planner.training.sources import read_source
 from manigraph_shared.errors import LogError
@@ -67,20 +69,24 @@ def read_decisions(paths: Iterable[Path]) -> tuple[dict[tuple[str, int], Scene],
     return scenes, actions
 
 
-#: The policy heads a decision trains: on a scene with racks the dishwasher's four, else the
-#: paper's object and goal (``ModelConfig.heads``).
-DISHWASHER_HEADS = "dishwasher"
+#: The heads this module's samples train: the paper's object and goal (``ModelConfig.heads``).
 OBJECT_GOAL_HEADS = "object-goal"
 
 
+def heads_of(scene: Scene) -> str:
+    """The heads a decision on ``scene`` trains: its task family's (``families.family_of``)."""
+    return family_of(scene).heads
+
+
 def count_heads(paths: Iterable[Path]) -> dict[str, int]:
-    """How many decisions of the logs train each kind of policy (those paired with a scene)."""
+    """How many decisions of the logs train each kind of policy (those paired with a scene),
+    by heads (every registered heads, the paper's first)."""
     scenes, actions = read_decisions(paths)
-    counts = {OBJECT_GOAL_HEADS: 0, DISHWASHER_HEADS: 0}
+    counts = dict.fromkeys(HEADS, 0)
     for action in actions:
         scene = scenes.get((action.episode_id, action.scene_sequence))
         if scene is not None:
-            counts[DISHWASHER_HEADS if scene.racks else OBJECT_GOAL_HEADS] += 1
+            counts[heads_of(scene)] += 1
     return counts
 
 
@@ -94,7 +100,7 @@ def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
     scenes, actions = read_decisions(paths)
     paired = [scenes.get((action.episode_id, action.scene_sequence)) for action in actions]
     try:
-        task = TaskFeatures.learn(s for s in paired if s is not None and not s.racks)
+        task = TaskFeatures.learn(s for s in paired if s is not None and _trains_here(s))
     except ValueError as exc:
         raise LogError(f"demonstrations: {exc}") from None
     spec = FeatureSpec.for_task(task)
@@ -103,7 +109,8 @@ def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
     skipped = 0
     episodes = set()
     for action, scene in zip(actions, paired, strict=True):
-        sample = _sample(scene, action, spec) if scene is not None and not scene.racks else None
+        trains = scene is not None and _trains_here(scene)
+        sample = _sample(scene, action, spec) if scene is not None and trains else None
         if sample is None:
             skipped += 1
             continue
@@ -114,6 +121,12 @@ def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
     if not samples:
         raise LogError("demonstrations: no action could be paired with the scene it was decided on")
     return Demonstrations(samples, digest.hexdigest()[:16], len(episodes), skipped, spec)
+
+
+def _trains_here(scene: Scene) -> bool:
+    """Whether a decision on ``scene`` trains the object-goal heads (another family's heads
+    are trained by its own ``PlannerFamily.trainer``)."""
+    return heads_of(scene) == OBJECT_GOAL_HEADS
 
 
 def _sample(scene: Scene, action: Action, spec: FeatureSpec = FEATURE_SPEC) -> Sample | None:

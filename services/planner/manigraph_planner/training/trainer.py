@@ -13,9 +13,10 @@ from typing import TextIO
 
 import torch
 
+from manigraph_planner.families.blocks.augment import Augmentation
+from manigraph_planner.families.blocks.recipes import augmentation_for, resample_every_for
 from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
-from manigraph_planner.training.augment import Augmentation
 from manigraph_planner.training.augmented_draws import (
     AugmentedDraws,
     Draws,
@@ -26,7 +27,6 @@ from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
 from manigraph_planner.training.dataset import Demonstrations, Sample
 from manigraph_planner.training.flat_adam import FlatAdam
 from manigraph_planner.training.padded_batch import PackedSamples, PaddedBatch
-from manigraph_planner.training.recipes import augmentation_for, resample_every_for
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.progress import Progress
 

@@ -3,7 +3,7 @@
 Registered by architecture name in :data:`RECIPES`, each with its options (copies per sample,
 epochs between fresh draws) whose defaults are that architecture's; ``manigraph train
 --copies/--resample-every`` override them. Why each recipe is what it is: the module
-docstring of :mod:`~manigraph_planner.training.augment`. A new architecture registers its
+docstring of :mod:`~manigraph_planner.families.blocks.augment`. A new architecture registers its
 recipe here too (``TrainConfig`` refuses an architecture without one)::
 
     @RECIPES.register("mine", options=RecipeOptions, help="every step")
@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-from manigraph_planner.training.augment import Augmentation
+from manigraph_planner.families.blocks.augment import Augmentation
 from manigraph_shared.options import Interval, Options, option
 from manigraph_shared.registry import Registry
 

@@ -1,7 +1,32 @@
-"""The dishwasher task's planner (docs/dishwasher.md): its expert (:mod:`.expert`, registered
-as ``dishwasher-top-bottom`` and ``dishwasher-left-right``), its graph state
+"""The dishwasher family's planner (docs/dishwasher.md): its expert (:mod:`.expert`,
+registered as ``dishwasher-top-bottom`` and ``dishwasher-left-right``), its graph state
 (:mod:`.features`), its four-headed network and ensemble (:mod:`.net`, :mod:`.ensemble`),
 the policy that decodes them (:mod:`.gnn_policy`) and their training (:mod:`.training`,
-:mod:`.augment`). The block task's counterparts live in ``gnn/``, ``policies/`` and
-``training/``; the registries point here (``policies/__init__.py``,
-``gnn/models/config.HEADS``, ``gnn/models/build.policy_net_for``)."""
+:mod:`.augment`), registered below as one :class:`~manigraph_planner.families.PlannerFamily`.
+"""
+
+from manigraph_planner.families.dishwasher import expert  # noqa: F401  (registers its experts)
+from manigraph_planner.families.family import PlannerFamily, register_family
+from manigraph_shared.messages import Scene
+
+
+def _has_racks(scene: Scene) -> bool:
+    """A dishwasher scene shows its racks (the trays the expert opens and closes)."""
+    return bool(scene.racks)
+
+
+FAMILY = register_family(
+    PlannerFamily(
+        name="dishwasher",
+        heads="dishwasher",
+        experts=("dishwasher-top-bottom", "dishwasher-left-right"),
+        matches=_has_racks,
+        feature_spec="manigraph_planner.families.dishwasher.features:DISH_FEATURE_SPEC",
+        network="manigraph_planner.families.dishwasher.ensemble:dish_network",
+        policy="manigraph_planner.families.dishwasher.gnn_policy:DishwasherGNNPolicy",
+        recipe="manigraph_planner.families.dishwasher.training:DishTrainConfig",
+        trainer="manigraph_planner.families.dishwasher.training:train_dish",
+        ensembles=True,
+        help="dishes into racks: object, goal, orientation and tray-action heads",
+    )
+)

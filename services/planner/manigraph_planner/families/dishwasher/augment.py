@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor
 
-from manigraph_planner.dishwasher.features import DISH_FEATURE_SPEC, TRAY_ACTIONS
+from manigraph_planner.families.dishwasher.features import DISH_FEATURE_SPEC, TRAY_ACTIONS
 from manigraph_shared.messages import TrayAction
 
 __all__ = ["DishSample", "add_dishes", "counter_dishes", "drop_dishes"]

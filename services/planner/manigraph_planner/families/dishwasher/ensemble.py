@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import torch
 from torch import Tensor, nn
 
-from manigraph_planner.dishwasher.net import DishHeads, DishPolicyNet
+from manigraph_planner.families.dishwasher.net import DishHeads, DishPolicyNet
 from manigraph_planner.gnn.models.config import ModelConfig
 
 __all__ = ["DishEnsembleNet"]
@@ -66,3 +66,11 @@ class DishEnsembleNet(DishPolicyNet):
 
     def _members(self) -> list[DishPolicyNet]:
         return [m for m in self.members if isinstance(m, DishPolicyNet)]
+
+
+def dish_network(config: ModelConfig, message_passing: bool = True) -> DishPolicyNet:
+    """The dishwasher heads' network for ``config``: one :class:`DishPolicyNet`, or an
+    ensemble of them (``config.ensemble`` > 1); the family's ``network`` part."""
+    if config.ensemble > 1:
+        return DishEnsembleNet(config, message_passing=message_passing)
+    return DishPolicyNet(config, message_passing)

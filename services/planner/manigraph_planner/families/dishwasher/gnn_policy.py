@@ -6,7 +6,7 @@ import itertools
 
 import torch
 
-from manigraph_planner.dishwasher.features import (
+from manigraph_planner.families.dishwasher.features import (
     FILLED_COLUMN,
     ORIENTATION_COLUMNS,
     POSITION_COLUMNS,
@@ -14,7 +14,7 @@ from manigraph_planner.dishwasher.features import (
     DishGraph,
     dish_scene_to_graph,
 )
-from manigraph_planner.dishwasher.net import DishHeads, DishPolicyNet
+from manigraph_planner.families.dishwasher.net import DishHeads, DishPolicyNet
 from manigraph_planner.gnn.checkpoint import CheckpointInfo
 from manigraph_planner.policies.base import Decision, Policy
 from manigraph_shared.messages import TRAY_RACKS, Scene, TrayAction

@@ -25,7 +25,7 @@ from typing import NamedTuple
 import torch
 from torch import Tensor, nn
 
-from manigraph_planner.dishwasher.features import DISH_FEATURE_SPEC
+from manigraph_planner.families.dishwasher.features import DISH_FEATURE_SPEC
 from manigraph_planner.gnn.models.config import ModelConfig
 from manigraph_planner.gnn.models.policy_net import PolicyNet
 from manigraph_shared.orientations import NUM_ORIENTATIONS

@@ -25,19 +25,19 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from manigraph_planner.dishwasher.augment import (
+from manigraph_planner.families.dishwasher.augment import (
     DishSample,
     add_dishes,
     counter_dishes,
     drop_dishes,
 )
-from manigraph_planner.dishwasher.ensemble import DishEnsembleNet
-from manigraph_planner.dishwasher.features import (
+from manigraph_planner.families.dishwasher.ensemble import DishEnsembleNet
+from manigraph_planner.families.dishwasher.features import (
     DISH_FEATURE_SPEC,
     TRAY_ACTIONS,
     dish_scene_to_graph,
 )
-from manigraph_planner.dishwasher.net import DishPolicyNet
+from manigraph_planner.families.dishwasher.net import DishPolicyNet
 from manigraph_planner.gnn.models import ModelConfig
 from manigraph_planner.training.dataset import read_decisions
 from manigraph_shared.errors import ConfigError, LogError

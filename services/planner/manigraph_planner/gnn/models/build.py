@@ -1,9 +1,10 @@
 """The network a :class:`ModelConfig` asks for, by its heads: the block policy's
-:class:`PolicyNet`, or a task's own network (the dishwasher's four heads, an ensemble of
-them)."""
+:class:`PolicyNet`, or the network its task family registers for its heads (the
+dishwasher's four heads, an ensemble of them)."""
 
 from __future__ import annotations
 
+from manigraph_planner.families import family_for_heads
 from manigraph_planner.gnn.models.config import ModelConfig
 from manigraph_planner.gnn.models.policy_net import PolicyNet
 
@@ -11,17 +12,14 @@ __all__ = ["policy_net_for", "with_message_passing"]
 
 
 def policy_net_for(config: ModelConfig, message_passing: bool = True) -> PolicyNet:
-    """The network class ``config`` asks for: the block policy's, a dishwasher network, or
-    an ensemble of them (``message_passing``: see :class:`PolicyNet`)."""
-    if config.heads != "dishwasher":
+    """The network class ``config`` asks for: the paper's :class:`PolicyNet`, or the network
+    of the family whose heads ``config`` has (``PlannerFamily.network``: the dishwasher's
+    four-headed network or an ensemble of them). ``message_passing``: see :class:`PolicyNet`."""
+    network = family_for_heads(config.heads).part("network")
+    if network is None:
         return PolicyNet(config, message_passing)
-    # Imported here: the dishwasher's networks build on this package (gnn.models).
-    from manigraph_planner.dishwasher.ensemble import DishEnsembleNet
-    from manigraph_planner.dishwasher.net import DishPolicyNet
-
-    if config.ensemble > 1:
-        return DishEnsembleNet(config, message_passing=message_passing)
-    return DishPolicyNet(config, message_passing)
+    net: PolicyNet = network(config, message_passing)
+    return net
 
 
 def with_message_passing(net: PolicyNet) -> PolicyNet:

@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from manigraph_planner.families import FAMILIES, family_for_heads
 from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec
 from manigraph_planner.gnn.models.backbone import ARCHITECTURES
 from manigraph_shared.errors import ConfigError
@@ -14,12 +15,15 @@ from manigraph_shared.registry import Registry
 __all__ = ["HEADS", "ModelConfig", "feature_spec_for"]
 
 #: The policy's output heads -> the feature spec its graph states are built with.
-#: ``object-goal``: the paper's node logits (object and goal); ``dishwasher``: those plus an
-#: orientation per object node and a tray action per graph (four heads).
-#: A task's own heads point at its package's spec, imported when first used.
+#: ``object-goal``: the paper's node logits (object and goal), over the paper's five columns
+#: (or a task file's, stamped in the checkpoint). A task family with heads of its own
+#: (``PlannerFamily.heads``, e.g. the dishwasher's four) points at its folder's spec,
+#: imported when first used.
 HEADS: Registry[FeatureSpec] = Registry("heads")
 HEADS.add("object-goal", FEATURE_SPEC)
-HEADS.add_lazy("dishwasher", "manigraph_planner.dishwasher.features:DISH_FEATURE_SPEC")
+for _name, _family in FAMILIES.items():
+    if _family.heads not in HEADS and _family.feature_spec is not None:
+        HEADS.add_lazy(_family.heads, _family.feature_spec, help=f"the {_name} family's")
 
 
 def feature_spec_for(heads: str) -> FeatureSpec:
@@ -42,9 +46,11 @@ class ModelConfig:
             layer. All ones (the default) feeds the paper's raw features; e.g.
             ``(1, 10, 10, 10, 1)`` would express positions in decimetres. Recorded in the
             checkpoint so inference scales exactly like training. Default: all ones.
-        heads: ``object-goal`` (the block tasks) or ``dishwasher`` (:data:`HEADS`).
-        ensemble: independently trained members whose logits are averaged (``dishwasher``
-            heads only; 1, the default, is one plain network).
+        heads: ``object-goal`` (the block tasks) or a family's own (``dishwasher``;
+            :data:`HEADS`).
+        ensemble: independently trained members whose logits are averaged (heads of a
+            family whose networks may be ensembles: ``dishwasher``; 1, the default, is one
+            plain network).
         features: a task's feature spec (:meth:`FeatureSpec.for_task`, ``object-goal`` heads
             only); None, the heads' own. Not in :meth:`to_dict`: the checkpoint stamps it as
             its ``feature_spec`` and :meth:`from_dict` takes it back from there.
@@ -94,9 +100,12 @@ class ModelConfig:
                 f"must equal the feature spec's {spec.num_features} features, "
                 f"got {self.in_channels}",
             )
-        if self.ensemble > 1 and self.heads != "dishwasher":
+        if self.ensemble > 1 and not family_for_heads(self.heads).ensembles:
+            with_members = [f.heads for _, f in FAMILIES.items() if f.ensembles]
             raise ConfigError(
-                "ensemble", f"only 'dishwasher' heads have members, not {self.heads!r}"
+                "ensemble",
+                f"only {', '.join(repr(h) for h in with_members)} heads have members, "
+                f"not {self.heads!r}",
             )
         assert self.feature_scale is not None
         scale = tuple(self.feature_scale)

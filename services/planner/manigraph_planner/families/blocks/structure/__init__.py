@@ -3,7 +3,7 @@ r"""Label-preserving structural augmentation: taller towers and distractor boxes
 Twenty box packing/unpacking demonstrations with K = 3, 4 show towers of at most four blocks,
 one box and one storage place. Two edits of a demonstrated graph show the network scenes
 like the ones it is tested on, and **never change the expert's choice** (each argued below
-from the expert's three rules in :mod:`manigraph_planner.policies.expert`, and checked by
+from the expert's three rules in :mod:`manigraph_planner.families.blocks.expert`, and checked by
 ``tests/planner/training/test_structure.py`` against the expert itself):
 
 * **Tower extension.** Every free-standing source tower (a column of blocks in no goal, away
@@ -32,7 +32,7 @@ The graph and its sizes are in :mod:`.graph`, the tower edits in :mod:`.towers`,
 cover edits in :mod:`.boxes`.
 """
 
-from manigraph_planner.training.structure.boxes import (
+from manigraph_planner.families.blocks.structure.boxes import (
     BOX_CELLS,
     add_distractors,
     add_open_box,
@@ -41,7 +41,7 @@ from manigraph_planner.training.structure.boxes import (
     is_closing,
     open_box_contents,
 )
-from manigraph_planner.training.structure.graph import (
+from manigraph_planner.families.blocks.structure.graph import (
     BLOCK,
     BLOCK_GOAL,
     COLUMN_TOLERANCE,
@@ -50,7 +50,7 @@ from manigraph_planner.training.structure.graph import (
     Graph,
     SceneGeometry,
 )
-from manigraph_planner.training.structure.towers import (
+from manigraph_planner.families.blocks.structure.towers import (
     add_finished_tower,
     drop_finished_pairs,
     extend_towers,

@@ -8,7 +8,7 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
-from manigraph_planner.training.structure.graph import (
+from manigraph_planner.families.blocks.structure.graph import (
     BLOCK,
     BLOCK_GOAL,
     COVER,

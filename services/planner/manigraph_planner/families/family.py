@@ -1,0 +1,113 @@
+"""A task family's part of the planner, as one registered unit (docs/architecture.md).
+
+A family owns what the planner does differently for its scenes: which scenes are its
+(:attr:`PlannerFamily.matches`), the network heads its policies are trained with and the
+feature spec of their graph states, the network and policy a checkpoint with those heads
+loads as, its experts and its training recipe. Its folder (``families/<name>/``) holds that
+code and its ``__init__`` registers the unit in :data:`FAMILIES` in one statement;
+``families/__init__.py`` imports each family with one line. The generic layers (``gnn/``,
+``policies/``, ``training/``, ``explain/``) ask the registry, never which family a scene is:
+
+    family_of(scene).heads                 # what a decision on this scene trains
+    family_for_heads(config.heads).network # what a checkpoint with these heads builds
+
+The heavy parts (networks, policies, training, anything importing torch) are named as
+``"module:attribute"`` and imported when first used (:meth:`PlannerFamily.part`), so
+registering a family and listing the policies stays torch-free.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.messages import Scene
+from manigraph_shared.registry import Registry
+
+__all__ = ["FAMILIES", "PlannerFamily", "family_for_heads", "family_of"]
+
+
+def _any_scene(scene: Scene) -> bool:
+    return True
+
+
+@dataclass(frozen=True)
+class PlannerFamily:
+    """One task family's planner parts.
+
+    Args:
+        name: the family (``blocks``, ``dishwasher``), as in the sim's and skills' registries.
+        heads: the network heads its learned policies have (``ModelConfig.heads``, a
+            :data:`~manigraph_planner.gnn.models.config.HEADS` entry).
+        experts: the policy names of its experts (registered in ``POLICIES`` by its expert
+            module, which its ``__init__`` imports).
+        matches: whether a scene is this family's (what the scene itself shows).
+        fallback: the family of every scene no other family matches (one family: blocks, whose
+            object-goal heads are the paper's and any task file's).
+        feature_spec: ``"module:attribute"`` of its heads' feature spec; None: the paper's
+            (already registered under ``object-goal``).
+        network: ``"module:attribute"`` of ``(ModelConfig, message_passing) -> PolicyNet``
+            for its heads; None: the paper's :class:`PolicyNet`.
+        policy: ``"module:attribute"`` of ``(net, CheckpointInfo) -> Policy`` for a loaded
+            checkpoint; None: :class:`~manigraph_planner.policies.gnn.GNNPolicy`.
+        recipe: ``"module:attribute"`` of its training recipe (augmentation and defaults).
+        trainer: ``"module:attribute"`` of its own training loop; None: the generic trainer
+            (``training.trainer``).
+        ensembles: whether its networks may be ensembles (``ModelConfig.ensemble`` > 1).
+    """
+
+    name: str
+    heads: str
+    experts: tuple[str, ...]
+    matches: Callable[[Scene], bool] = _any_scene
+    fallback: bool = False
+    feature_spec: str | None = None
+    network: str | None = None
+    policy: str | None = None
+    recipe: str | None = None
+    trainer: str | None = None
+    ensembles: bool = False
+    help: str = ""
+
+    def part(self, name: str) -> Any:
+        """The part ``name`` (``network``, ``policy``, ``recipe``, ...) imported, or None."""
+        path = getattr(self, name)
+        if path is None:
+            return None
+        module, _, attribute = path.partition(":")
+        return getattr(importlib.import_module(module), attribute)
+
+
+#: Every task family the planner knows, by name; each registers itself in its folder.
+FAMILIES: Registry[PlannerFamily] = Registry("family")
+
+
+def register_family(family: PlannerFamily) -> PlannerFamily:
+    """Add ``family`` to :data:`FAMILIES` (its one registration statement)."""
+    FAMILIES.add(family.name, family, help=family.help)
+    return family
+
+
+def family_of(scene: Scene) -> PlannerFamily:
+    """The family ``scene`` belongs to: the first that matches it, else the fallback."""
+    fallback = None
+    for _, family in FAMILIES.items():
+        if family.fallback:
+            fallback = fallback or family
+        elif family.matches(scene):
+            return family
+    if fallback is None:
+        raise ConfigError("family", "no family takes this scene and none is the fallback")
+    return fallback
+
+
+def family_for_heads(heads: str) -> PlannerFamily:
+    """The family whose policies have ``heads`` (``ConfigError`` naming the known heads)."""
+    for _, family in FAMILIES.items():
+        if family.heads == heads:
+            return family
+    known = ", ".join(family.heads for _, family in FAMILIES.items())
+    raise ConfigError("heads", f"'{heads}' is not one of {known}")
