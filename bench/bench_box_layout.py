@@ -1,6 +1,6 @@
 """Does the physics world's box layout alone cost a policy episodes? The same seeds of a box
 task in the geometric world (no physics), once in the demonstrations' box layout and once in
-the physics world's (``manigraph_sim.physics.box_layout.PHYSICS_BOXES``), in process.
+the physics world's (``manigraph_sim.families.blocks.physics_boxes.PHYSICS_BOXES``), in process.
 
     python bench/bench_box_layout.py --policy checkpoints/sage.pt --episodes 20
 """
@@ -14,8 +14,8 @@ from functools import partial
 from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.policies.base import load_policy
 from manigraph_shared.messages import EpisodeRequest
+from manigraph_sim.families.blocks.physics_boxes import PHYSICS_BOXES
 from manigraph_sim.geometric.backend import GeometricBackend
-from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 
 
 def main() -> None:

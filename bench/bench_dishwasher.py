@@ -62,9 +62,9 @@ def episode(policy, seed: int, objects: int, preference: str) -> dict:
     wall = time.perf_counter() - started
     cpu = time.process_time() - cpu
     backend = backends[0]
-    assert backend.dishwasher is not None
+    assert backend.task_world is not None
     # (A world without slot_offsets, before issue 33's fix, reports none.)
-    report = getattr(backend.dishwasher, "slot_offsets", None)
+    report = getattr(backend.task_world, "slot_offsets", None)
     offsets = report() if report is not None else {}
     bowls = [mm for dish, mm in offsets.items() if dish.startswith("bowl")]
     return {

@@ -85,7 +85,7 @@ def _task_file_protocol(path: Path, protocol: DemoProtocol) -> DemoProtocol:
     naming the field, before any episode)."""
     from dataclasses import replace
 
-    from manigraph_sim.tasks.task_file import parse_task_file
+    from manigraph_sim.families.blocks.task_file import parse_task_file
     from manigraph_tools.episode_plan import EpisodeOptions
 
     episodes = EpisodeOptions(task_file=path)
@@ -135,7 +135,7 @@ def _eval_run(args: argparse.Namespace) -> int:
     task_file = episodes.task_text()
     blocks = episodes.blocks
     if task_file is not None:
-        from manigraph_sim.tasks.task_file import parse_task_file
+        from manigraph_sim.families.blocks.task_file import parse_task_file
 
         # A bad file stops here, naming the file and the field.
         blocks = parse_task_file(task_file, str(episodes.task_file)).blocks

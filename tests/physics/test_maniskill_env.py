@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import sapien
 
+from manigraph_sim.families.blocks.options import BlockOptions
 from manigraph_sim.physics.video import vulkan_available
 from manigraph_sim.tasks import get_task
-from manigraph_sim.tasks.base import TaskParams
 
 pytestmark = pytest.mark.slow
 
@@ -24,7 +24,7 @@ def test_gym_make_lays_out_the_seeded_task_and_judges_success() -> None:
     try:
         _, info = env.reset(seed=5)
         unwrapped = env.unwrapped
-        layout = get_task("stack", TaskParams(blocks=2)).layout(np.random.default_rng(5))
+        layout = get_task("stack", BlockOptions(blocks=2)).layout(np.random.default_rng(5))
         for body in layout.bodies:
             placed = unwrapped.blocks[body.id].pose.p[0].numpy()
             assert np.allclose(placed, body.position, atol=1e-5)
@@ -42,13 +42,13 @@ def test_box_packing_as_a_maniskill_env_without_a_render_device() -> None:
     import gymnasium as gym
 
     import manigraph_sim.physics.maniskill_env  # noqa: F401  (registers the environments)
-    from manigraph_sim.physics.box_layout import PHYSICS_BOXES
+    from manigraph_sim.families.blocks.physics_boxes import PHYSICS_BOXES
 
     env = gym.make("Manigraph-BoxPack-v0", blocks=2, obs_mode="state", render_backend="none")
     try:
         _, info = env.reset(seed=3)
         unwrapped = env.unwrapped
-        params = TaskParams(blocks=2, boxes=PHYSICS_BOXES)
+        params = BlockOptions(blocks=2, boxes=PHYSICS_BOXES)
         layout = get_task("box-pack", params).layout(np.random.default_rng(3))
         (box,) = layout.containers
         assert np.allclose(unwrapped.boxes["box_0"].pose.p[0].numpy()[:2], box.centre, atol=1e-5)

@@ -13,9 +13,9 @@ from manigraph_planner.families.blocks.expert import ExpertPolicy
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest, SkillState
 from manigraph_sim.backends import create_backend
-from manigraph_sim.physics.box_layout import PHYSICS_BOXES
+from manigraph_sim.families.blocks.options import BlockOptions
+from manigraph_sim.families.blocks.physics_boxes import PHYSICS_BOXES
 from manigraph_sim.tasks import get_task
-from manigraph_sim.tasks.base import TaskParams
 
 Loop = Any  # tests/physics/conftest.py: InProcessLoop
 
@@ -86,7 +86,7 @@ def test_the_expert_packs_three_blocks_into_a_box(loop: Loop) -> None:
 
 def test_the_physical_box_geometry_leaves_finger_room_and_fits_the_sites() -> None:
     g = PHYSICS_BOXES
-    params = TaskParams(blocks=4, boxes=g)
+    params = BlockOptions(blocks=4, boxes=g)
     for seed in range(20):
         layout = get_task("box-rearrangement", params).layout(np.random.default_rng(seed))
         sites = [c.centre for c in layout.containers]
@@ -97,4 +97,4 @@ def test_the_physical_box_geometry_leaves_finger_room_and_fits_the_sites() -> No
         for body in layout.bodies:
             assert np.linalg.norm(body.position[:2]) < 0.78  # top-down reach of the Panda
     with pytest.raises(TaskError, match="blocks"):
-        get_task("box-pack", TaskParams(blocks=5, boxes=g))
+        get_task("box-pack", BlockOptions(blocks=5, boxes=g))

@@ -23,10 +23,10 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.orientations import ORIENTATIONS, UPSIDE_DOWN, up_axis_orientation
 from manigraph_shared.rotations import rotation_matrix
-from manigraph_sim.dishwasher.physics import PHYSICAL_DISH_SIZE, RAIL, physical_counter_x
+from manigraph_sim.families.dishwasher.physics import PHYSICAL_DISH_SIZE, RAIL, physical_counter_x
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_skills.dishwasher.turn_over import quaternion_of
+from manigraph_skills.families.dishwasher.turn_over import quaternion_of
 
 #: Seed 8, 10 dishes: bowl_3 lies upside down and plate_3 stands on its rim (x >= 0.3 m), so
 #: both can be loaded by top-down grasps. (Found by listing layouts; no outcome is tuned.)
@@ -108,7 +108,7 @@ def test_the_physics_scene_has_the_geometric_worlds_shape() -> None:
 def test_racks_slide_out_and_in_on_their_rails_with_the_dishes_in_them(
     dish_loop: DishLoop,
 ) -> None:
-    world = dish_loop.backend.dishwasher
+    world = dish_loop.backend.task_world
     assert world is not None
     assert dish_loop.toggle("rack_top").state is SkillState.SUCCEEDED
     assert world.rack_travel("rack_top") == pytest.approx(RAIL, abs=0.005)
@@ -240,7 +240,7 @@ def _sapien_pose_quaternion(q: Quaternion) -> list[float]:
 def test_a_rack_part_of_the_way_out_is_seen_where_it_is_and_clicks_to_the_nearer_end(
     dish_loop: DishLoop,
 ) -> None:
-    world = dish_loop.backend.dishwasher
+    world = dish_loop.backend.task_world
     assert world is not None
     closed = dish_loop.scene()
     top = world.rails["rack_top"]
@@ -289,7 +289,7 @@ def test_a_plate_on_its_rim_in_its_slot_is_loaded_whichever_edge_is_down() -> No
     scene = backend.scene(2.0)
     assert scene is not None and scene.object(plate.id).filled and scene.goal(slot.id).filled
     assert up_axis_orientation(scene.object(plate.id).orientation) == 2  # upright, as asked
-    assert plate.id in backend.occupied_goals()
+    assert plate.id in backend.evaluation().filled_goals
 
 
 #: Seed 15012 (issue 33, the seventh round's one failure), 10 dishes: bowl_3 lies on its side
@@ -309,7 +309,7 @@ def test_a_bowl_set_down_beside_a_turned_one_knocks_neither_off_its_slot(loop: L
         time.time(),
     )
     dishes = DishLoop(loop)
-    dishwasher = loop.backend.dishwasher
+    dishwasher = loop.backend.task_world
     assert dishwasher is not None
     assert dishes.toggle("rack_top").state is SkillState.SUCCEEDED
     first = dishes.act("bowl_3", "top_bowl_02", orientation_index=UPSIDE_DOWN)

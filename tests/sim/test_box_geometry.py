@@ -9,14 +9,14 @@ import pytest
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_sim.backends import create_backend
-from manigraph_sim.physics.box_layout import PHYSICS_BOXES
+from manigraph_sim.families.blocks.box_geometry import BoxGeometry
+from manigraph_sim.families.blocks.options import BlockOptions
+from manigraph_sim.families.blocks.physics_boxes import PHYSICS_BOXES
 from manigraph_sim.tasks import get_task
-from manigraph_sim.tasks.base import TaskParams
-from manigraph_sim.tasks.box_geometry import BoxGeometry
 
 
 def test_the_default_geometry_is_the_demonstrations() -> None:
-    layout = get_task("box-unpack", TaskParams(blocks=4)).layout(np.random.default_rng(0))
+    layout = get_task("box-unpack", BlockOptions(blocks=4)).layout(np.random.default_rng(0))
     (box,) = layout.containers
     assert np.allclose(box.inner, 0.14) and box.height == 0.06
     centres = np.array([b.position[:2] for b in layout.bodies if b.category == "block"])
@@ -24,7 +24,7 @@ def test_the_default_geometry_is_the_demonstrations() -> None:
     assert offsets == [[0, 0], [-1, 0], [0, -1], [0, 1]]  # centre first, 4.5 cm apart
     cover = layout.bodies[-1]
     assert np.allclose(cover.size, [0.16, 0.16, 0.01]) and np.isclose(cover.position[2], 0.065)
-    explicit = get_task("box-unpack", TaskParams(blocks=4, boxes=BoxGeometry()))
+    explicit = get_task("box-unpack", BlockOptions(blocks=4, boxes=BoxGeometry()))
     again = explicit.layout(np.random.default_rng(0))
     assert [b.position.tolist() for b in again.bodies] == [
         b.position.tolist() for b in layout.bodies
@@ -61,7 +61,7 @@ def test_the_physical_box_rearrangement_lays_out_seeds_that_once_found_no_sites(
     request = EpisodeRequest(
         episode_id=f"rearrange-{seed}", task="box-rearrangement", blocks=4, seed=seed
     )
-    layout = episode_layout(request, boxes=PHYSICS_BOXES).layout
+    layout = episode_layout(request, "physics").layout
     side = float(PHYSICS_BOXES.cover_size[0])
     sites = [c.centre[:2] for c in layout.containers]
     sites += [g.position[:2] for g in layout.goals if g.id.startswith("storage_")]

@@ -10,15 +10,15 @@ from manigraph_planner.policies import load_policy
 from manigraph_shared.errors import SkillError, TaskError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN
-from manigraph_sim.dishwasher.dishwasher_world import DishwasherWorld
-from manigraph_sim.dishwasher.model import BOTTOM, TOP, Preference
-from manigraph_sim.dishwasher.scene import dishwasher_scene
+from manigraph_sim.families.dishwasher.dishwasher_world import DishwasherWorld
+from manigraph_sim.families.dishwasher.model import BOTTOM, TOP, Preference
+from manigraph_sim.families.dishwasher.options import DishwasherOptions
+from manigraph_sim.families.dishwasher.scene import dishwasher_scene
 from manigraph_sim.tasks import get_task
-from manigraph_sim.tasks.base import TaskParams
 
 
 def world(objects: int = 4, preference: str = "top-bottom", seed: int = 0) -> DishwasherWorld:
-    task = get_task("dishwasher", TaskParams(objects=objects, preference=preference))
+    task = get_task("dishwasher", DishwasherOptions(objects=objects, preference=preference))
     return DishwasherWorld(task.layout(np.random.default_rng(seed)))
 
 
@@ -112,9 +112,9 @@ def test_layouts_are_seeded_and_options_are_checked() -> None:
     assert all(np.array_equal(a.dishes[k].position, b.dishes[k].position) for k in a.dishes)
     assert {d.kind for d in a.dishes.values()} == {"plate", "bowl"}
     with pytest.raises(TaskError, match="preference"):
-        get_task("dishwasher", TaskParams(objects=4, preference="sideways"))
+        get_task("dishwasher", DishwasherOptions(objects=4, preference="sideways"))
     with pytest.raises(TaskError, match="objects"):
-        get_task("dishwasher", TaskParams(objects=13))
+        get_task("dishwasher", DishwasherOptions(objects=13))
     assert Preference.parse(None) is Preference.TOP_BOTTOM
 
 

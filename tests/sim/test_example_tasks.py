@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from manigraph_shared.messages import EpisodeRequest, GripperOp, RobotCommand
+from manigraph_sim.families.blocks.goal_matching import maximum_matching
+from manigraph_sim.families.blocks.task_file import FileTask, parse_task_file
 from manigraph_sim.geometric.backend import GeometricBackend
-from manigraph_sim.tasks.goal_matching import maximum_matching
-from manigraph_sim.tasks.task_file import FileTask, parse_task_file
 from manigraph_sim.world_model import Layout
 
 TASKS = Path(__file__).resolve().parents[2] / "examples" / "tasks"
@@ -112,4 +112,4 @@ def test_an_object_a_goal_does_not_accept_leaves_it_empty(name: str) -> None:
     after = sim.scene(0.0)
     assert after is not None and not after.goal(goal.id).filled
     assert not after.object(body.id).filled
-    assert sim.wrong_object_goals() == {goal.id}  # a 7 cm block in a 3 cm goal too
+    assert sim.evaluation().wrong_object_goals == {goal.id}  # a 7 cm block in a 3 cm goal too

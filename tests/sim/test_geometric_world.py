@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from manigraph_shared.errors import ConfigError, SkillError, TaskError
-from manigraph_sim.geometric.geometric_world import GeometricWorld
+from manigraph_sim.families.blocks.geometric_world import GeometricWorld
+from manigraph_sim.families.blocks.options import BlockOptions
 from manigraph_sim.tasks import get_task
-from manigraph_sim.tasks.base import TaskParams
 from manigraph_sim.world_model import BLOCK_SIZE, Body, Goal
 
 SIZE = np.full(3, BLOCK_SIZE)
@@ -62,7 +62,7 @@ def test_a_block_dropped_beside_a_stack_rests_on_the_table() -> None:
 def pyramid_missing_one() -> GeometricWorld:
     """A 6-pyramid with its bottom row and the middle row's left block in place, and a
     spare block on the table."""
-    from manigraph_sim.tasks.pyramid import pyramid_goals
+    from manigraph_sim.families.blocks.pyramid import pyramid_goals
 
     goals = pyramid_goals(np.array([0.5, 0.0, 0.0]), 6)
     present = [goals[i] for i in (0, 1, 2, 3)]  # bottom row and the middle row's left block
@@ -108,7 +108,7 @@ def test_a_block_at_a_top_goal_on_a_stray_block_does_not_fill_it() -> None:
     neither): a block set on the top goal stands there, centred on that stray block, but the
     goals under it are free, so the top goal is not filled (and the pyramid cannot be
     finished until both blocks are moved)."""
-    from manigraph_sim.tasks.pyramid import pyramid_goals
+    from manigraph_sim.families.blocks.pyramid import pyramid_goals
 
     goals = pyramid_goals(np.array([0.5, 0.0, 0.0]), 3)
     top = goals[2]
@@ -137,15 +137,15 @@ def test_a_stack_goal_over_a_free_goal_is_not_filled() -> None:
 @pytest.mark.parametrize(
     ("task", "params", "supported"),
     [
-        ("stack", TaskParams(blocks=5), [1, 1, 1, 1]),
-        ("multistack", TaskParams(blocks=3, stacks=3), [1, 1] * 3),
-        ("pyramid", TaskParams(blocks=6), [2, 2, 2]),
-        ("pyramid", TaskParams(blocks=10), [2] * 6),
-        ("box-rearrangement", TaskParams(blocks=4), []),
-        ("box-pack", TaskParams(blocks=3), []),
+        ("stack", BlockOptions(blocks=5), [1, 1, 1, 1]),
+        ("multistack", BlockOptions(blocks=3, stacks=3), [1, 1] * 3),
+        ("pyramid", BlockOptions(blocks=6), [2, 2, 2]),
+        ("pyramid", BlockOptions(blocks=10), [2] * 6),
+        ("box-rearrangement", BlockOptions(blocks=4), []),
+        ("box-pack", BlockOptions(blocks=3), []),
     ],
 )
-def test_goal_supports_of_the_tasks(task: str, params: TaskParams, supported: list[int]) -> None:
+def test_goal_supports_of_the_tasks(task: str, params: BlockOptions, supported: list[int]) -> None:
     """Every goal off the table stands on the goals under it (one in a stack, two in a
     pyramid); the box tasks' goals stand on a box floor, a rim or the table."""
     layout = get_task(task, params).layout(np.random.default_rng(3))
@@ -171,7 +171,7 @@ def test_goal_tolerance_decides_filled() -> None:
 
 
 def test_stack_layout_is_seeded() -> None:
-    task = get_task("stack", TaskParams(blocks=5))
+    task = get_task("stack", BlockOptions(blocks=5))
     first = task.layout(np.random.default_rng(7))
     again = task.layout(np.random.default_rng(7))
     other = task.layout(np.random.default_rng(8))
@@ -188,6 +188,6 @@ def test_stack_layout_is_seeded() -> None:
 
 def test_unknown_task_and_bad_parameters_are_named() -> None:
     with pytest.raises(ConfigError, match=r"task: 'tower' is not one of: .*, stack, multistack"):
-        get_task("tower", TaskParams())
+        get_task("tower", BlockOptions())
     with pytest.raises(TaskError, match="stacks"):
-        get_task("stack", TaskParams(stacks=2))
+        get_task("stack", BlockOptions(stacks=2))

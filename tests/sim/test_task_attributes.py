@@ -11,9 +11,9 @@ import pytest
 
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest, GripperOp, RobotCommand, Scene, Vector3
+from manigraph_sim.families.blocks.task_file import FileTask, parse_task_file
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.layout_message import layout_message
-from manigraph_sim.tasks.task_file import FileTask, parse_task_file
 
 
 def block(name: str, position: str, extra: str = "") -> str:
@@ -113,7 +113,7 @@ def test_swapping_two_towers_is_not_done_before_it_starts_and_succeeds_when_swap
     scene = sim.scene(0.0)
     assert scene is not None and not any(g.filled for g in scene.goals)
     assert not any(o.filled for o in scene.objects)
-    assert sim.wrong_object_goals() == {"ga0", "ga1", "gb0", "gb1"}
+    assert sim.evaluation().wrong_object_goals == {"ga0", "ga1", "gb0", "gb1"}
     # Through a free spot: b's tower to the side, a's tower across, b's into a's place.
     park = {"b1": Vector3(x=0.60, y=0.00, z=0.02), "b0": Vector3(x=0.60, y=0.30, z=0.02)}
     for name in ("b1", "b0"):
@@ -133,7 +133,7 @@ def test_a_goal_holding_an_object_it_does_not_accept_is_not_filled_and_is_counte
     sim = reset(COLOURS, max_steps=2)
     scene = put(sim, "b", Vector3(x=0.60, y=-0.10, z=0.02))  # blue into the red goal
     assert not scene.goal("red_goal").filled and not scene.object("b").filled
-    assert sim.wrong_object_goals() == {"red_goal"}
+    assert sim.evaluation().wrong_object_goals == {"red_goal"}
     scene = put(sim, "r", Vector3(x=0.60, y=0.10, z=0.02))  # red into the blue goal
     end = sim.end_event(0.0)
     assert end is not None and end.success is False

@@ -13,8 +13,8 @@ from manigraph_lab.evaluate import EvalSpec, evaluate
 from manigraph_planner.policies import load_policy
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest
+from manigraph_sim.families.blocks.task_file import FileTask, parse_task_file
 from manigraph_sim.geometric.backend import GeometricBackend
-from manigraph_sim.tasks.task_file import FileTask, parse_task_file
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "two-towers.toml"
 

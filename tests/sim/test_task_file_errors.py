@@ -11,8 +11,8 @@ import pytest
 
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest
+from manigraph_sim.families.blocks.task_file import parse_task_file
 from manigraph_sim.geometric.backend import GeometricBackend
-from manigraph_sim.tasks.task_file import parse_task_file
 
 VALID = """name = "one block"
 

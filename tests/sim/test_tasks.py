@@ -8,9 +8,10 @@ import pytest
 from manigraph_planner.families.blocks.expert import ExpertPolicy
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeEvent, EpisodeRequest, GripperOp, RobotCommand
+from manigraph_sim.families import family_of
+from manigraph_sim.families.blocks.options import BlockOptions
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.tasks import TASKS, get_task
-from manigraph_sim.tasks.base import TaskParams
 
 
 def command(op: GripperOp, object_id: str, position: object) -> RobotCommand:
@@ -69,7 +70,9 @@ def test_expert_solves_every_fully_observed_task(task: str, blocks: int, stacks:
 
 @pytest.mark.parametrize("task", sorted(TASKS))
 def test_layouts_are_seeded(task: str) -> None:
-    params = TaskParams(blocks=3, stacks=2 if task == "multistack" else 1)
+    stacks = 2 if task == "multistack" else 1
+    request = EpisodeRequest(episode_id="e", task=task, blocks=3, stacks=stacks)
+    params = family_of(request).options(request)  # each task with its family's options
     a = get_task(task, params).layout(np.random.default_rng(5))
     b = get_task(task, params).layout(np.random.default_rng(5))
     c = get_task(task, params).layout(np.random.default_rng(6))
@@ -79,7 +82,7 @@ def test_layouts_are_seeded(task: str) -> None:
 
 
 def test_pyramid_upper_goals_rest_on_two_below() -> None:
-    layout = get_task("pyramid", TaskParams(blocks=6)).layout(np.random.default_rng(0))
+    layout = get_task("pyramid", BlockOptions(blocks=6)).layout(np.random.default_rng(0))
     levels = sorted({round(g.position[2], 4) for g in layout.goals})
     rows = [sum(1 for g in layout.goals if round(g.position[2], 4) == z) for z in levels]
     assert rows == [3, 2, 1]
@@ -155,12 +158,12 @@ def test_rearrangement_hides_what_is_in_closed_boxes_until_opened() -> None:
 @pytest.mark.parametrize(
     ("task", "params", "field"),
     [
-        ("box-pack", TaskParams(blocks=10), "blocks"),
-        ("multistack", TaskParams(blocks=3, stacks=9), "stacks"),
-        ("pyramid", TaskParams(blocks=3, stacks=2), "stacks"),
+        ("box-pack", BlockOptions(blocks=10), "blocks"),
+        ("multistack", BlockOptions(blocks=3, stacks=9), "stacks"),
+        ("pyramid", BlockOptions(blocks=3, stacks=2), "stacks"),
     ],
 )
-def test_out_of_range_parameters_are_named(task: str, params: TaskParams, field: str) -> None:
+def test_out_of_range_parameters_are_named(task: str, params: BlockOptions, field: str) -> None:
     with pytest.raises(TaskError, match=field):
         get_task(task, params)
 

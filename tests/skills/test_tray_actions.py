@@ -175,7 +175,7 @@ def test_a_plate_on_its_rim_on_the_far_row_is_taken_under_a_pulled_out_bottom_ra
     from arm_helpers import PerfectArm, trajectory_of
 
     from manigraph_shared.orientations import ORIENTATIONS
-    from manigraph_sim.dishwasher.physics import COUNTER_ROWS, PHYSICAL_DISH_SIZE, RAIL
+    from manigraph_sim.families.dishwasher.physics import COUNTER_ROWS, PHYSICAL_DISH_SIZE, RAIL
     from manigraph_skills.drivers.panda_motion import PandaMotionDriver
     from manigraph_skills.grasp_choice import choose_grasps
     from manigraph_skills.motion import PandaModel

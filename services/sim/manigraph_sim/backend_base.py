@@ -18,6 +18,7 @@ from manigraph_shared.messages import (
     Scene,
     SkillStatus,
 )
+from manigraph_sim.families.base import Evaluation
 
 
 class SimBackend(ABC):
@@ -72,12 +73,14 @@ class JointedArmBackend(SimBackend):
 
 
 class EpisodeBackend(SimBackend):
-    """A backend's episode bookkeeping: the request, the goals that must be filled, the step
-    budget, and start and end events. Subclasses lay out their world, say which goals are
-    occupied (:meth:`occupied_goals`) and decide when the episode has ended (``ended``)."""
+    """A backend's episode bookkeeping: the request, the step budget, and start and end
+    events. Subclasses lay out their world (a task family's world adapter), say how the
+    episode stands by the family's rule (:meth:`evaluation`) and decide when it has ended
+    (``ended``)."""
 
     def __init__(self) -> None:
         self.request: EpisodeRequest | None = None
+        #: The running episode's required goals (its family's ``required_goals``).
         self.required: set[str] = set()
         self.steps = 0
         self.max_steps = 0
@@ -99,7 +102,8 @@ class EpisodeBackend(SimBackend):
     def begin(
         self, request: EpisodeRequest, required: set[str], max_steps: int, stamp: float
     ) -> EpisodeEvent:
-        """Start ``request``'s episode (its world laid out); returns its start event."""
+        """Start ``request``'s episode (its world laid out, ``required``: the ids of the goals
+        its family counts); returns its start event."""
         self.request = request
         self.required = required
         self.steps = 0
@@ -119,15 +123,12 @@ class EpisodeBackend(SimBackend):
         return True
 
     @abstractmethod
-    def occupied_goals(self) -> set[str]:
-        """Ids of the goals something fills now."""
-
-    def wrong_object_goals(self) -> set[str]:
-        """Ids of the goals holding an object they do not accept (none by default)."""
-        return set()
+    def evaluation(self) -> Evaluation:
+        """How the running episode stands by its family's rule (``families.base``)."""
 
     def required_filled(self) -> int:
-        return len(self.required & self.occupied_goals())
+        """Required goals filled now (by the family's rule)."""
+        return self.evaluation().filled
 
     def end_event(self, stamp: float) -> EpisodeEvent | None:
         if not self.ended or self._end_reported or self.request is None:
@@ -149,12 +150,10 @@ class EpisodeBackend(SimBackend):
             self.request,
             phase,
             stamp,
-            filled=self.required_filled(),
-            total=len(self.required),
+            self.evaluation(),
             steps=self.steps,
             max_steps=self.max_steps,
             sim_seconds=self.sim_seconds() if phase is EpisodePhase.END else None,
-            wrong_object=len(self.wrong_object_goals()) if phase is EpisodePhase.END else 0,
             cut_reason=self.cut_reason,
         )
 
@@ -163,26 +162,26 @@ def episode_event(
     request: EpisodeRequest,
     phase: EpisodePhase,
     stamp: float,
+    evaluation: Evaluation,
     *,
-    filled: int,
-    total: int,
     steps: int,
     max_steps: int,
     sim_seconds: float | None = None,
-    wrong_object: int = 0,
     cut_reason: str = "",
 ) -> EpisodeEvent:
     """The start or end event of ``request``'s episode: an episode ends in success exactly when
-    every required goal is filled (holds an object it accepts, on filled goals), else because
-    its step budget is spent. The end event counts the goals holding an object they do not
-    accept (``wrong_object``). An episode cut short (``cut_reason``, e.g. ``estop_engaged:
-    ...``) ends unsuccessful for that reason."""
+    its family's rule says so (``evaluation``: every required goal filled), else because its
+    step budget is spent. The end event counts the goals holding an object they do not accept
+    (``wrong_object``). An episode cut short (``cut_reason``, e.g. ``estop_engaged: ...``)
+    ends unsuccessful for that reason."""
     success = None
     reason = ""
-    if phase is EpisodePhase.END and cut_reason:
+    ended = phase is EpisodePhase.END
+    wrong_object = evaluation.wrong_object if ended else 0
+    if ended and cut_reason:
         success, reason = False, cut_reason[:256]
-    elif phase is EpisodePhase.END:
-        success = filled == total
+    elif ended:
+        success = evaluation.success
         reason = "all goals filled" if success else f"step budget {max_steps} spent"
         if not success and wrong_object:
             hold = "goals hold" if wrong_object != 1 else "goal holds"
@@ -192,8 +191,8 @@ def episode_event(
         phase=phase,
         task=request.task,
         seed=request.seed,
-        goals_total=total,
-        goals_filled=filled,
+        goals_total=evaluation.total,
+        goals_filled=evaluation.filled,
         steps=steps,
         goals_wrong_object=wrong_object,
         success=success,

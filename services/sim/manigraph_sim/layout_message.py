@@ -12,8 +12,8 @@ from manigraph_shared.messages import (
     TaskLayout,
     Vector3,
 )
-from manigraph_sim.observation import vector
 from manigraph_sim.tasks.base import Layout
+from manigraph_sim.world_model import vector
 
 
 def layout_message(layout: Layout, episode_id: str, stamp: float) -> TaskLayout:

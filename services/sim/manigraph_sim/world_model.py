@@ -16,6 +16,7 @@ import numpy as np
 
 from manigraph_shared.acceptance import admits
 from manigraph_shared.errors import TaskError
+from manigraph_shared.messages import Vector3
 
 #: The object and goal categories: a block fills a block goal, a cover a cover goal.
 BLOCK: Final = "block"
@@ -111,3 +112,8 @@ class Layout:
             raise TaskError("layout: object and goal ids must be unique")
         if not self.required_goals():
             raise TaskError("layout: at least one goal must be required")
+
+
+def vector(values: np.ndarray) -> Vector3:
+    """A numpy 3-vector as the contract's ``Vector3`` (what every family's Scene is made of)."""
+    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))

@@ -157,7 +157,7 @@ class SlotLikingNet:
 def _top_rack_out(objects: int = 4):  # type: ignore[no-untyped-def]
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=objects), 0.0)
-    backend.dishwasher.toggle("rack_top")  # type: ignore[union-attr]
+    backend.world.toggle("rack_top")  # type: ignore[union-attr]
     s = backend.scene(1.0)
     assert s is not None
     return s
@@ -226,7 +226,7 @@ def test_a_dish_standing_in_a_slot_is_never_an_alternative() -> None:
     loaded plates from slot to slot until the step budget was spent."""
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
-    world = backend.dishwasher
+    world = backend.world
     assert world is not None
     world.toggle("rack_top")
     bowl = next(d for d in world.dishes.values() if d.kind == "bowl")
@@ -261,7 +261,7 @@ def test_a_dish_on_the_counter_waiting_for_its_rack_makes_the_decision_a_toggle(
     bowls moved about until the step budget was spent)."""
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
-    world = backend.dishwasher
+    world = backend.world
     assert world is not None
     world.toggle("rack_top")
     free = [s for s in world.slots.values() if s.kind == "bowl" and s.rack == "rack_top"]
@@ -302,7 +302,7 @@ def test_a_toggle_for_a_waiting_dish_brings_its_rack_nearer(bottom_out: bool) ->
     is out, else the top one pulled out. (With a tray head favouring the bottom rack, the
     decision pulled it out and pushed it in until the step budget was spent.)"""
     backend, left = _one_bowl_loaded_the_bottom_rack_out()
-    world = backend.dishwasher
+    world = backend.world
     assert world is not None
     for plate in [d for d in world.dishes.values() if d.kind == "plate"]:
         _load(world, plate.id, "rack_bottom")
@@ -349,7 +349,7 @@ def _one_bowl_loaded_the_bottom_rack_out():  # type: ignore[no-untyped-def]
     bottom rack is out; the world and the other bowl."""
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=4), 0.0)
-    world = backend.dishwasher
+    world = backend.world
     assert world is not None
     world.toggle("rack_top")
     loaded, left = [d for d in world.dishes.values() if d.kind == "bowl"]

@@ -1,15 +1,12 @@
 """The physics world as a sim backend: seeded task layouts, joint trajectories, a Panda.
 
 Layouts come from the same registered tasks as the geometric backend, so a seed gives the
-same blocks and goals in both worlds. Whether a goal is filled is decided geometrically with
-the geometric world's rule (:meth:`GeometricWorld.occupancy`) on the simulated poses: a block
-fills a goal when its centre is within ``goal_tolerance`` metres of the goal's centre and it is
-not held. The default tolerance, 2 cm (half a block), accepts a block that settled a few
-millimetres off but not one resting on the neighbouring place or tipped over.
-
-Box tasks are laid out with the physical box geometry (``physics.box_layout``): static boxes,
-covers as dynamic bodies with a handle. What a closed box hides is decided by the geometric
-world's rule too (``GeometricWorld.is_hidden``), on the simulated poses.
+same blocks and goals in both worlds. The task's family (``families``) builds its part of the
+simulated world and reads the simulated poses back by its own rules: its Scene and whether its
+goals are filled (the block family: the geometric world's rule, a block fills a goal when its
+centre is within ``goal_tolerance`` metres of the goal's centre and it is not held). The
+default tolerance, 2 cm (half a block), accepts a block that settled a few millimetres off but
+not one resting on the neighbouring place or tipped over.
 
 Steps are counted per finished skill of the episode (``SkillStatus``, failed ones too); the
 episode ends when every required goal is filled with the gripper open, or when the step
@@ -35,7 +32,6 @@ from manigraph_shared.messages import (
     JointState,
     JointTrajectoryCommand,
     JointTrajectoryResult,
-    Quaternion,
     RobotCommand,
     RobotFeedback,
     Scene,
@@ -43,13 +39,8 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.preflight import INSTALL_VULKAN
 from manigraph_sim.backend_base import EpisodeBackend, JointedArmBackend
-from manigraph_sim.dishwasher.model import DishwasherLayout
-from manigraph_sim.dishwasher.physics import PhysicsDishwasher
-from manigraph_sim.dishwasher.scene import dishwasher_scene
-from manigraph_sim.geometric.geometric_world import GeometricWorld
+from manigraph_sim.families.base import Evaluation, PhysicsTaskWorld
 from manigraph_sim.manifest import CAMERA, JOINTS
-from manigraph_sim.observation import observed_scene
-from manigraph_sim.physics.box_layout import PHYSICS_BOXES
 from manigraph_sim.physics.physics_world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig, vulkan_available
 from manigraph_sim.tasks.from_request import episode_layout
@@ -106,12 +97,10 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         #: Files written by the video recorder, one per ended episode.
         self.videos_written: list[Path] = []
         self.config = config or PhysicsConfig()
-        self.world: PhysicsWorld | None = None
+        #: The running episode's world: its task family's reading of the simulator
+        #: (``world``), None before the first episode.
+        self.task_world: PhysicsTaskWorld | None = None
         self.layout: Layout | None = None
-        #: The dishwasher task's cabinet and dishes (``dishwasher.physics``), else None.
-        self.dishwasher: PhysicsDishwasher | None = None
-        #: Boxes seen open in this episode: their contents stay observed (partial observability).
-        self.revealed: set[str] = set()
         self.physics_steps = 0
         self._warm_world: PhysicsWorld | None = None
         if camera is not None:
@@ -153,43 +142,44 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         """Scene and JointState rates (Hz) in real time; None when running flat out."""
         return self.stream_hz if self.realtime else None
 
+    @property
+    def world(self) -> PhysicsWorld | None:
+        """The simulator of the running episode (arm, bodies), None before the first."""
+        return None if self.task_world is None else self.task_world.physics
+
     # --- episodes ---------------------------------------------------------------------------
     def reset(self, request: EpisodeRequest, stamp: float) -> EpisodeEvent:
-        episode = episode_layout(request, boxes=PHYSICS_BOXES)
-        layout = episode.layout
+        episode = episode_layout(request, "physics")
+        family, layout = episode.family, episode.layout
         if self.markers is not None and self.camera_config is not None:
             self.markers.check_objects((body.id, body.category) for body in layout.bodies)
-        dishes = isinstance(layout, DishwasherLayout)
-        self.world = PhysicsWorld(
-            [] if dishes else layout.bodies,
-            self.config,
-            render=self.video_config is not None or self.camera_config is not None,
-            containers=layout.containers,
-            markers=self.markers if self.camera_config is not None else None,
-        )
-        self.dishwasher = None
-        required = layout.required_goals()
-        if isinstance(layout, DishwasherLayout):
-            self.dishwasher = PhysicsDishwasher(self.world, layout)
-            self.world.step(round(self.config.settle_time / self.config.timestep))
-            # Success as in the geometric world: every dish loaded as preferred, racks in.
-            required = {dish.id for dish in layout.dishes} | {rack.id for rack in layout.racks}
+
+        def make_world(bodies: list[Body]) -> PhysicsWorld:
+            return PhysicsWorld(
+                bodies,
+                self.config,
+                render=self.video_config is not None or self.camera_config is not None,
+                containers=layout.containers,
+                markers=self.markers if self.camera_config is not None else None,
+            )
+
+        self.task_world = family.physics_world(layout, make_world, self.goal_tolerance)
+        world = self.task_world.physics
         self._warm_world = None
-        self.revealed = set()
         if self.video_config is not None:
-            self.video = EpisodeVideo(self.video_config, self.world.scene, self.config.timestep)
-            self.world.on_step.append(self.video.on_step)
+            self.video = EpisodeVideo(self.video_config, world.scene, self.config.timestep)
+            world.on_step.append(self.video.on_step)
             self.video.capture()
         if self.camera_config is not None:
             from manigraph_sim.physics.camera import TripodCamera, light
 
             if self.video_config is None:
-                light(self.world.scene, self.camera_config.light_scale)
+                light(world.scene, self.camera_config.light_scale)
             sequence = self.camera.sequence if self.camera is not None else 0
-            self.camera = TripodCamera(self.camera_config, self.world.scene)
+            self.camera = TripodCamera(self.camera_config, world.scene)
             self.camera.sequence = sequence
         self.layout = layout
-        return self.begin(request, required, episode.max_steps, stamp)
+        return self.begin(request, family.required_goals(layout), episode.max_steps, stamp)
 
     def _warm_up(self) -> None:
         """Render one frame of a one-block episode: the first frame of a process compiles the
@@ -204,28 +194,9 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         # Kept until the next episode's world exists: SAPIEN frees the compiled shaders
         # with the last scene.
         self._warm_world = self.world
-        self.world = self.layout = self.request = self.camera = None
+        self.task_world = None
+        self.layout = self.request = self.camera = None
         self.ended = True
-
-    def _geometric_view(self) -> GeometricWorld:
-        """The simulated poses as a geometric world, to apply its goal and visibility rules."""
-        assert self.world is not None and self.layout is not None
-        world = self.world
-        layout = self.layout
-        bodies = [
-            Body(body.id, body.category, body.size, world.pose(body.id)[0], body.attributes)
-            for body in layout.bodies
-        ]
-        view = GeometricWorld(
-            bodies,
-            layout.goals,
-            self.goal_tolerance,
-            containers=layout.containers,
-            hide_inside_closed=layout.partially_observable,
-        )
-        view.revealed = self.revealed  # shared: what observing reveals stays revealed
-        view.held = self.held()
-        return view
 
     def held(self) -> str | None:
         """The body whose grasp point is between the closed fingers, if any."""
@@ -240,24 +211,11 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         return None
 
     def scene(self, stamp: float) -> Scene | None:
-        if self.world is None or self.layout is None or self.request is None:
+        if self.task_world is None or self.request is None:
             return None
-        if self.dishwasher is not None:
-            self.sequence += 1
-            view = self.dishwasher.view(self.held())
-            return dishwasher_scene(view, self.request.episode_id, stamp, self.sequence, self.ended)
-        orientations = {}
-        for body in self.layout.bodies:
-            x, y, z, w = self.world.pose(body.id)[1]
-            orientations[body.id] = Quaternion(x=x, y=y, z=z, w=w)
         self.sequence += 1
-        return observed_scene(
-            self._geometric_view(),
-            self.request.episode_id,
-            stamp,
-            self.sequence,
-            self.ended,
-            orientations,
+        return self.task_world.scene(
+            self.request.episode_id, stamp, self.sequence, self.ended, self.held()
         )
 
     def layout_message(self, stamp: float) -> TaskLayout | None:
@@ -364,20 +322,12 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
     def _check_end(self) -> None:
         if self.world is None or self.ended:
             return
-        done = not self.world.gripper_closed and self.required_filled() == len(self.required)
+        done = not self.world.gripper_closed and self.evaluation().success
         self.ended = done or self.steps >= self.max_steps
 
-    def occupied_goals(self) -> set[str]:
-        if self.dishwasher is not None:
-            view = self.dishwasher.view(self.held())
-            loaded = {d.id for d in view.dishes.values() if view.loaded_as_preferred(d)}
-            return loaded | {r.id for r in view.racks.values() if not r.open}
-        return set(self._geometric_view().occupancy())
-
-    def wrong_object_goals(self) -> set[str]:
-        if self.dishwasher is not None:
-            return set()
-        return set(self._geometric_view().wrong_objects())
+    def evaluation(self) -> Evaluation:
+        assert self.task_world is not None
+        return self.task_world.evaluate(self.held())
 
     def sim_seconds(self) -> float | None:
         """Physics time simulated in this episode (motions and settling, without the

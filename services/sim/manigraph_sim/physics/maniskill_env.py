@@ -32,7 +32,8 @@ from mani_skill.utils.building.ground import build_ground
 from mani_skill.utils.registration import register_env
 from mani_skill.utils.structs.pose import Pose
 
-from manigraph_sim.physics.box_layout import PHYSICS_BOXES
+from manigraph_sim.families.blocks.options import BlockOptions
+from manigraph_sim.families.blocks.physics_boxes import PHYSICS_BOXES
 from manigraph_sim.physics.physics_world import (
     BOX_COLOUR,
     COVER_COLOUR,
@@ -44,7 +45,6 @@ from manigraph_sim.physics.physics_world import (
     box_walls,
 )
 from manigraph_sim.tasks import get_task
-from manigraph_sim.tasks.base import TaskParams
 from manigraph_sim.world_model import Layout
 
 
@@ -65,7 +65,7 @@ class ManigraphEnv(BaseEnv):
         robot_uids: str = "panda",
         **kwargs: Any,
     ) -> None:
-        params = TaskParams(blocks=blocks, stacks=stacks, boxes=PHYSICS_BOXES)
+        params = BlockOptions(blocks=blocks, stacks=stacks, boxes=PHYSICS_BOXES)
         self.task = get_task(self.task_name, params)
         self.goal_tolerance = goal_tolerance
         probe = self.task.layout(np.random.default_rng(0))

@@ -1,7 +1,9 @@
-"""Registered tasks: seeded initial layouts, goals and a success check."""
+"""Registered tasks: seeded initial layouts, goals and a success check.
 
-from manigraph_sim.dishwasher import task as _dishwasher  # noqa: F401  (registers its task)
-from manigraph_sim.tasks import boxes, pyramid, size_sort, stack  # noqa: F401  (register their tasks)
+Each task belongs to a task family (``manigraph_sim.families``), which registers it; importing
+this package registers every family's tasks."""
+
+from manigraph_sim import families as _families  # noqa: F401  (registers every family's tasks)
 from manigraph_sim.tasks.base import TASKS, Task, get_task, register_task
 from manigraph_sim.world_model import Layout
 

@@ -3,33 +3,25 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 
 from manigraph_shared.errors import TaskError
 from manigraph_shared.registry import Registry
-from manigraph_sim.tasks.box_geometry import BoxGeometry
 from manigraph_sim.world_model import BLOCK_SIZE, WORKSPACE_X, WORKSPACE_Y, Body, Goal, Layout
 
-
-@dataclass(frozen=True)
-class TaskParams:
-    blocks: int = 4
-    stacks: int = 1
-    #: The box tasks' geometry; None: the geometric world's (``BoxGeometry()``).
-    boxes: BoxGeometry | None = None
-    #: The dishwasher task's dishes (None: its default) and loading preference.
-    objects: int | None = None
-    preference: str | None = None
+#: A task's parameters: its family's options (``manigraph_sim.families``).
+P = TypeVar("P")
 
 
-class Task(ABC):
-    """Subclasses document Task Description / Randomizations / Success Conditions."""
+class Task(ABC, Generic[P]):
+    """Subclasses document Task Description / Randomizations / Success Conditions. A task
+    belongs to a family (``manigraph_sim.families``), whose options are its ``params``."""
 
     name: str
 
-    def __init__(self, params: TaskParams) -> None:
+    def __init__(self, params: P) -> None:
         self.params = params
         self.validate()
 
@@ -43,15 +35,27 @@ class Task(ABC):
         return 2 * goals + 4
 
 
-#: Tasks by name. A task takes no options of its own: its parameters (blocks, stacks, box
-#: geometry) come with each episode request, and :meth:`Task.validate` checks them.
-TASKS: Registry[type[Task]] = Registry("task")
+#: Tasks by name. A task takes no options of its own: its parameters are its family's options
+#: (``FAMILIES``), built from each episode request, and :meth:`Task.validate` checks them.
+TASKS: Registry[type[Task[Any]]] = Registry("task")
 register_task = TASKS.register
 
+#: Tasks that became task files (no Python of their own): the file to use instead.
+TASK_FILES_NOW = {"size-sort": "examples/tasks/size-sort.toml"}
 
-def get_task(name: str, params: TaskParams) -> Task:
-    """Task ``name`` with ``params``; ``ConfigError`` naming the known tasks if unknown."""
-    return TASKS[name](params)
+
+def check_task_name(name: str) -> str:
+    """``name`` if it is a registered task; ``TaskError`` naming the task file that replaced
+    a retired one, else ``ConfigError`` naming the known tasks."""
+    if name in TASK_FILES_NOW and name not in TASKS:
+        raise TaskError(f"task: {name} is a task file now: --task-file {TASK_FILES_NOW[name]}")
+    return TASKS.check(name)
+
+
+def get_task(name: str, params: Any) -> Task[Any]:
+    """Task ``name`` with ``params`` (its family's options); ``ConfigError`` naming the known
+    tasks if unknown."""
+    return TASKS[check_task_name(name)](params)
 
 
 def stack_bodies(prefix: str, base: np.ndarray, count: int, first: int = 0) -> list[Body]:

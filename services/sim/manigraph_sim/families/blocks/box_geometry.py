@@ -3,7 +3,7 @@
 The default is the geometric world's (and the demonstrations'): a 14 cm box holding a 3 x 3
 grid of 4 cm blocks 4.5 cm apart, sites at least 20 cm apart anywhere in the task workspace.
 A world with real fingers needs more room between blocks (see
-``manigraph_sim.physics.box_layout``) and passes its own geometry; the layouts keep their
+``manigraph_sim.families.blocks.physics_boxes``) and passes its own geometry; the layouts keep their
 structure (ids, grid order, which goals are optional), only the distances change.
 """
 

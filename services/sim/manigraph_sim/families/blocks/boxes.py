@@ -7,15 +7,15 @@ from collections.abc import Sequence
 import numpy as np
 
 from manigraph_shared.errors import TaskError
+from manigraph_sim.families.blocks.box_geometry import BoxGeometry
+from manigraph_sim.families.blocks.options import BlockTask
 from manigraph_sim.tasks.base import (
-    Task,
     register_task,
     sample_sites,
     sample_square_sites,
     stack_bodies,
     stack_goals,
 )
-from manigraph_sim.tasks.box_geometry import BoxGeometry
 from manigraph_sim.world_model import BLOCK_SIZE, Body, Container, Goal, Layout
 
 
@@ -44,8 +44,8 @@ def storage_goal(name: str, site: np.ndarray, geometry: BoxGeometry) -> Goal:
     return Goal(name, "cover", np.array([site[0], site[1], geometry.cover_thickness / 2]))
 
 
-class BoxTask(Task):
-    """The box tasks share a geometry (``TaskParams.boxes``) and how they place sites."""
+class BoxTask(BlockTask):
+    """The box tasks share a geometry (``BlockOptions.boxes``) and how they place sites."""
 
     @property
     def geometry(self) -> BoxGeometry:

@@ -23,7 +23,7 @@ within ~0.77 m of the base, the nearest 0.30 m in front of it).
 from __future__ import annotations
 
 from manigraph_shared.panda import FINGER_REACH
-from manigraph_sim.tasks.box_geometry import BoxGeometry
+from manigraph_sim.families.blocks.box_geometry import BoxGeometry
 from manigraph_sim.world_model import BLOCK_SIZE
 
 #: Between a finger and whatever it passes, metres.

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from manigraph_shared.errors import TaskError
+from manigraph_sim.families.blocks.options import BlockTask
 from manigraph_sim.tasks.base import (
-    Task,
     register_task,
     sample_sites,
     stack_bodies,
@@ -36,7 +36,7 @@ def pyramid_goals(base: np.ndarray, count: int) -> list[Goal]:
 
 
 @register_task("pyramid")
-class PyramidTask(Task):
+class PyramidTask(BlockTask):
     """K-pyramid.
 
     **Task Description**: K blocks stand in one stack; build a pyramid with them (rows of

@@ -7,8 +7,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-import numpy as np
-
 from manigraph_shared.messages import (
     GoalCategory,
     ObjectCategory,
@@ -16,13 +14,9 @@ from manigraph_shared.messages import (
     Scene,
     SceneGoal,
     SceneObject,
-    Vector3,
 )
-from manigraph_sim.geometric.geometric_world import GeometricWorld
-
-
-def vector(values: np.ndarray) -> Vector3:
-    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
+from manigraph_sim.families.blocks.geometric_world import GeometricWorld
+from manigraph_sim.world_model import vector
 
 
 def observed_scene(

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from manigraph_shared.errors import TaskError
+from manigraph_sim.families.blocks.options import BlockTask
 from manigraph_sim.tasks.base import (
-    Task,
     register_task,
     sample_sites,
     stack_bodies,
@@ -16,7 +16,7 @@ from manigraph_sim.world_model import BLOCK_SIZE, Layout
 
 
 @register_task("stack")
-class StackTask(Task):
+class StackTask(BlockTask):
     """K-block stacking.
 
     **Task Description**: K blocks stand in one stack; build the inverted stack at another
@@ -41,7 +41,7 @@ class StackTask(Task):
 
 
 @register_task("multistack")
-class MultiStackTask(Task):
+class MultiStackTask(BlockTask):
     """K-block s-stack.
 
     **Task Description**: s stacks of K blocks each; build s inverted goal stacks elsewhere.

@@ -21,8 +21,8 @@ import numpy as np
 
 from manigraph_shared.acceptance import admits
 from manigraph_shared.errors import TaskError
-from manigraph_sim.tasks.goal_matching import Shortfall, shortfall
-from manigraph_sim.tasks.task_file_specs import RESERVED, GoalSpec, ObjectSpec
+from manigraph_sim.families.blocks.goal_matching import Shortfall, shortfall
+from manigraph_sim.families.blocks.task_file_specs import RESERVED, GoalSpec, ObjectSpec
 
 AttributeValue = str | float
 #: Draws of a file's attributes tried per episode before the episode is refused.

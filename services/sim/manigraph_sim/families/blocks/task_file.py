@@ -76,10 +76,10 @@ import numpy as np
 from pydantic import BaseModel, Field, ValidationError, model_validator
 
 from manigraph_shared.errors import TaskError
-from manigraph_sim.tasks import task_attributes
-from manigraph_sim.tasks.base import Task, TaskParams
-from manigraph_sim.tasks.task_file_errors import describe_errors
-from manigraph_sim.tasks.task_file_specs import (
+from manigraph_sim.families.blocks import task_attributes
+from manigraph_sim.families.blocks.options import BlockOptions, BlockTask
+from manigraph_sim.families.blocks.task_file_errors import describe_errors
+from manigraph_sim.families.blocks.task_file_specs import (
     BLOCK_WIDTH,
     MAX_PROBLEMS_NAMED,
     OVERLAP_TOLERANCE,
@@ -338,7 +338,7 @@ def _accepts(goal: GoalSpec) -> dict[str, str | float | list[float]]:
     return {k: list(v) if isinstance(v, tuple) else v for k, v in goal.accepts.items()}
 
 
-class FileTask(Task):
+class FileTask(BlockTask):
     """A layout from a task file.
 
     **Randomizations** (all seeded by the episode seed): each object stands at one of its
@@ -357,7 +357,7 @@ class FileTask(Task):
 
     def __init__(self, spec: TaskFile) -> None:
         self.spec = spec
-        super().__init__(TaskParams(blocks=spec.blocks))
+        super().__init__(BlockOptions(blocks=spec.blocks))
 
     def layout(self, rng: np.random.Generator) -> Layout:
         r = self.spec.randomize_xy

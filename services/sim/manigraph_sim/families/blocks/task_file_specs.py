@@ -1,6 +1,6 @@
 """The task file's tables as validated records: an object, a goal, a container, and the value
-types and robot-reach bounds they are checked against (``manigraph_sim.tasks.task_file`` reads
-the file and checks the layout as a whole)."""
+types and robot-reach bounds they are checked against (``families.blocks.task_file`` reads the
+file and checks the layout as a whole)."""
 
 from __future__ import annotations
 

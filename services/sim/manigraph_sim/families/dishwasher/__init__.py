@@ -1,7 +1,6 @@
-"""The dishwasher task's world: two sliding racks with plate and bowl slots, dishes on a
-counter, the paper's loading rules (docs/dishwasher.md).
-
-The task in one place: its model and geometric world (:mod:`.model`,
-:mod:`.dishwasher_world`), its registered task with layout sampler and success check
-(:mod:`.task`, registered by ``tasks/__init__.py``), its Scene (:mod:`.scene`) and its SAPIEN
-cabinet and dishes (:mod:`.physics`, imported only by the physics backend)."""
+"""The dishwasher family (:class:`~manigraph_sim.families.dishwasher.family.DishwasherFamily`):
+two sliding racks with plate and bowl slots, dishes on a counter, the paper's loading rules
+(docs/dishwasher.md), laid out as every family is: its unit (:mod:`.family`), options
+(:mod:`.options`), model (:mod:`.model`), task (:mod:`.task`), geometric world
+(:mod:`.dishwasher_world`), Scene (:mod:`.scene`) and SAPIEN cabinet and dishes
+(:mod:`.physics`, imported only by the physics backend)."""

@@ -19,7 +19,7 @@ import numpy as np
 
 from manigraph_shared.dishwasher_rules import check_rack_usable, check_slot
 from manigraph_shared.errors import SkillError
-from manigraph_sim.dishwasher.model import (
+from manigraph_sim.families.dishwasher.model import (
     Dish,
     DishwasherLayout,
     Preference,

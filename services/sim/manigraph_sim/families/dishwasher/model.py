@@ -1,8 +1,8 @@
 """What a dishwasher episode is made of: dishes, racks, slots and the loading preference.
 
 Plain records laid out by the ``dishwasher`` task and played by
-:class:`~manigraph_sim.dishwasher.dishwasher_world.DishwasherWorld`; they build on the sim's
-ground floor (``world_model``) and nothing else.
+:class:`~manigraph_sim.families.dishwasher.dishwasher_world.DishwasherWorld`; they build on
+the sim's ground floor (``world_model``) and nothing else.
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ bodies, all built from boxes (nothing downloaded).
   (``physical_counter_x``), resting at their own height.
 
 The task's state is read back off the simulated poses as a
-:class:`~manigraph_sim.dishwasher.dishwasher_world.DishwasherWorld`
+:class:`~manigraph_sim.families.dishwasher.dishwasher_world.DishwasherWorld`
 (:meth:`PhysicsDishwasher.view`), so the geometric world's rules, success test and Scene are
 applied unchanged.
 """
@@ -40,17 +40,19 @@ from manigraph_shared.grasp_points import (
     RACK_FLOOR_X,
     rack_handle_boxes,
 )
-from manigraph_shared.messages import Quaternion
+from manigraph_shared.messages import Quaternion, Scene
 from manigraph_shared.orientations import ORIENTATIONS, postures_like, up_axis_orientation
 from manigraph_shared.rotations import rotation_matrix
-from manigraph_sim.dishwasher.dishwasher_world import DishwasherWorld
-from manigraph_sim.dishwasher.model import (
+from manigraph_sim.families.base import Evaluation, PhysicsTaskWorld, SimFamily
+from manigraph_sim.families.dishwasher.dishwasher_world import DishwasherWorld
+from manigraph_sim.families.dishwasher.model import (
     BOWL,
     PLATE,
     SLOT_PITCH,
     Dish,
     DishwasherLayout,
 )
+from manigraph_sim.families.dishwasher.scene import dishwasher_scene
 from manigraph_sim.physics.physics_world import PhysicsWorld
 
 Part = tuple[sapien.Pose, np.ndarray]  # a box: pose relative to its body, half size
@@ -199,13 +201,15 @@ def _sapien_quaternion(q: Quaternion) -> list[float]:
     return [q.w, q.x, q.y, q.z]
 
 
-class PhysicsDishwasher:
+class PhysicsDishwasher(PhysicsTaskWorld):
     """The dishwasher and the dishes of ``layout`` added to ``world``'s scene (which must
-    not have been stepped with them yet: the caller settles the world afterwards)."""
+    not have been stepped with them yet: the caller settles the world afterwards); its state
+    is judged by ``family``'s rule (:meth:`evaluate`)."""
 
-    def __init__(self, world: PhysicsWorld, layout: DishwasherLayout) -> None:
-        self.world = world
+    def __init__(self, world: PhysicsWorld, layout: DishwasherLayout, family: SimFamily) -> None:
+        self.world = self.physics = world
         self.layout = layout
+        self.family = family
         self.racks = {rack.id: rack for rack in layout.racks}
         self.slots = {slot.id: slot for slot in layout.slots}
         self.cabinet = self._build_cabinet()
@@ -323,6 +327,14 @@ class PhysicsDishwasher:
         world = DishwasherWorld(replace(self.layout, dishes=dishes, racks=racks))
         world.held = held
         return world
+
+    def scene(
+        self, episode_id: str, stamp: float, sequence: int, ended: bool, held: str | None
+    ) -> Scene:
+        return dishwasher_scene(self.view(held), episode_id, stamp, sequence, ended)
+
+    def evaluate(self, held: str | None) -> Evaluation:
+        return self.family.evaluate(self.layout, self.view(held))
 
     def slot_offsets(self) -> dict[str, float]:
         """How far each dish in a rack rests from the slot of its kind nearest it, across

@@ -14,8 +14,8 @@ from manigraph_shared.messages import (
     SceneRack,
 )
 from manigraph_shared.orientations import orientation
-from manigraph_sim.dishwasher.dishwasher_world import DishwasherWorld
-from manigraph_sim.observation import vector
+from manigraph_sim.families.dishwasher.dishwasher_world import DishwasherWorld
+from manigraph_sim.world_model import vector
 
 
 def about_vertical(yaw: float, q: Quaternion) -> Quaternion:

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from manigraph_shared.errors import TaskError
-from manigraph_sim.dishwasher.dishwasher_world import resting_height
-from manigraph_sim.dishwasher.model import (
+from manigraph_sim.families.dishwasher.dishwasher_world import resting_height
+from manigraph_sim.families.dishwasher.model import (
     BOTTOM,
     BOWL,
     MAX_DISHES,
@@ -20,7 +20,8 @@ from manigraph_sim.dishwasher.model import (
     Rack,
     Slot,
 )
-from manigraph_sim.tasks.base import Task, register_task
+from manigraph_sim.families.dishwasher.options import DishwasherTask
+from manigraph_sim.tasks.base import register_task
 from manigraph_sim.world_model import Body, Goal
 
 #: Where the dishes start: a counter in front of the robot, a grid of 10 cm cells (metres);
@@ -47,7 +48,7 @@ def rack_slots(rack: str) -> list[Slot]:
 
 
 @register_task("dishwasher")
-class DishwasherTask(Task):
+class DishwasherLoading(DishwasherTask):
     """Dishwasher loading.
 
     **Task Description**: ``objects`` dishes (half plates, the rest bowls) lie on a counter;
