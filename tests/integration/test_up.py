@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_shared.errors import CONFIG_EXIT_CODE, RUNTIME_EXIT_CODE
+from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, Explanation
 from manigraph_shared.preflight import vulkan_problem
@@ -184,7 +184,8 @@ def test_a_checkpoint_the_planner_cannot_read_stops_the_stack_without_restarts(
     garbage = tmp_path / "garbage.pt"
     garbage.write_bytes(b"not a checkpoint")
     result = run_up("--policy", str(garbage), "--episodes", "1", check=False)
-    assert result.returncode == RUNTIME_EXIT_CODE  # the stack ran, and stopped
+    # The planner refused its configuration: up exits as eval does with the same file.
+    assert result.returncode == CONFIG_EXIT_CODE
     assert "not a manigraph checkpoint: " in result.stderr
     assert "planner refused its configuration" in result.stderr
     assert "restarting in" not in result.stderr

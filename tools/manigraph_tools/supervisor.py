@@ -123,6 +123,9 @@ class Supervisor:
         self.children: list[_Child] = []
         #: Why the stack must stop (a router death, a service out of restarts), once known.
         self.failure: str | None = None
+        #: Whether the failure is a service refusing its configuration (``CONFIG_EXIT_CODE``):
+        #: ``up`` then exits with that code too, as the same refusal in one process would.
+        self.failure_is_configuration = False
         self._pumps: list[threading.Thread] = []
         # re-entrant: a stop signal's handler may say something while the main thread writes
         self._write_lock = threading.RLock()
@@ -253,6 +256,7 @@ class Supervisor:
             return
         if code == CONFIG_EXIT_CODE:  # it said why above; the same options fail again
             self.failure = f"{name} refused its configuration (see its log above); not restarted"
+            self.failure_is_configuration = True
             return
         if child.in_a_row >= self.policy.max_restarts:
             self.failure = (

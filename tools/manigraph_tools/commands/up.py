@@ -20,7 +20,7 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import DEFAULT_PORT, BusConfig, loopback_endpoint
 from manigraph_shared.cells import cell_names
 from manigraph_shared.cli import Command
-from manigraph_shared.errors import ConfigError, ManigraphError
+from manigraph_shared.errors import CONFIG_EXIT_CODE, ConfigError, ManigraphError
 from manigraph_shared.manifest import driver_for_world, load_manifests
 from manigraph_shared.markers import load_marker_map
 from manigraph_shared.options import option_argv
@@ -411,7 +411,10 @@ def _up_run(args: argparse.Namespace) -> int:
         if tls_dir is not None:
             shutil.rmtree(tls_dir, ignore_errors=True)
     if supervisor.failure is not None:
-        raise ManigraphError(f"the stack stopped: {supervisor.failure}")
+        stopped = ManigraphError(f"the stack stopped: {supervisor.failure}")
+        if supervisor.failure_is_configuration:  # exit as the refusal would in one process
+            stopped.exit_code = CONFIG_EXIT_CODE
+        raise stopped
     if summary is not None:
         if any(supervisor.restarts.values()):
             summary["restarts"] = {k: v for k, v in supervisor.restarts.items() if v}
