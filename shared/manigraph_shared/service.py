@@ -208,17 +208,24 @@ class Service:
         hands them over this way."""
         reason = gate.check(scene)
         if reason is not None:
-            self.reject(scene, reason, f"{scene.episode_id} #{scene.sequence}")
+            # The next episode's first scene overtaking its start event happens at every
+            # episode boundary: counted (status, doctor) but not a warning nobody can act on.
+            quiet = reason == "not_running_episode"
+            self.reject(scene, reason, f"{scene.episode_id} #{scene.sequence}", quiet=quiet)
             return False
         return True
 
-    def reject(self, message: Message | str, reason: str, detail: str = "") -> None:
+    def reject(
+        self, message: Message | str, reason: str, detail: str = "", quiet: bool = False
+    ) -> None:
         """Refuse a valid ``message`` (or a message type's name): count it by type and
-        ``reason``, log it now and then. Safe from any thread; never blocks."""
+        ``reason``, log it now and then (``quiet``: at debug level only). Safe from any
+        thread; never blocks."""
         name = message if isinstance(message, str) else type(message).type_name()
         kind = f"{type_label(name)}:{reason}"
         if self.rejections.add(kind):
-            self.log.warning("refused %s%s", kind, f" ({detail})" if detail else "")
+            level = logging.DEBUG if quiet else logging.WARNING
+            self.log.log(level, "refused %s%s", kind, f" ({detail})" if detail else "")
 
     def setup(self) -> None:
         """Declare subscriptions, queryables and publishers."""
