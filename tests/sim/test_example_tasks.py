@@ -23,7 +23,9 @@ FAMILIES = {
     "kitting": "kitting-6",
     "red-tower": "red-tower-8",
 }
-FILES = sorted([*FAMILIES, *FAMILIES.values()])
+#: More evaluation sizes: size sort at three times its training file's blocks.
+LARGER = ("size-sort-12",)
+FILES = sorted([*FAMILIES, *FAMILIES.values(), *LARGER])
 
 
 def text(name: str) -> str:
@@ -74,6 +76,14 @@ def test_the_evaluation_file_has_twice_the_objects_and_goals(small: str) -> None
     values = {(n, str(v)) for o in a.objects for n, v in o.attributes.items()}
     assert {(n, str(v)) for o in b.objects for n, v in o.attributes.items()} <= values
     assert a.shuffle == b.shuffle
+
+
+def test_size_sort_12_has_six_blocks_of_each_size_and_a_goal_for_each() -> None:
+    spec = parse_task_file(text("size-sort-12"))
+    sizes = sorted(o.size[0] for o in spec.objects)
+    assert sizes == [0.03] * 6 + [0.07] * 6
+    accepted = sorted(g.accepts["size"][0] for g in spec.goals)  # type: ignore[index]
+    assert accepted == sizes
 
 
 @pytest.mark.parametrize("name", FILES)
