@@ -18,6 +18,7 @@ from manigraph_shared.registry import Registry
 REGISTRIES: tuple[tuple[str, str, str], ...] = (
     ("BACKENDS", "manigraph_sim.backends", "manigraph_sim.backends"),
     ("TASKS", "manigraph_sim.tasks.base", "manigraph_sim.tasks"),
+    ("FAMILIES", "manigraph_sim.families.base", "manigraph_sim.families"),
     ("DRIVERS", "manigraph_skills.drivers.registry", "manigraph_skills.drivers"),
     ("POLICIES", "manigraph_planner.policies.base", "manigraph_planner.policies"),
     ("TASK_EXPERTS", "manigraph_planner.policies.base", "manigraph_planner.policies"),
