@@ -14,7 +14,6 @@ from functools import partial
 from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.policies.base import load_policy
 from manigraph_shared.messages import EpisodeRequest
-from manigraph_sim.families.blocks.physics_boxes import PHYSICS_BOXES
 from manigraph_sim.geometric.backend import GeometricBackend
 
 
@@ -29,7 +28,7 @@ def main() -> None:
     policy = load_policy(args.policy)
     layouts = {
         "geometric": GeometricBackend,
-        "physics": partial(GeometricBackend, boxes=PHYSICS_BOXES),
+        "physics": partial(GeometricBackend, box_geometry="physics"),
     }
     seeds = range(args.seed, args.seed + args.episodes)
     for name, factory in layouts.items():

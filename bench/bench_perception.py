@@ -154,7 +154,7 @@ def main() -> None:
                     errors_mm.append(
                         float(np.linalg.norm(np.array(obj.position.as_tuple()) - truth)) * 1000
                     )
-            occupied = backend.occupied_goals()
+            occupied = backend.evaluation().filled_goals
             for goal_state in scene.goals:
                 goal_checks += 1
                 goal_correct += goal_state.filled == (goal_state.id in occupied)

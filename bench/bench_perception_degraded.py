@@ -64,7 +64,11 @@ def render(seeds: range, task: str, blocks: int, out: Path) -> None:
                 world.step(60)
             truth = {o.id: world.pose(o.id)[0] for o in layout.objects}
             frames.append(
-                {"rgb": camera.render(), "truth": truth, "occupied": backend.occupied_goals()}
+                {
+                    "rgb": camera.render(),
+                    "truth": truth,
+                    "occupied": backend.evaluation().filled_goals,
+                }
             )
         episodes.append({"layout": layout.model_dump_json(), "frames": frames})
         print(f"seed {seed}: {len(frames)} frames", flush=True)
