@@ -21,11 +21,12 @@ from manigraph_shared.messages import (
 )
 from manigraph_skills.drivers.base import Motion
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+from manigraph_skills.families.blocks.obstacles import box_walls
 from manigraph_skills.grasp_choice import choose_grasps
 from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, JointTrajectory, PandaModel
 from manigraph_skills.motion.collision import ESCAPE_TIME, ArmCollisionModel, LinkSpheres
 from manigraph_skills.motion.model import top_down
-from manigraph_skills.obstacles import Obstacle, box_walls
+from manigraph_skills.obstacles import Obstacle
 
 
 def tower(name: str, x: float, y: float, height: int) -> list[SceneObject]:

@@ -126,7 +126,7 @@ def test_a_pushed_in_racks_floor_is_an_obstacle_where_the_rack_stands() -> None:
     """The wrist reaching into the pulled-out bottom rack's far slots met the pushed-in top
     rack's front edge, which the arm check did not know of, and stopped 5 cm short."""
     from manigraph_shared.grasp_points import RACK_FLOOR_X, RACK_HANDLE_X
-    from manigraph_skills.obstacles import rack_obstacles
+    from manigraph_skills.families.dishwasher.obstacles import rack_obstacles
 
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)

@@ -1,4 +1,4 @@
-"""Which tilts turn a dish over (``manigraph_skills.dishwasher.turn_over``): pure geometry."""
+"""Which tilts turn a dish over (``families.dishwasher.turn_over``): pure geometry."""
 
 from __future__ import annotations
 
@@ -15,14 +15,14 @@ from manigraph_shared.orientations import (
     up_axis_orientation,
 )
 from manigraph_shared.rotations import rotation_matrix
-from manigraph_skills.dishwasher.turn_over import (
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
+from manigraph_skills.families.dishwasher.turn_over import (
     next_tilts,
     quaternion_of,
     set_down_hands,
     top_down_rotation,
     up_index,
 )
-from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
 BOWL = np.array([0.05, 0.05, 0.035])
 PLATE = np.array([0.064, 0.064, 0.015])

@@ -37,8 +37,8 @@ from manigraph_shared.panda import (
     FINGER_REACH,
 )
 from manigraph_shared.rotations import rotation_matrix
-from manigraph_skills.dishwasher.turn_over import HORIZONTAL
 from manigraph_skills.drivers.base import Grasp
+from manigraph_skills.families.dishwasher.turn_over import HORIZONTAL
 from manigraph_skills.obstacles import scene_obstacles
 
 #: Added to the fingers' reach before an axis counts as free, metres.

@@ -1,19 +1,20 @@
-"""PickAndPlace(object, goal): the primitive the policy's decisions are executed with; with a
-tray action (dishwasher), ToggleTray(rack) instead, and an ``orientation_index`` turns the
-object to that orientation as it is placed."""
+"""PickAndPlace(object, goal): the primitive the policy's decisions are executed with. An
+action a task family owns (the dishwasher's tray actions) is run by that family's extension
+(``families``: ``SkillFamily.run_action``), and an ``orientation_index`` turns the object to
+that orientation as it is placed. Where the object is set down, and which rules a robot
+whose world refuses nothing checks first, are the scene's family's."""
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
 
-from manigraph_shared.dishwasher_rules import check_dish_move
 from manigraph_shared.errors import SkillError
-from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus, TrayAction
+from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus
 from manigraph_shared.orientations import orientation
 from manigraph_shared.workspace import Workspace
-from manigraph_skills.dishwasher.slot_room import set_down_point
-from manigraph_skills.drivers.base import Motion, RobotDriver, TrayToggle
+from manigraph_skills.drivers.base import Motion, RobotDriver
+from manigraph_skills.families import family_of, family_taking
 from manigraph_skills.grasp_choice import choose_grasps
 
 SKILL = "pick_and_place"
@@ -48,8 +49,9 @@ class PickAndPlace:
         try:
             if scene is None or scene.episode_id != action.episode_id:
                 raise SkillError("no_scene", f"no observation of episode {action.episode_id}")
-            if action.tray_action is not TrayAction.NONE:
-                self._toggle_tray(action, scene, status)
+            owner = family_taking(action)
+            if owner is not None:  # e.g. a tray action: its family runs it
+                owner.part("run_action")(self, action, scene, status)
                 return status(SkillState.SUCCEEDED)
 
             try:
@@ -66,8 +68,10 @@ class PickAndPlace:
             turn = goal.orientation
             if action.orientation_index is not None:
                 turn = orientation(action.orientation_index)
-            if scene.racks and self.driver.checks_dish_rules:
-                check_dish_move(scene, item, goal)
+            family = family_of(scene)
+            rules = family.part("check_move")
+            if rules is not None and self.driver.checks_dish_rules:
+                rules(scene, item, goal)
             if action.orientation_index is not None:
                 self.driver.check_orientation(item.id, item.orientation, turn)
             status(SkillState.RUNNING)
@@ -81,29 +85,11 @@ class PickAndPlace:
                         }
                     )
                     item = turned
-            target = set_down_point(scene, item, goal) if scene.racks else goal.position
+            set_down = family.part("set_down_point")
+            target = goal.position if set_down is None else set_down(scene, item, goal)
             pick, place = choose_grasps(scene, item, target)
             self.driver.pick(Motion(decision, item.id, item.position, item.orientation, pick))
             self.driver.place(Motion(decision, item.id, target, turn, place))
         except SkillError as exc:
             return status(SkillState.FAILED, exc.reason, exc.detail)
         return status(SkillState.SUCCEEDED)
-
-    def _toggle_tray(
-        self, action: Action, scene: Scene, status: Callable[[SkillState], SkillStatus]
-    ) -> None:
-        """ToggleTray: the rack the tray action names, if the scene has it."""
-        rack_id = action.tray_action.rack_id
-        assert rack_id is not None
-        try:
-            rack = scene.rack(rack_id)
-        except KeyError:
-            raise SkillError("unknown_rack", f"the scene has no {rack_id}") from None
-        if not self.workspace.contains(rack.position):
-            raise SkillError("outside_workspace", f"{rack_id} handle at {rack.position.as_tuple()}")
-        status(SkillState.RUNNING)
-        self.driver.toggle_tray(
-            TrayToggle(
-                action.decision_id, rack_id, rack.position, rack.open, rack.travel, rack.rail
-            )
-        )

@@ -14,7 +14,7 @@ Checks, each reported as a ``SkillError`` reason:
 * ``placement_missed``: after release the object's centre is more than
   ``placement_tolerance`` from the target (when the transport can observe objects);
 * ``orientation_unreachable``: a placement asks for another up axis than the object has and
-  the fingers span it across no axis that would tilt it there (``panda_turn_over``: the
+  the fingers span it across no axis that would tilt it there (its family's turn-over: the
   turn-over manoeuvre tilts it on the counter first, then the top-down grasp places it);
 * ``handle_missed``: the fingers closed on nothing at a rack's handle; ``rack_stuck``: after a
   toggle the scene still shows the rack where it was;
@@ -44,7 +44,6 @@ from manigraph_shared.messages import (
     SceneObject,
 )
 from manigraph_shared.orientations import postures_like, up_axis_orientation
-from manigraph_skills.dishwasher.panda_turn_over import turn_dish
 from manigraph_skills.drivers.base import (
     PLANNING_FAILURES,
     Grasp,
@@ -55,6 +54,7 @@ from manigraph_skills.drivers.base import (
 from manigraph_skills.drivers.joint_transport import JointTransport
 from manigraph_skills.drivers.registry import MotionOptions
 from manigraph_skills.drivers.replanning import Replanner
+from manigraph_skills.families import family_of
 from manigraph_skills.motion import (
     HOME_Q,
     GraspPlanner,
@@ -203,13 +203,22 @@ class PandaMotionDriver(RobotDriver):
     def turn_over(
         self, decision_id: str, item: SceneObject, target: Quaternion, scene: Scene
     ) -> SceneObject:
-        """Tilt ``item`` on the counter until it stands as ``target`` asks (``panda_turn_over``):
+        """Tilt ``item`` on the counter until it stands as ``target`` asks, by the turn-over
+        manoeuvre of the scene's family (``SkillFamily.turn_over``, composed of this driver's
+        public pieces; the dishwasher's ``panda_turn_over``):
         its up axis ``target``'s, or for a plate on its rim any edge down
         (``orientations.postures_like``); the object as it then lies."""
         wanted = postures_like(item.category.value, up_axis_orientation(target))
         if up_axis_orientation(item.orientation) in wanted:
             return item
-        return turn_dish(self, decision_id, item, wanted, scene)
+        family = family_of(scene)
+        manoeuvre = family.part("turn_over")
+        if manoeuvre is None:
+            raise SkillError(
+                "orientation_unreachable", f"the {family.name} family has no turn-over manoeuvre"
+            )
+        turned: SceneObject = manoeuvre(self, decision_id, item, wanted, scene)
+        return turned
 
     def toggle_tray(self, toggle: TrayToggle) -> None:
         """Down onto the rack's handle tab (``grasp_points.rack_grip``), close across it,

@@ -27,14 +27,14 @@ from manigraph_shared.messages import Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATION_NAMES
 from manigraph_shared.panda import FINGER_BELOW_TCP
 from manigraph_shared.rotations import rotation_matrix
-from manigraph_skills.dishwasher.turn_over import (
+from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp, Motion
+from manigraph_skills.families.dishwasher.turn_over import (
     next_tilts,
     quaternion_of,
     set_down_hands,
     top_down_rotation,
     up_index,
 )
-from manigraph_skills.drivers.base import PLANNING_FAILURES, Grasp, Motion
 from manigraph_skills.grasp_choice import dish_grasp_height, dish_opening, room
 from manigraph_skills.motion.collision import Contact, refusal
 from manigraph_skills.motion.plan import UP, GraspPlanner

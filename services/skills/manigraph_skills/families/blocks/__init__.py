@@ -1,0 +1,14 @@
+"""The block family's skill extensions: the walls of the boxes its covers close
+(:mod:`.obstacles`). Blocks are set down at their goal's point and follow no rule beyond the
+goal's own; it is the fallback family (a scene no other family claims)."""
+
+from manigraph_skills.families.family import SkillFamily, register_family
+
+FAMILY = register_family(
+    SkillFamily(
+        name="blocks",
+        fallback=True,
+        obstacles="manigraph_skills.families.blocks.obstacles:box_walls",
+        help="blocks, covers and boxes: the boxes' walls as obstacles",
+    )
+)
