@@ -9,13 +9,13 @@ import numpy as np
 from manigraph_shared.errors import TaskError
 from manigraph_sim.families.blocks.box_geometry import BoxGeometry
 from manigraph_sim.families.blocks.options import BlockTask
-from manigraph_sim.tasks.base import (
-    register_task,
+from manigraph_sim.families.blocks.placement import (
     sample_sites,
     sample_square_sites,
     stack_bodies,
     stack_goals,
 )
+from manigraph_sim.tasks.base import register_task
 from manigraph_sim.world_model import BLOCK_SIZE, Body, Container, Goal, Layout
 
 

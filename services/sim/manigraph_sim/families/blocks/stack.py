@@ -6,12 +6,8 @@ import numpy as np
 
 from manigraph_shared.errors import TaskError
 from manigraph_sim.families.blocks.options import BlockTask
-from manigraph_sim.tasks.base import (
-    register_task,
-    sample_sites,
-    stack_bodies,
-    stack_goals,
-)
+from manigraph_sim.families.blocks.placement import sample_sites, stack_bodies, stack_goals
+from manigraph_sim.tasks.base import register_task
 from manigraph_sim.world_model import BLOCK_SIZE, Layout
 
 
