@@ -20,6 +20,7 @@ REGISTRIES: tuple[tuple[str, str, str], ...] = (
     ("TASKS", "manigraph_sim.tasks.base", "manigraph_sim.tasks"),
     ("FAMILIES", "manigraph_sim.families.base", "manigraph_sim.families"),
     ("DRIVERS", "manigraph_skills.drivers.registry", "manigraph_skills.drivers"),
+    ("FAMILIES", "manigraph_skills.families.family", "manigraph_skills.families"),
     ("POLICIES", "manigraph_planner.policies.base", "manigraph_planner.policies"),
     ("TASK_EXPERTS", "manigraph_planner.policies.base", "manigraph_planner.policies"),
     ("POLICY_FILE_LOADERS", "manigraph_planner.policies.base", "manigraph_planner.policies"),
