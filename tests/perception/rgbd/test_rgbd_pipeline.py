@@ -225,3 +225,25 @@ def test_the_segmentation_picture_shows_each_segment_beside_the_depth(
     # The segment is tinted with its colour's hue, the table around it darkened.
     assert picture[rows, cols].mean() != bgr[rows, cols].mean()
     assert picture[5, 5].sum() < bgr[5, 5].sum()
+
+
+def test_a_block_first_seen_far_from_its_start_learns_its_colour_and_keeps_it(
+    calibration: Calibration,
+) -> None:
+    red, green, yellow = (0.5, -0.1, 0.02), (0.6, 0.2, 0.02), (0.45, 0.1, 0.02)
+    perception = RgbdPerception(calibration)
+    perception.set_layout(_layout({"block_0": red, "block_1": green, "block_2": yellow}))
+    bgr, depth = draw(calibration, [(red, SIDE, "red"), (yellow, SIDE, "yellow")])
+    _scene_positions(perception, bgr, depth, 1.0)  # green unseen: its hue is not known
+    moved = (0.35, -0.05, 0.02)  # green seen 30 cm from its start: no other block is green
+    bgr, depth = draw(
+        calibration, [(red, SIDE, "red"), (yellow, SIDE, "yellow"), (moved, SIDE, "green")]
+    )
+    _scene_positions(perception, bgr, depth, 2.0)
+    # Yellow moves onto green's place while green is out of sight: yellow is yellow.
+    onto = (0.35, -0.05, 0.06)
+    bgr, depth = draw(calibration, [(red, SIDE, "red"), (onto, SIDE, "yellow")])
+    _, result, positions = _scene_positions(perception, bgr, depth, 3.0)
+    assert "block_1" not in result.matches
+    assert np.linalg.norm(positions["block_2"] - onto) < 0.004
+    assert np.linalg.norm(positions["block_1"] - moved) < 0.004

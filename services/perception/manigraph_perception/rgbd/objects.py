@@ -5,8 +5,8 @@ segment's points within ``top_band`` of its highest (95th percentile) height; se
 above it is a rectangle: ``cv2.minAreaRect`` of its x, y gives the centre, the footprint and
 the yaw (modulo the face's symmetry). The **height** is the top over the table. A face that
 is not a rectangle (a thin strip or an L: the top edges of the sides of an object whose top
-is under another one) makes a *covered* object: its top and its side are known, its centre
-only roughly (half its depth behind the side, away from the camera).
+is under another one) makes a *covered* object: it is there, its centre only roughly known
+(half its depth behind the side, away from the camera; the pipeline keeps its belief).
 
 The **colour** is the palette name (``manigraph_shared.colours``) nearest in hue: of the
 task's vocabulary when the layout names colours (and one is within ``VOCABULARY_REACH``),

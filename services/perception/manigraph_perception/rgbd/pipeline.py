@@ -15,7 +15,7 @@ naming why; the caller keeps the last good Scene.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -89,14 +89,8 @@ class RgbdPerception:
         self.calibration = calibration
         self.camera = camera
         self.base_T_camera = calibration.base_T_camera
-        self.world = WorldModel(
-            WorldConfig(
-                fill_enter=(world or WorldConfig()).fill_enter,
-                fill_exit=(world or WorldConfig()).fill_exit,
-                stale_after=(world or WorldConfig()).stale_after,
-                rest=None,
-            )
-        )
+        # Depth measures height directly: no resting along the viewing ray (markers' rule).
+        self.world = WorldModel(replace(world or WorldConfig(), rest=None))
         self.plane_config = PlaneConfig()
         self.segment_config = SegmentConfig()
         self.object_config = ObjectConfig()
@@ -218,9 +212,10 @@ class RgbdPerception:
         size = self.tracker.sizes[object_id]
         centre = detection.centre - np.array([0.0, 0.0, size[2] / 2])
         if detection.covered:
-            # Only its top is measured well: keep where it is believed across the image.
-            believed = self.world.beliefs[object_id].position
-            centre[:2] = believed[:2]
+            # Something stands on it: only a part of its side shows, which says it is there,
+            # not exactly where (the top of what shows may be well below its own). It is
+            # kept where it was believed when its top was last seen.
+            centre = self.world.beliefs[object_id].position.copy()
         else:
             centre[:2] += detection.away * _far_edge_loss(detection, size) / 2
         pose = np.eye(4)

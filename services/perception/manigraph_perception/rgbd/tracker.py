@@ -6,7 +6,8 @@ is the distance from where the object is believed to be (``WorldModel``: object 
 the carried-object rule) and a pair is ruled out when
 
 * the colours differ: the layout's colour when it names one, else the hue the object showed
-  when it was first matched (learned once per episode, from a match near its believed place);
+  when it was first matched (learned once per episode, from a match near its believed place
+  or from a detection that no other object could be);
 * the footprint differs from the layout's size by more than ``size_tolerance`` (a fully seen
   top only);
 * the object is a covered detection's and it is further than ``covered_reach`` from its
@@ -61,6 +62,10 @@ class Tracker:
                 if cost is not None:
                     pairs.append((cost, object_id, index))
         pairs.sort()
+        # How many objects each detection could be: one only, and it teaches its hue.
+        candidates = [0] * len(detections)
+        for _, _, index in pairs:
+            candidates[index] += 1
         taken_objects: set[str] = set()
         taken_detections: set[int] = set()
         out = []
@@ -73,7 +78,7 @@ class Tracker:
             if (
                 object_id not in self.hues
                 and object_id not in self.colours
-                and cost < self.config.learn_within
+                and (cost < self.config.learn_within or candidates[index] == 1)
             ):
                 self.hues[object_id] = detection.hue
             out.append((object_id, detection))
