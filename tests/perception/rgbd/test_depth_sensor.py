@@ -69,3 +69,10 @@ def test_depth_travels_as_a_16_bit_png_of_millimetres() -> None:
     # A full frame of the noisy sensor fits the contract's limit (640 x 480).
     full = sensor_depth(_flat(0.9, (480, 640)), 2, DepthNoise(), np.random.default_rng(3))
     assert len(encode_depth_png(full)) < 700_000
+
+
+def test_depth_without_the_camera_is_refused_by_name() -> None:
+    from manigraph_sim.backends import create_backend
+
+    with pytest.raises(ConfigError, match="camera-depth: renders the camera's depth"):
+        create_backend("physics", camera_depth=True)

@@ -108,6 +108,8 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
 
     @classmethod
     def from_options(cls, options: Any) -> PhysicsBackend:
+        if options.camera_depth and not options.camera:
+            raise ConfigError("camera-depth", "renders the camera's depth: needs --camera")
         if (options.video or options.camera) and not vulkan_available():
             raise ConfigError(
                 "camera" if options.camera else "video",
