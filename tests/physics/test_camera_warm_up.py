@@ -4,6 +4,7 @@ shaders (which holds the GIL, so no thread of the sim could say it), then how lo
 from __future__ import annotations
 
 import logging
+import re
 import time
 
 import pytest
@@ -20,13 +21,14 @@ def test_progress_lines_come_while_a_block_runs_and_stop_with_it(
     caplog.set_level(logging.INFO, "manigraph.sim")
     with warm_up.progress_while(log, "camera: warming up", "a while", every=0.2):
         time.sleep(1.1)
-    time.sleep(0.5)  # a ticker still running would write again
     lines = [line for line in capfd.readouterr().err.splitlines() if "so far" in line]
-    assert 3 <= len(lines) <= 6, lines
-    assert lines[0].endswith("INFO  manigraph.sim: camera: warming up: 0 s so far")
+    time.sleep(1.0)  # a ticker still running would write again (a loaded machine: no bound)
+    later = [line for line in capfd.readouterr().err.splitlines() if "so far" in line]
+    assert lines and not later, (lines, later)
+    assert re.search(r"INFO  manigraph\.sim: camera: warming up: \d+ s so far$", lines[0])
     said = [r.getMessage() for r in caplog.records]
     assert said[0] == "camera: warming up (a while) ..."
-    assert said[-1].startswith("camera: warming up: done in 1.")
+    assert re.match(r"camera: warming up: done in \d+\.\d s", said[-1]), said[-1]
 
 
 def test_no_progress_lines_where_the_log_says_nothing_at_info(
@@ -57,5 +59,6 @@ def test_the_physics_camera_warm_up_reports_progress_while_shaders_compile(
     said = [r.getMessage() for r in caplog.records if r.name == "manigraph.sim"]
     assert said[0].startswith("camera: warming up the renderer (")
     assert said[-1].startswith("camera: warming up the renderer: done in ")
-    # One line a second (the first at 1 s), however long the shaders held the GIL.
-    assert len(ticks) >= int(seconds) - 3, (seconds, ticks)
+    # Lines while the shaders hold the GIL: one a second when the machine is free, and at
+    # least one every 5 s when it is loaded (the ticker is a process of its own).
+    assert len(ticks) >= int(seconds / 5), (seconds, ticks)
