@@ -1,9 +1,10 @@
 """``manigraph train``: learn a GNN policy from MCAP demonstrations (or a LeRobot dataset
 that ``manigraph export`` wrote), write a checkpoint.
 
-The logs say which policy they teach: decisions on dishwasher scenes (with racks) train the
-four-headed dishwasher policy (``dishwasher.training``), any other the paper's object and goal
-heads. ``--heads`` chooses where a log holds both. Scenes whose objects carry attributes or
+The logs say which policy they teach: each decision's scene belongs to a task family
+(``families``), whose heads it trains; a family with a training loop of its own (the
+dishwasher's four heads) runs it, any other the generic trainer with the paper's object and
+goal heads. ``--heads`` chooses where a log holds both. Scenes whose objects carry attributes or
 whose goals list what they accept (a task file's) train with the task's feature columns,
 learned from the scenes and stamped in the checkpoint (docs/training.md)."""
 
@@ -41,12 +42,16 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--epochs", type=int, help="full passes (default: 150; dishwasher heads: 300)"
     )
+    from manigraph_planner.families import FAMILIES
+
+    heads = {family.heads: name for name, family in FAMILIES.items()}
     parser.add_argument(
         "--heads",
-        choices=["auto", "object-goal", "dishwasher"],
+        choices=["auto", *heads],
         default="auto",
-        help="the policy to train: object-goal (block tasks) or dishwasher (four heads); auto "
-        "(default): what the logs' decisions are",
+        help="the policy to train, by its heads: "
+        + ", ".join(f"{h} ({family})" for h, family in heads.items())
+        + "; auto (default): what the logs' decisions are",
     )
     parser.add_argument(
         "--copies",
@@ -85,13 +90,12 @@ def _heads(args: argparse.Namespace) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    use_threads(args.threads)
-    if _heads(args) == "dishwasher":
-        if args.device != "cpu":
-            from manigraph_shared.errors import ConfigError
+    from manigraph_planner.families import family_for_heads
 
-            raise ConfigError("device", "the dishwasher recipe trains on the CPU only")
-        return _train_dishwasher(args)
+    use_threads(args.threads)
+    own_command = family_for_heads(_heads(args)).part("train_command")
+    if own_command is not None:  # a family with a training loop of its own (the dishwasher)
+        return int(own_command(args))
     from manigraph_planner.families.blocks.recipes import augmentation_for
     from manigraph_planner.gnn import save_checkpoint
     from manigraph_planner.training.dataset import load_demonstrations
@@ -122,38 +126,6 @@ def _run(args: argparse.Namespace) -> int:
     )
     features = list(demos.feature_spec.names)
     print(json.dumps(rounded({**checkpoint_field(output), **metrics, "features": features})))
-    return 0
-
-
-def _train_dishwasher(args: argparse.Namespace) -> int:
-    from dataclasses import asdict
-
-    from manigraph_planner.families.dishwasher.training import (
-        DishTrainConfig,
-        load_dish_demonstrations,
-        train_dish,
-    )
-    from manigraph_planner.gnn import save_checkpoint
-
-    defaults = DishTrainConfig()
-    config = DishTrainConfig(
-        architecture=args.arch,
-        seed=args.seed,
-        epochs=defaults.epochs if args.epochs is None else args.epochs,
-        copies=defaults.copies if args.copies is None else args.copies,
-    )
-    demos = load_dish_demonstrations(args.demos)
-    net, metrics = train_dish(demos, config)
-    output = args.output or RUNS / f"dishwasher-{args.arch}-seed{args.seed}.pt"
-    output.parent.mkdir(parents=True, exist_ok=True)
-    save_checkpoint(
-        output,
-        net,
-        training_config={**asdict(config), "demos": [str(p) for p in args.demos]},
-        data_hash=demos.data_hash,
-        metrics={**metrics, "episodes": demos.episodes},
-    )
-    print(json.dumps(rounded({**checkpoint_field(output), "heads": "dishwasher", **metrics})))
     return 0
 
 

@@ -19,7 +19,7 @@ from manigraph_planner.gnn.models.build import policy_net_for
 from manigraph_planner.gnn.models.config import HEADS, feature_spec_for
 from manigraph_planner.policies import POLICIES, load_policy
 from manigraph_planner.policies.gnn import GNNPolicy
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.errors import CONFIG_EXIT_CODE, ConfigError
 from manigraph_shared.messages import EpisodeRequest, Scene
 from manigraph_sim.geometric.backend import GeometricBackend
 
@@ -78,3 +78,15 @@ def test_shipped_checkpoints_load_through_their_familys_registration(
     assert type(loaded) is policy
     assert family_for_heads(loaded.net.config.heads).name == family  # type: ignore[attr-defined]
     assert family_of(scene).name == family
+
+
+def test_train_runs_the_family_s_own_command_for_its_heads(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--heads dishwasher`` reaches the dishwasher's own training command (it trains on the
+    CPU only and says so before reading any log)."""
+    from manigraph_shared.cli import main
+
+    log = str(tmp_path / "demos.mcap")
+    assert main(["train", log, "--heads", "dishwasher", "--device", "cuda"]) == CONFIG_EXIT_CODE
+    assert "the dishwasher recipe trains on the CPU only" in capsys.readouterr().err

@@ -56,6 +56,8 @@ class PlannerFamily:
         recipe: ``"module:attribute"`` of its training recipe (augmentation and defaults).
         trainer: ``"module:attribute"`` of its own training loop; None: the generic trainer
             (``training.trainer``).
+        train_command: ``"module:attribute"`` of ``(args) -> exit code``: what ``manigraph
+            train`` runs for demonstrations of this family; None: the generic command.
         ensembles: whether its networks may be ensembles (``ModelConfig.ensemble`` > 1).
     """
 
@@ -69,6 +71,7 @@ class PlannerFamily:
     policy: str | None = None
     recipe: str | None = None
     trainer: str | None = None
+    train_command: str | None = None
     ensembles: bool = False
     help: str = ""
 

@@ -26,6 +26,7 @@ FAMILY = register_family(
         policy="manigraph_planner.families.dishwasher.gnn_policy:DishwasherGNNPolicy",
         recipe="manigraph_planner.families.dishwasher.training:DishTrainConfig",
         trainer="manigraph_planner.families.dishwasher.training:train_dish",
+        train_command="manigraph_planner.families.dishwasher.train_command:train_from_args",
         ensembles=True,
         help="dishes into racks: object, goal, orientation and tray-action heads",
     )
