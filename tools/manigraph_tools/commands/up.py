@@ -96,6 +96,12 @@ SIM_RGBD_PERCEPTION = [
 ]
 
 
+class StackRefusedConfiguration(ManigraphError):
+    """A service of the stack refused its configuration: ``up`` exits with that code too."""
+
+    exit_code = CONFIG_EXIT_CODE
+
+
 def _up_configure(parser: argparse.ArgumentParser) -> None:
     episode_arguments(parser)
     parser.add_argument("--record", type=Path, help="also record everything to this MCAP file")
@@ -411,10 +417,9 @@ def _up_run(args: argparse.Namespace) -> int:
         if tls_dir is not None:
             shutil.rmtree(tls_dir, ignore_errors=True)
     if supervisor.failure is not None:
-        stopped = ManigraphError(f"the stack stopped: {supervisor.failure}")
         if supervisor.failure_is_configuration:  # exit as the refusal would in one process
-            stopped.exit_code = CONFIG_EXIT_CODE
-        raise stopped
+            raise StackRefusedConfiguration(f"the stack stopped: {supervisor.failure}")
+        raise ManigraphError(f"the stack stopped: {supervisor.failure}")
     if summary is not None:
         if any(supervisor.restarts.values()):
             summary["restarts"] = {k: v for k, v in supervisor.restarts.items() if v}
