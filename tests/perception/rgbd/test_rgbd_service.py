@@ -140,3 +140,55 @@ def test_a_realsense_without_the_package_is_refused_by_name(tmp_path: Path) -> N
     )
     assert result.returncode != 0
     assert "camera: realsense needs the pyrealsense2 package" in result.stderr, result.stderr
+
+
+LAYOUT_TOML = """
+[[objects]]
+id = "block_0"
+category = "block"
+position = [0.5, 0.0, 0.02]
+
+[[goals]]
+id = "goal_0"
+category = "block"
+position = [0.4, 0.1, 0.02]
+"""
+
+
+def test_a_recording_drives_the_service_and_its_end_is_named(tmp_path: Path) -> None:
+    from manigraph_shared.mcap_log import McapLogWriter
+
+    calibration = load_calibration(CALIBRATION)
+    recording = tmp_path / "rgbd.mcap"
+    writer = McapLogWriter(recording)
+    for sequence, place in enumerate([RED, (0.45, 0.05, 0.02), (0.4, 0.1, 0.02)]):
+        bgr, depth = draw(calibration, [(place, 0.04, "red")])
+        for message in _frame(bgr, depth, sequence):
+            writer.write(message.key_for(), message.encode(), int(message.stamp * 1e9))
+    writer.close()
+    layout = tmp_path / "layout.toml"
+    layout.write_text(LAYOUT_TOML)
+    with stack(tmp_path) as running:
+        running.start("router")
+        with running.client() as bus:
+            scenes: queue.Queue[Scene] = queue.Queue()
+            bus.subscribe(Scene, scenes.put)
+            process = running.start(
+                "perception",
+                "perception",
+                "--pipeline",
+                "rgbd",
+                "--camera",
+                str(recording),
+                "--calibration",
+                CALIBRATION,
+                "--layout",
+                str(layout),
+            )
+            seen = [scenes.get(timeout=60) for _ in range(3)]
+            assert process.wait(timeout=60) != 0  # the recording ended: named, not hung
+    final = np.array(seen[-1].objects[0].position.as_tuple())
+    assert np.linalg.norm(final - (0.4, 0.1, 0.02)) < 0.005
+    assert seen[-1].goals[0].filled and not seen[0].goals[0].filled
+    log = (tmp_path / "perception.log").read_text()
+    assert "recording rgbd.mcap ended after 3 RGB-D frames" in log
