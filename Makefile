@@ -34,7 +34,8 @@ lint: install  ## ruff, mypy, and this branch's commit subjects (CONTRIBUTING.md
 	$(RUN) ruff format --check .
 	$(RUN) mypy shared/manigraph_shared tools/manigraph_tools lab/manigraph_lab \
 		services/sim/manigraph_sim services/planner/manigraph_planner \
-		services/skills/manigraph_skills services/perception/manigraph_perception
+		services/skills/manigraph_skills services/perception/manigraph_perception \
+		testkit/manigraph_testkit
 
 format: install
 	$(RUN) ruff format .

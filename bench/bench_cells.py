@@ -46,10 +46,10 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.cells import cell_names
 from manigraph_shared.messages import Action, Scene
+from manigraph_testkit.testing import free_port
 from manigraph_tools.cell_episodes import run_cells
 from manigraph_tools.episode_plan import EpisodeOptions
 from manigraph_tools.episodes import run_episodes
-from manigraph_tools.testing import free_port
 
 P50_RATIO_TARGET = 2.0
 STARVATION_TARGET = 0.8

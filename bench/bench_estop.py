@@ -45,7 +45,7 @@ from manigraph_shared.messages import (
     SkillState,
     SkillStatus,
 )
-from manigraph_tools.testing import stack
+from manigraph_testkit.testing import stack
 
 
 def legal_first_move(scene: Scene) -> tuple[str, str]:

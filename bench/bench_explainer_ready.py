@@ -32,7 +32,7 @@ from scenes import stack_scene
 
 from manigraph_shared.errors import BusError, RequestRefused
 from manigraph_shared.messages import EXPLAINER_WARMING_UP, ExplainRequest, Explanation
-from manigraph_tools.testing import stack
+from manigraph_testkit.testing import stack
 
 ROOT = Path(__file__).resolve().parents[1]
 READY_TARGET_S = 2.0

@@ -7,7 +7,7 @@ runs twice in one invocation:
 * **loopback**: both sites on this machine's loopback, routers on two ports, no delay;
 * **netns**: the sites in two Linux network namespaces joined by a veth pair with ``--rtt-ms``
   of round trip (``tc netem`` on each end; where the kernel lacks netem,
-  ``manigraph_tools.delay_link`` relays the router link with half the RTT each way).
+  ``manigraph_testkit.delay_link`` relays the router link with half the RTT each way).
 
 Latency per decision: the scene's ``stamp`` (the sim, site a) to its Action's arrival back at
 site a, both on this machine's clock; the scene crosses the link, the planner decides, the
@@ -28,16 +28,16 @@ import tempfile
 import time
 from pathlib import Path
 
-from manigraph_tools.access import cell_identities, write_cell_identities
-from manigraph_tools.certs import IDENTITIES, make_certificates
-from manigraph_tools.netlab import (
+from manigraph_testkit.netlab import (
     Sites,
     TwoHosts,
     decision_latencies_ms,
     loopback_hosts,
     netns_problem,
 )
-from manigraph_tools.testing import free_port
+from manigraph_testkit.testing import free_port
+from manigraph_tools.access import cell_identities, write_cell_identities
+from manigraph_tools.certs import IDENTITIES, make_certificates
 
 CELLS = {
     **cell_identities(["cell-1"]),

@@ -5,7 +5,7 @@ simulated seconds, and the Scene and JointState rates the recorder saw on the bu
 
 runs ``manigraph up --sim physics --realtime ... --record <tmp>.mcap --json`` and prints one
 JSON object: the episode summary's wall and simulated seconds, and per-episode stream rates
-(``manigraph_tools.stream_rates``). Extra arguments after ``--`` go to ``manigraph up``.
+(``manigraph_testkit.stream_rates``). Extra arguments after ``--`` go to ``manigraph up``.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from manigraph_tools.stream_rates import stream_rates, summary
+from manigraph_testkit.stream_rates import stream_rates, summary
 
 
 def main() -> int:

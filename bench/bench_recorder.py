@@ -21,7 +21,7 @@ from mcap.reader import make_reader
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action
-from manigraph_tools.testing import record_then_kill, stack
+from manigraph_testkit.testing import record_then_kill, stack
 
 
 def lost_window_ms(tmp: Path, run: int) -> float:

@@ -37,7 +37,7 @@ from manigraph_shared.messages import (
     SkillState,
     SkillStatus,
 )
-from manigraph_tools.testing import Stack, stack
+from manigraph_testkit.testing import Stack, stack
 
 REFUSED = {
     "unknown task": EpisodeRequest(episode_id="bad-1", task="no_such_task"),

@@ -21,7 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from manigraph_tools.testing import stack
+from manigraph_testkit.testing import stack
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGET_S = 10.0

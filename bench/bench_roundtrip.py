@@ -33,7 +33,7 @@ from raw_echo import PING, PONG, open_client  # type: ignore[import-not-found]
 from manigraph_shared.bus import Bus
 from manigraph_shared.messages import Action, EpisodeRequest, Scene
 from manigraph_sim.geometric.backend import GeometricBackend
-from manigraph_tools.testing import Stack, stack
+from manigraph_testkit.testing import Stack, stack
 
 ROOT = Path(__file__).resolve().parent.parent
 CHECKPOINTS = {"expert": "expert", "sage": str(ROOT / "checkpoints" / "sage.pt")}

@@ -19,7 +19,7 @@ import sys
 import time
 from pathlib import Path
 
-from manigraph_tools.testing import free_port
+from manigraph_testkit.testing import free_port
 
 ROOT = Path(__file__).resolve().parent.parent
 CELLS = {

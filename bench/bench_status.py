@@ -24,7 +24,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from manigraph_tools.testing import stack
+from manigraph_testkit.testing import stack
 
 
 def timed(running, *args: str) -> tuple[float, subprocess.CompletedProcess[str]]:  # type: ignore[no-untyped-def]

@@ -25,8 +25,8 @@ from bench_roundtrip import scene_for  # type: ignore[import-not-found]
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.messages import Action, Scene
+from manigraph_testkit.testing import Stack, stack
 from manigraph_tools.certs import make_certificates
-from manigraph_tools.testing import Stack, stack
 
 
 class Timer:

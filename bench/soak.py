@@ -51,8 +51,8 @@ from manigraph_shared.messages import (
     Scene,
 )
 from manigraph_shared.messages.base import MAX_PAYLOAD_BYTES
-from manigraph_tools.flood import concrete_key, flood_scenes, fuzz_stack
-from manigraph_tools.fuzzing import message_types
+from manigraph_testkit.flood import concrete_key, flood_scenes, fuzz_stack
+from manigraph_testkit.fuzzing import message_types
 
 #: Payloads per type of the fuzz pass before the fuzz row's baseline (Soak.warm_up).
 WARM_UP_PER_TYPE = 2_000

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from soak_stack import SERVICES, soak_stack  # bench/soak_stack.py
 
-from manigraph_tools.flood import flood_scenes
+from manigraph_testkit.flood import flood_scenes
 
 
 def main() -> None:

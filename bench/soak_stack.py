@@ -21,9 +21,9 @@ from pathlib import Path
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.messages import Delivery, ServiceStatus
-from manigraph_tools.flood import concrete_key, rss_mb
-from manigraph_tools.fuzzing import message_types
-from manigraph_tools.testing import Stack, stack
+from manigraph_testkit.flood import concrete_key, rss_mb
+from manigraph_testkit.fuzzing import message_types
+from manigraph_testkit.testing import Stack, stack
 
 SERVICES = ("sim", "planner", "skills", "recorder")
 

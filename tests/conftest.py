@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_tools.testing import Stack, stack
+from manigraph_testkit.testing import Stack, stack
 
 
 @pytest.fixture

@@ -11,7 +11,7 @@ import pytest
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import BusError
 from manigraph_shared.messages import EpisodeEvent, EpisodeRequest, Scene
-from manigraph_tools.testing import Stack, run_up
+from manigraph_testkit.testing import Stack, run_up
 
 pytestmark = pytest.mark.integration
 

@@ -30,7 +30,7 @@ from manigraph_shared.messages import (
     SkillStatus,
     Vector3,
 )
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
 

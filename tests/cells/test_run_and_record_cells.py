@@ -13,7 +13,7 @@ import pytest
 from manigraph_shared.bus import Bus
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Scene
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
 

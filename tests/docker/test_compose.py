@@ -28,7 +28,7 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, JointState
-from manigraph_tools.testing import free_port, open_raw_session
+from manigraph_testkit.testing import free_port, open_raw_session
 
 # The first test also builds every image: cold, on a fresh engine, that takes 6-15 minutes
 # (the torch wheels), far past the suite's 300 s per-test limit.

@@ -32,7 +32,7 @@ import pytest
 from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import decode_log
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene, TrayAction
-from manigraph_tools.testing import Stack, free_port, stack
+from manigraph_testkit.testing import Stack, free_port, stack
 
 pytestmark = pytest.mark.integration
 

@@ -12,7 +12,7 @@ import pytest
 
 from manigraph_shared.errors import CONFIG_EXIT_CODE, RUNTIME_EXIT_CODE, PolicyError
 from manigraph_shared.messages import Action, ExplainRequest, Explanation
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
 

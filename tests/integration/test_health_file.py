@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from manigraph_shared.health import ENVIRONMENT, FRESH_SECONDS
-from manigraph_tools.testing import stack
+from manigraph_testkit.testing import stack
 
 pytestmark = pytest.mark.integration
 

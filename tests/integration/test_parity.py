@@ -15,7 +15,7 @@ from manigraph_planner.training.dataset import load_demonstrations
 from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodeRequest
-from manigraph_tools.testing import run_up
+from manigraph_testkit.testing import run_up
 
 pytestmark = pytest.mark.integration
 

@@ -16,7 +16,7 @@ from manigraph_shared.messages import (
     ServiceStatus,
     TaskLayout,
 )
-from manigraph_tools.testing import Stack, free_port, stack
+from manigraph_testkit.testing import Stack, free_port, stack
 
 pytestmark = pytest.mark.integration
 

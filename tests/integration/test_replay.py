@@ -10,7 +10,7 @@ import pytest
 
 from manigraph_shared.mcap_log import McapLogWriter, read_log
 from manigraph_shared.messages import Action, Scene
-from manigraph_tools.testing import Stack, run_up
+from manigraph_testkit.testing import Stack, run_up
 
 pytestmark = pytest.mark.integration
 

@@ -12,7 +12,7 @@ from mcap.reader import make_reader
 from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, Scene, ServiceStatus
-from manigraph_tools.testing import Stack, free_port, record_then_kill, run_up
+from manigraph_testkit.testing import Stack, free_port, record_then_kill, run_up
 
 pytestmark = pytest.mark.integration
 

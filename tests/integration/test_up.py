@@ -17,7 +17,7 @@ from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, Explanation
 from manigraph_shared.preflight import vulkan_problem
-from manigraph_tools.testing import free_port, run_up
+from manigraph_testkit.testing import free_port, run_up
 
 CHECKPOINTS = Path(__file__).resolve().parents[2] / "checkpoints"
 

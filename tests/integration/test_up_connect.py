@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_tools.testing import free_port
+from manigraph_testkit.testing import free_port
 
 pytestmark = pytest.mark.integration
 

@@ -15,7 +15,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, Scene
-from manigraph_tools.testing import run_up
+from manigraph_testkit.testing import run_up
 
 pytestmark = pytest.mark.integration
 

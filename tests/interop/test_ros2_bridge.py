@@ -24,7 +24,7 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_shared.panda import ARM_JOINTS
-from manigraph_tools.testing import Stack, open_raw_session
+from manigraph_testkit.testing import Stack, open_raw_session
 
 pytestmark = pytest.mark.integration
 

@@ -1,4 +1,4 @@
-"""The delay relay that stands in for netem (``manigraph_tools.delay_link``), as its own
+"""The delay relay that stands in for netem (``manigraph_testkit.delay_link``), as its own
 process on loopback in front of a TCP echo: every byte arrives, in order, both ways, never
 before its delay; an end of stream passes through. How late it is, is a bench figure
 (``bench/bench_netem.py`` prints what the link adds to the round trip)."""
@@ -14,7 +14,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from manigraph_tools.testing import free_port
+from manigraph_testkit.testing import free_port
 
 DELAY_MS = 15.0
 
@@ -49,7 +49,7 @@ def echo_port() -> Iterator[int]:
 def relay_port(echo_port: int) -> Iterator[int]:
     port = free_port()
     relay = subprocess.Popen(
-        [sys.executable, "-m", "manigraph_tools.delay_link", "--listen", f"127.0.0.1:{port}",
+        [sys.executable, "-m", "manigraph_testkit.delay_link", "--listen", f"127.0.0.1:{port}",
          "--to", f"127.0.0.1:{echo_port}", "--delay-ms", str(DELAY_MS)],
     )  # fmt: skip
     deadline = time.monotonic() + 30.0

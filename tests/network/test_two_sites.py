@@ -22,9 +22,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_tools.access import cell_identities, write_cell_identities
-from manigraph_tools.certs import IDENTITIES, make_certificates
-from manigraph_tools.netlab import (
+from manigraph_testkit.netlab import (
     MANIGRAPH,
     PROBE,
     Host,
@@ -33,6 +31,8 @@ from manigraph_tools.netlab import (
     decision_latencies_ms,
     netns_problem,
 )
+from manigraph_tools.access import cell_identities, write_cell_identities
+from manigraph_tools.certs import IDENTITIES, make_certificates
 
 pytestmark = pytest.mark.integration
 CUT_SECONDS = 4.0

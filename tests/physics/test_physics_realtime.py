@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_tools.stream_rates import stream_rates
-from manigraph_tools.testing import run_up, spare_core_problem
+from manigraph_testkit.stream_rates import stream_rates
+from manigraph_testkit.testing import run_up, spare_core_problem
 
 pytestmark = pytest.mark.integration
 

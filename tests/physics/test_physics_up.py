@@ -8,7 +8,7 @@ import json
 import pytest
 
 from manigraph_sim.physics.video import vulkan_available
-from manigraph_tools.testing import run_up
+from manigraph_testkit.testing import run_up
 
 pytestmark = pytest.mark.integration
 

@@ -13,7 +13,7 @@ import pytest
 from manigraph_planner.policies import load_policy
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, Scene
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 REPO = Path(__file__).resolve().parents[2]
 GOLDEN = sorted((REPO / "tests" / "golden").glob("*.mcap"))

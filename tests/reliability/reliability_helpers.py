@@ -17,7 +17,7 @@ from manigraph_shared.messages import (
     Scene,
     ServiceStatus,
 )
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 M = TypeVar("M", bound=Message)
 

@@ -10,7 +10,7 @@ import time
 import pytest
 
 from manigraph_shared.messages import EpisodeEvent, EpisodePhase
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
 

@@ -28,7 +28,7 @@ from manigraph_shared.messages import (
     SkillState,
     SkillStatus,
 )
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
 

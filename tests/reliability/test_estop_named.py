@@ -13,7 +13,7 @@ import pytest
 from reliability_helpers import STARTUP, Inbox, start
 
 from manigraph_shared.messages import Action, EmergencyStop, EpisodeEvent, EpisodePhase
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
 

@@ -27,7 +27,7 @@ from manigraph_shared.messages import (
     SceneObject,
     Vector3,
 )
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 CHECKPOINT = Path(__file__).resolve().parents[2] / "checkpoints" / "sage.pt"
 BLOCK = Vector3(x=0.04, y=0.04, z=0.04)

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from manigraph_shared.errors import MessageError
 from manigraph_shared.messages import Message, key_matches
-from manigraph_tools.fuzzing import hostile_payloads, message_types, valid_messages
+from manigraph_testkit.fuzzing import hostile_payloads, message_types, valid_messages
 
 TYPES = message_types()
 FUZZ = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])

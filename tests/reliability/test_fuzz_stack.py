@@ -10,8 +10,8 @@ import time
 import pytest
 
 from manigraph_shared.messages import ServiceStatus
-from manigraph_tools.flood import fuzz_stack
-from manigraph_tools.testing import Stack
+from manigraph_testkit.flood import fuzz_stack
+from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
 

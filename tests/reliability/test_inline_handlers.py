@@ -16,7 +16,7 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_shared.service import Service
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 SERVICE_THREAD = "probe-service"
 

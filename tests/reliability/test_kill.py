@@ -19,7 +19,7 @@ import pytest
 from reliability_helpers import STARTUP, start
 
 from manigraph_shared.messages import Action
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
 

@@ -13,8 +13,8 @@ from manigraph_shared.errors import LogError
 from manigraph_shared.mcap_log import McapLogWriter, is_finalised, recover_log
 from manigraph_shared.messages import Action
 from manigraph_shared.service import TRIM_AFTER_MESSAGES
+from manigraph_testkit.testing import Stack, record_then_kill
 from manigraph_tools.recorder import Recorder
-from manigraph_tools.testing import Stack, record_then_kill
 
 pytestmark = pytest.mark.integration
 

@@ -14,8 +14,8 @@ import pytest
 from reliability_helpers import STARTUP, start
 
 from manigraph_shared.messages import ServiceStatus
+from manigraph_testkit.testing import Stack, free_port, stack
 from manigraph_tools.certs import make_certificates
-from manigraph_tools.testing import Stack, free_port, stack
 
 pytestmark = pytest.mark.integration
 

@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 from manigraph_shared.errors import CONFIG_EXIT_CODE, RUNTIME_EXIT_CODE
+from manigraph_testkit.testing import free_port
 from manigraph_tools.supervisor import ProcessSpec, RestartPolicy, Supervisor
-from manigraph_tools.testing import free_port
 
 
 @dataclass(frozen=True)

@@ -25,9 +25,9 @@ from manigraph_shared.messages import (
     RobotCommand,
     Vector3,
 )
+from manigraph_testkit.testing import Stack, stack
 from manigraph_tools.access import cell_identities, write_cell_identities
 from manigraph_tools.certs import IDENTITIES, make_certificates
-from manigraph_tools.testing import Stack, stack
 
 pytestmark = pytest.mark.integration
 NOW = 1_700_000_000.0
@@ -146,7 +146,7 @@ def test_a_cell_identity_cannot_serve_another_cells_resets(router: Stack) -> Non
 
 
 def test_up_secure_runs_each_cell_under_its_own_identities() -> None:
-    from manigraph_tools.testing import run_up
+    from manigraph_testkit.testing import run_up
 
     result = run_up("--secure", "--cells", "2", "--blocks", "3", "--episodes", "1", "--json")
     summary = json.loads(result.stdout.strip().splitlines()[-1])

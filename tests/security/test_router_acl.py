@@ -28,8 +28,8 @@ from manigraph_shared.messages import (
     ServiceStatus,
     Vector3,
 )
+from manigraph_testkit.testing import Stack, open_raw_session, stack
 from manigraph_tools.certs import make_certificates
-from manigraph_tools.testing import Stack, open_raw_session, stack
 
 pytestmark = pytest.mark.integration
 NOW = 1_700_000_000.0

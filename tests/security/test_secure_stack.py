@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_tools.testing import run_up, stack
+from manigraph_testkit.testing import run_up, stack
 
 pytestmark = pytest.mark.integration
 

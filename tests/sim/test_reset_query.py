@@ -7,7 +7,7 @@ import time
 import pytest
 
 from manigraph_shared.messages import EpisodeRequest
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
 

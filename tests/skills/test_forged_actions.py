@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reliability"))
 from reliability_helpers import (

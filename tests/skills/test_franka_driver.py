@@ -26,7 +26,7 @@ from manigraph_skills.drivers import DRIVERS
 from manigraph_skills.drivers.base import Grasp, Motion, TrayToggle
 from manigraph_skills.drivers.franka import FrankaDriver
 from manigraph_skills.drivers.franka_config import FrankaConfig
-from manigraph_tools.testing import free_port
+from manigraph_testkit.testing import free_port
 
 franky = pytest.importorskip("franky")
 

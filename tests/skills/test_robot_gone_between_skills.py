@@ -9,7 +9,7 @@ import pytest
 
 from manigraph_shared.messages import SkillState, SkillStatus
 from manigraph_skills.in_flight import ActionInFlight
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 
 def test_under_way_from_begin_to_the_final_status_or_the_end() -> None:

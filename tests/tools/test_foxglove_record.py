@@ -12,8 +12,8 @@ from mcap.reader import make_reader
 
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, Explanation, Scene
+from manigraph_testkit.testing import run_up
 from manigraph_tools.foxglove_bridge import SCENE_TOPIC, TF_TOPIC
-from manigraph_tools.testing import run_up
 
 CHECKPOINTS = Path(__file__).resolve().parents[2] / "checkpoints"
 ProtobufDecoder = Callable[[str, bytes, bytes], dict[str, Any]]

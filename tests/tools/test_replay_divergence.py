@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_tools.testing import Stack
+from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
 

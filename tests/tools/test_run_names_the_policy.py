@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 
 from manigraph_shared.results import FLOAT_DIGITS
+from manigraph_testkit.testing import Stack
 from manigraph_tools.served_policy import served_policy
-from manigraph_tools.testing import Stack
 
 pytestmark = pytest.mark.integration
 

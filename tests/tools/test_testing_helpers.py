@@ -5,7 +5,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 
-from manigraph_tools.testing import cpu_share, spare_core_problem
+from manigraph_testkit.testing import cpu_share, spare_core_problem
 
 
 def _spin(seconds: float) -> None:

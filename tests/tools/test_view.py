@@ -15,8 +15,8 @@ from websockets.sync.client import ClientConnection, connect
 
 from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneGoal, SceneObject
 from manigraph_shared.messages import Vector3 as V
+from manigraph_testkit.testing import Stack, free_port
 from manigraph_tools.foxglove_bridge import SCENE_TOPIC
-from manigraph_tools.testing import Stack, free_port
 
 ProtobufDecoder = Callable[[str, bytes, bytes], dict[str, Any]]
 #: foxglove-sdk 0.30 names the Foxglove WebSocket protocol (foxglove.websocket.v1) so; the

@@ -28,7 +28,7 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_sim.physics.depth_noise import encode_depth_png
-from manigraph_tools.testing import Stack, free_port, stack
+from manigraph_testkit.testing import Stack, free_port, stack
 
 pytestmark = pytest.mark.integration
 
@@ -102,8 +102,9 @@ def test_frames_become_scenes_and_bad_ones_are_named_with_the_last_scene_kept(
             bus.subscribe(ServiceStatus, statuses.put, key="manigraph/status/perception")
             bus.publish(_layout())
             time.sleep(0.5)
-            for message in _frame(bgr, depth, 0):
-                bus.publish(message)
+            depth_image, image = _frame(bgr, depth, 0)
+            bus.publish(image)  # a driver may send the image first: paired all the same
+            bus.publish(depth_image)
             good = scenes.get(timeout=10)
             assert good.episode_id == "rgbd" and not good.stale
             block = good.objects[0]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from manigraph_shared.errors import CONFIG_EXIT_CODE
-from manigraph_tools.testing import run_up
+from manigraph_testkit.testing import run_up
 
 pytestmark = pytest.mark.integration
 

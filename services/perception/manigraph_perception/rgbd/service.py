@@ -2,18 +2,19 @@
 sim's ``--camera --camera-depth``, a camera driver) or from a source (a RealSense, an MCAP
 recording) in, ``Scene`` out.
 
-Bus frames are paired by ``sequence`` (the depth of a frame is published before its image)
-and handled newest-first, as the ArUco service does. A frame that cannot be used is named in
-the service's status (``no table plane: ...``, ``depth 320 x 240 ..., calibrated for ...``,
-``no usable frame for 4 s``), with the age of the last good Scene; that Scene is published
-again, ``stale``, with its own stamp: the planner decides only on a Scene observed after its
-last skill ended, so it never acts on the old world.
+Bus frames are paired by ``sequence`` (in either order: the sim publishes a frame's depth
+first, a driver may not) and handled newest-first, as the ArUco service does. A frame that
+cannot be used is named in the service's status (``no table plane: ...``, ``depth 320 x 240
+..., calibrated for ...``, ``no usable frame for 4 s``), with the age of the last good
+Scene; that Scene is published again, ``stale``, with its own stamp: the planner decides
+only on a Scene observed after its last skill ended, so it never acts on the old world.
 """
 
 from __future__ import annotations
 
 import threading
 import time
+from typing import Any
 
 import msgspec
 
@@ -36,6 +37,12 @@ from manigraph_shared.service import Service
 _NO_FRAME = "no usable frame"
 
 
+def _hold(held: dict[int, Any], sequence: int, message: Any) -> None:
+    held[sequence] = message
+    for old in [s for s in held if s < sequence - 4]:
+        del held[old]
+
+
 class RgbdPerceptionService(Service):
     name = "perception"
 
@@ -53,7 +60,9 @@ class RgbdPerceptionService(Service):
         self.fixed_layout = layout
         self.tick_period = poll_period if source is not None else 0.5
         self._lock = threading.Lock()
+        #: Halves of frames waiting for their other half, by sequence (a few at most).
         self._depths: dict[int, DepthImage] = {}
+        self._images: dict[int, CompressedImage] = {}
         self._waiting: tuple[CompressedImage, DepthImage] | None = None
         self.last_good: Scene | None = None
         self.failed = False
@@ -102,15 +111,23 @@ class RgbdPerceptionService(Service):
 
     def _depth_arrived(self, depth: DepthImage) -> None:
         with self._lock:  # Zenoh thread
-            self._depths[depth.sequence] = depth
-            for old in [s for s in self._depths if s < depth.sequence - 4]:
-                del self._depths[old]
+            image = self._images.pop(depth.sequence, None)
+            if image is None:
+                _hold(self._depths, depth.sequence, depth)
+                return
+        self._pair(image, depth)
 
     def _image_arrived(self, image: CompressedImage) -> None:
-        with self._lock:  # Zenoh thread: keep the newest pair only
+        with self._lock:  # Zenoh thread
             depth = self._depths.pop(image.sequence, None)
             if depth is None:
-                return  # its depth never came (or the camera gives none): not a frame
+                _hold(self._images, image.sequence, image)  # its depth may come next
+                return
+        self._pair(image, depth)
+
+    def _pair(self, image: CompressedImage, depth: DepthImage) -> None:
+        """A whole frame: keep only the newest waiting; schedule one processing."""
+        with self._lock:
             waiting = self._waiting is not None
             self._waiting = (image, depth)
         if not waiting:

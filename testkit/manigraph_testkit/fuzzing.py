@@ -3,7 +3,7 @@
 Used by the reliability suite (``tests/reliability/``) and the soak (``bench/soak.py``); it
 needs the workspace's dev dependency group (``hypothesis``), which no service image installs.
 
-For floods of hundreds of thousands of payloads, :mod:`manigraph_tools.mutation_fuzzer`
+For floods of hundreds of thousands of payloads, :mod:`manigraph_testkit.mutation_fuzzer`
 mutates a pool of these draws instead.
 
 Valid messages are drawn from each type's own JSON Schema (the one written into MCAP), then

@@ -1,7 +1,7 @@
 """A mutational fuzzer for volume: cheap hostile payloads (~10-50 us each) mutated from a pool
 of valid objects that Hypothesis draws once (:func:`seed_objects`), for floods of hundreds of
-thousands (``manigraph_tools.flood``, the soaks). Hypothesis' own strategies, slower and
-shrinking, are :mod:`manigraph_tools.fuzzing`'s; this module needs the same dev dependency
+thousands (``manigraph_testkit.flood``, the soaks). Hypothesis' own strategies, slower and
+shrinking, are :mod:`manigraph_testkit.fuzzing`'s; this module needs the same dev dependency
 group."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import math
 from typing import Any
 
 from manigraph_shared.messages import Message
-from manigraph_tools.fuzzing import json_bytes, valid_objects
+from manigraph_testkit.fuzzing import json_bytes, valid_objects
 
 
 def seed_objects(cls: type[Message], count: int, seed: int = 0) -> list[dict[str, Any]]:

@@ -1,7 +1,7 @@
 """A TCP relay that holds every byte ``--delay-ms`` in each direction: a link's delay where the
-kernel has no ``netem`` (:mod:`manigraph_tools.netlab`).
+kernel has no ``netem`` (:mod:`manigraph_testkit.netlab`).
 
-``python -m manigraph_tools.delay_link --listen 10.213.1.1:7448 --to 10.213.1.1:7447
+``python -m manigraph_testkit.delay_link --listen 10.213.1.1:7448 --to 10.213.1.1:7447
 --delay-ms 10``. Each accepted connection is relayed to ``--to``; each chunk read is written
 ``delay`` after it arrived, in order, so a request and its answer cross it in twice the delay.
 It never inspects what it relays (a TLS stream passes through untouched).

@@ -23,8 +23,8 @@ from manigraph_shared.messages import (
     SceneObject,
     Vector3,
 )
-from manigraph_tools.fuzzing import message_types
-from manigraph_tools.mutation_fuzzer import Mutator, seed_objects
+from manigraph_testkit.fuzzing import message_types
+from manigraph_testkit.mutation_fuzzer import Mutator, seed_objects
 
 
 def concrete_key(cls: type[Message]) -> str:

@@ -1,5 +1,5 @@
 """A bus client that tests and benches run *inside* a namespace (``ip netns exec NS python -m
-manigraph_tools.netprobe ...``): the test process itself lives outside every namespace.
+manigraph_testkit.netprobe ...``): the test process itself lives outside every namespace.
 
 ``alive``: exit 0 once the named services are alive in the cell. ``listen``: record every
 Scene, Action and RobotCommand of the cell (with arrival times) until SIGTERM or ``--seconds``,

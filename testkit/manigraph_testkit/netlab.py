@@ -7,7 +7,7 @@ namespaces made here, and everything is removed on exit, also after a failure.
 
 The link's delay is ``tc qdisc ... netem delay`` on each end where the kernel has netem. Where
 it has not (``sch_netem`` is a module some kernels lack, and loading one needs the host),
-:mod:`manigraph_tools.delay_link` relays the router-to-router TCP connection through a
+:mod:`manigraph_testkit.delay_link` relays the router-to-router TCP connection through a
 userspace queue that holds every byte ``delay`` in each direction: the same round trip for the
 application, applied per chunk instead of per packet. :attr:`TwoHosts.delay_by` says which.
 Cutting the link (``ip link set DEV down``) cuts it either way.
@@ -161,7 +161,7 @@ class TwoHosts:
         itself where netem delays the link, else a relay in a adding the delay each way."""
         if self.delay_by != "relay":
             return f"{self.a.address}:{port}"
-        argv = [sys.executable, "-m", "manigraph_tools.delay_link",
+        argv = [sys.executable, "-m", "manigraph_testkit.delay_link",
                 "--listen", f"{self.a.address}:{relay_port}", "--to", f"{self.a.address}:{port}",
                 "--delay-ms", f"{self.delay_ms / 2:g}"]  # fmt: skip
         relay = self.a.start(argv, dict(os.environ), log)
@@ -189,7 +189,7 @@ def loopback_hosts() -> tuple[Host, Host]:
 
 
 MANIGRAPH = (sys.executable, "-m", "manigraph_shared.cli")
-PROBE = (sys.executable, "-m", "manigraph_tools.netprobe")
+PROBE = (sys.executable, "-m", "manigraph_testkit.netprobe")
 
 
 class Sites:
