@@ -209,3 +209,11 @@ def test_a_marker_map_is_refused_without_the_camera_or_when_it_does_not_read(
     )  # fmt: skip
     assert result.returncode == CONFIG_EXIT_CODE
     assert "markers.0.category" in result.stderr and len(result.stderr.strip().splitlines()) == 1
+
+
+def test_no_decider_starts_no_planner_and_takes_no_episodes() -> None:
+    """``--policy none``: a client of one's own decides (examples/demonstrator.py), so up
+    runs no episodes of its own."""
+    result = run_up("--policy", "none", "--episodes", "1", check=False)
+    assert result.returncode == CONFIG_EXIT_CODE
+    assert "--policy none: your own client starts each episode" in result.stderr

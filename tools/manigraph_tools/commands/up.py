@@ -54,6 +54,9 @@ def _sim_backends() -> Registry[Any] | None:
 
 #: ``up --policy human``: no planner; the demonstration page (``manigraph demo-ui``) decides.
 HUMAN = "human"
+#: ``up --policy none``: no decider at all; a client of one's own plays the planner's part
+#: (``examples/demonstrator.py``), and ``--record`` keeps its demonstrations.
+NOBODY = "none"
 
 
 def _demo_ui_argv(args: argparse.Namespace) -> list[str]:
@@ -109,7 +112,8 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         "--policy",
         default="expert",
         help=f"planner policy or checkpoint; '{HUMAN}': no planner, a person decides on the "
-        "demonstration page instead (docs/demo-ui.md)",
+        f"demonstration page instead (docs/demo-ui.md); '{NOBODY}': no decider, a client of "
+        "your own decides (examples/demonstrator.py)",
     )
     parser.add_argument(
         "--demo-port",
@@ -302,11 +306,15 @@ def _up_run(args: argparse.Namespace) -> int:
         raise ConfigError(
             "episodes", f"--policy {HUMAN}: a person starts each episode on the page; leave it out"
         )
-    if human and args.explain_decisions:
-        raise ConfigError("explain-decisions", f"needs a GNN planner, not --policy {HUMAN}")
+    if args.policy == NOBODY and plan is not None:
+        raise ConfigError(
+            "episodes", f"--policy {NOBODY}: your own client starts each episode; leave it out"
+        )
+    if args.policy in (HUMAN, NOBODY) and args.explain_decisions:
+        raise ConfigError("explain-decisions", f"needs a GNN planner, not --policy {args.policy}")
     if args.policy.endswith(".pt") and not Path(args.policy).is_file():
         raise ConfigError("policy", f"no such checkpoint file: {args.policy}")
-    if args.cells is not None and (human or args.scene_source != "sim"):
+    if args.cells is not None and (args.policy in (HUMAN, NOBODY) or args.scene_source != "sim"):
         raise ConfigError("cells", f"one cell only with --policy {HUMAN} or --scene-source camera")
     if args.planner_per_cell and args.cells is None:
         raise ConfigError("planner-per-cell", "only with --cells")
@@ -342,7 +350,8 @@ def _up_run(args: argparse.Namespace) -> int:
     if args.record:
         specs.append(spec("recorder", ["record", "--output", str(args.record)]))
     for cell in cells:
-        specs += _cell_specs(args, plan, sim_options, human, cell, spec, not shared_planner)
+        deciding = not shared_planner and args.policy != NOBODY
+        specs += _cell_specs(args, plan, sim_options, human, cell, spec, deciding)
     if shared_planner:
         served = ",".join(str(cell) for cell in cells)
         planner = spec("planner", [*_planner_argv(args, plan), "--cells", served])
