@@ -21,6 +21,8 @@ gives them with its exact pose, the ground truth the calibration commands are ch
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -90,20 +92,53 @@ class CameraConfig:
             raise ConfigError("camera.eye", "must be at least 5 cm from the target")
 
 
+@contextlib.contextmanager
+def default_shaders() -> Iterator[None]:
+    """SAPIEN's lit shaders and float pictures for the cameras made meanwhile, whatever the
+    process's global choice: a ManiSkill environment made earlier in the process switches to
+    its ``minimal`` pack with 8-bit pictures, in which every lit surface read as white (the
+    colours and the markers' quiet zone both lost). ``picture_rgb`` reads either kind."""
+    previous = sapien.render.get_camera_shader_dir()
+    sapien.render.set_camera_shader_dir("default")
+    for name, kind in SAPIEN_DEFAULT_PICTURES.items():
+        sapien.render.set_picture_format(name, kind)
+    try:
+        yield
+    finally:
+        sapien.render.set_camera_shader_dir(previous)
+
+
+#: The picture formats of SAPIEN's default shader pack (what ManiSkill restores for it too).
+SAPIEN_DEFAULT_PICTURES = {
+    "Color": "r32g32b32a32sfloat",
+    "ColorRaw": "r32g32b32a32sfloat",
+    "PositionSegmentation": "r32g32b32a32sfloat",
+}
+
+
+def picture_rgb(camera: sapien.render.RenderCameraComponent) -> np.ndarray:
+    """The camera's colour picture as 8-bit RGB, from float or 8-bit render targets."""
+    rgba = camera.get_picture("Color")
+    if rgba.dtype == np.uint8:
+        return np.ascontiguousarray(rgba[..., :3])
+    return (np.clip(rgba[..., :3], 0, 1) * 255).astype(np.uint8)
+
+
 class TripodCamera:
     """A fixed camera in a rendering SAPIEN scene."""
 
     def __init__(self, config: CameraConfig, scene: sapien.Scene) -> None:
         self.config = config
         self.scene = scene
-        self.camera = scene.add_camera(
-            config.name,
-            config.width * config.supersample,
-            config.height * config.supersample,
-            float(np.deg2rad(config.fovy_degrees)),
-            0.01,
-            10.0,
-        )
+        with default_shaders():
+            self.camera = scene.add_camera(
+                config.name,
+                config.width * config.supersample,
+                config.height * config.supersample,
+                float(np.deg2rad(config.fovy_degrees)),
+                0.01,
+                10.0,
+            )
         self._rng = np.random.default_rng(config.seed)
         self.camera.entity.set_pose(_off_by(config, self._rng))
         self.sequence = 0
@@ -141,8 +176,7 @@ class TripodCamera:
         return sensor_depth(fine, self.config.supersample, noise, self._rng)
 
     def _colour(self) -> np.ndarray:
-        rgba = self.camera.get_picture("Color")
-        rgb = (np.clip(rgba[..., :3], 0, 1) * 255).astype(np.uint8)
+        rgb = picture_rgb(self.camera)
         if self.config.supersample > 1:
             size = (self.config.width, self.config.height)
             rgb = cv2.resize(rgb, size, interpolation=cv2.INTER_AREA)

@@ -74,7 +74,10 @@ class EpisodeVideo:
         self._steps = 0
         scene.set_ambient_light([0.45, 0.45, 0.45])
         scene.add_directional_light([0.3, 0.5, -1.0], [0.8, 0.8, 0.8])
-        self.camera = scene.add_camera("video", config.width, config.height, 0.9, 0.01, 10.0)
+        from manigraph_sim.physics.camera import default_shaders
+
+        with default_shaders():
+            self.camera = scene.add_camera("video", config.width, config.height, 0.9, 0.01, 10.0)
         self.camera.entity.set_pose(look_at(CAMERA_EYE, CAMERA_TARGET))
         self.scene = scene
 
@@ -86,8 +89,9 @@ class EpisodeVideo:
     def capture(self) -> None:
         self.scene.update_render()
         self.camera.take_picture()
-        rgba = self.camera.get_picture("Color")
-        self.frames.append((np.clip(rgba[..., :3], 0, 1) * 255).astype(np.uint8))
+        from manigraph_sim.physics.camera import picture_rgb
+
+        self.frames.append(picture_rgb(self.camera))
 
     def write(self, episode: str, seed: int) -> Path:
         """Write the frames so far; returns the file written."""
