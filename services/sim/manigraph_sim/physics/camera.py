@@ -21,8 +21,6 @@ gives them with its exact pose, the ground truth the calibration commands are ch
 
 from __future__ import annotations
 
-import contextlib
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,6 +33,7 @@ from manigraph_shared.markers import MarkerMap, MarkerSpec, marker_in_object
 from manigraph_shared.messages import CameraInfo, CompressedImage, DepthImage, ImageFormat
 from manigraph_shared.rotations import rotation_matrix
 from manigraph_sim.physics.depth_noise import DepthNoise, encode_depth_png, sensor_depth
+from manigraph_sim.physics.render_targets import default_shaders, picture_rgb
 from manigraph_sim.physics.video import look_at
 
 #: Tripod in front of the table and above it, looking at the middle of the workspace.
@@ -90,38 +89,6 @@ class CameraConfig:
             raise ConfigError("camera-pose-error", "at most 0.05 m and 5 degrees")
         if np.linalg.norm(np.subtract(self.eye, self.target)) < 0.05:
             raise ConfigError("camera.eye", "must be at least 5 cm from the target")
-
-
-@contextlib.contextmanager
-def default_shaders() -> Iterator[None]:
-    """SAPIEN's lit shaders and float pictures for the cameras made meanwhile, whatever the
-    process's global choice: a ManiSkill environment made earlier in the process switches to
-    its ``minimal`` pack with 8-bit pictures, in which every lit surface read as white (the
-    colours and the markers' quiet zone both lost). ``picture_rgb`` reads either kind."""
-    previous = sapien.render.get_camera_shader_dir()
-    sapien.render.set_camera_shader_dir("default")
-    for name, kind in SAPIEN_DEFAULT_PICTURES.items():
-        sapien.render.set_picture_format(name, kind)
-    try:
-        yield
-    finally:
-        sapien.render.set_camera_shader_dir(previous)
-
-
-#: The picture formats of SAPIEN's default shader pack (what ManiSkill restores for it too).
-SAPIEN_DEFAULT_PICTURES = {
-    "Color": "r32g32b32a32sfloat",
-    "ColorRaw": "r32g32b32a32sfloat",
-    "PositionSegmentation": "r32g32b32a32sfloat",
-}
-
-
-def picture_rgb(camera: sapien.render.RenderCameraComponent) -> np.ndarray:
-    """The camera's colour picture as 8-bit RGB, from float or 8-bit render targets."""
-    rgba = camera.get_picture("Color")
-    if rgba.dtype == np.uint8:
-        return np.ascontiguousarray(rgba[..., :3])
-    return (np.clip(rgba[..., :3], 0, 1) * 255).astype(np.uint8)
 
 
 class TripodCamera:

@@ -14,6 +14,7 @@ import numpy as np
 import sapien
 
 from manigraph_shared.errors import ConfigError
+from manigraph_sim.physics.render_targets import default_shaders, picture_rgb
 
 #: Where the camera stands and what it looks at (robot base frame, metres): in front of the
 #: table, to the robot's left, looking down at the middle of the task workspace.
@@ -74,8 +75,6 @@ class EpisodeVideo:
         self._steps = 0
         scene.set_ambient_light([0.45, 0.45, 0.45])
         scene.add_directional_light([0.3, 0.5, -1.0], [0.8, 0.8, 0.8])
-        from manigraph_sim.physics.camera import default_shaders
-
         with default_shaders():
             self.camera = scene.add_camera("video", config.width, config.height, 0.9, 0.01, 10.0)
         self.camera.entity.set_pose(look_at(CAMERA_EYE, CAMERA_TARGET))
@@ -89,8 +88,6 @@ class EpisodeVideo:
     def capture(self) -> None:
         self.scene.update_render()
         self.camera.take_picture()
-        from manigraph_sim.physics.camera import picture_rgb
-
         self.frames.append(picture_rgb(self.camera))
 
     def write(self, episode: str, seed: int) -> Path:
