@@ -20,6 +20,7 @@ from manigraph_shared.bus import Bus
 from manigraph_shared.cell_services import CellServices
 from manigraph_shared.errors import RequestRefused
 from manigraph_shared.messages import (
+    EXPLAINER_WARMING_UP,
     Action,
     ExplainRequest,
     Explanation,
@@ -150,12 +151,24 @@ def test_each_cell_explains_its_own_decisions_only(running_stack: Stack) -> None
         actions = Actions(buses["left"])
         buses["left"].publish(two_block_scene("ep-left", time.time(), 0))
         decided = actions.wait_for("ep-left:0", 30.0)
-        # The explainer may still be building (PyG's import): the query waits for it.
-        why = buses["left"].request(ExplainRequest(decision_id="ep-left:0"), Explanation, 60.0)
+        # The explainer may still be warming up: asked again, as `manigraph explain` does.
+        why = explain(buses["left"], "ep-left:0")
         assert why.decision_id == "ep-left:0"
         assert (why.object, why.goal) == (decided.object_id, decided.goal_id)
         with pytest.raises(RequestRefused, match="decision_id"):  # not the right cell's
-            buses["right"].request(ExplainRequest(decision_id="ep-left:0"), Explanation, 60.0)
+            explain(buses["right"], "ep-left:0")
+
+
+def explain(bus: Bus, decision_id: str, within: float = 60.0) -> Explanation:
+    """The planner's explanation, asked again while its explainer warms up."""
+    deadline = time.monotonic() + within
+    while True:
+        try:
+            return bus.request(ExplainRequest(decision_id=decision_id), Explanation, within)
+        except RequestRefused as exc:
+            if EXPLAINER_WARMING_UP not in str(exc) or time.monotonic() > deadline:
+                raise
+            time.sleep(0.1)
 
 
 def test_a_bad_cell_list_stops_the_planner_naming_cells() -> None:
