@@ -7,8 +7,10 @@ enforces the access-control policy of ``manigraph_tools.access``: deny unless gr
 from __future__ import annotations
 
 import logging
+import os
 import signal
 import threading
+import time
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
@@ -17,11 +19,33 @@ from manigraph_tools.access import access_control, read_cell_identities
 
 log = logging.getLogger("manigraph.router")
 
+#: Set by ``manigraph up``'s supervisor to its pid: the router then also stops when it is no
+#: longer that process's child (belt and braces beside the parent-death signal), and a stop
+#: that does not finish within :data:`STOP_GRACE` seconds ends the process outright.
+SUPERVISOR_ENV = "MANIGRAPH_SUPERVISOR_PID"
+STOP_GRACE = 5.0
+
+
+def _watch_supervisor(stop: threading.Event) -> None:
+    supervisor = os.environ.get(SUPERVISOR_ENV, "")
+    if not supervisor.isdigit():
+        return
+
+    def watch() -> None:
+        while not stop.is_set():
+            if os.getppid() != int(supervisor):
+                log.info("the supervisor went away: stopping")
+                stop.set()
+            time.sleep(0.5)
+
+    threading.Thread(target=watch, name="supervisor-watch", daemon=True).start()
+
 
 def run_router(config: BusConfig) -> int:
     stop = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    _watch_supervisor(stop)
     # The certificate set's cells.json (if any) names each cell identity's cells.
     cells = read_cell_identities(config.tls_dir) if config.tls else {}
     overrides = {"access_control": access_control(cells=cells)} if config.tls else {}
@@ -45,4 +69,8 @@ def run_router(config: BusConfig) -> int:
             health.beat()
         health.clear()
         log.info("stopping")
+        # Closing the session must not keep a stopped router alive on its port.
+        timer = threading.Timer(STOP_GRACE, os._exit, args=(0,))
+        timer.daemon = True
+        timer.start()
     return 0

@@ -147,8 +147,13 @@ class Supervisor:
         self.children.append(_Child(spec, self._spawn(spec, colour), colour, time.monotonic()))
 
     def _spawn(self, spec: ProcessSpec, colour: str) -> subprocess.Popen[str]:
-        env = {**os.environ, "PYTHONUNBUFFERED": "1", **spec.env}
         parent = os.getpid()
+        env = {
+            **os.environ,
+            "PYTHONUNBUFFERED": "1",
+            "MANIGRAPH_SUPERVISOR_PID": str(parent),  # the router watches it (router.py)
+            **spec.env,
+        }
         process = subprocess.Popen(
             spec.argv(),
             stdout=subprocess.PIPE,
