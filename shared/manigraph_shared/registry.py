@@ -44,10 +44,16 @@ from manigraph_shared.options import (
     option_fields,
 )
 
-__all__ = ["Entry", "Registry"]
+__all__ = ["Entry", "Registry", "import_target"]
 
 T = TypeVar("T")
 S = TypeVar("S")
+
+
+def import_target(path: str) -> Any:
+    """The object ``"module:attribute"`` names, its module imported on first use."""
+    module, _, attribute = path.partition(":")
+    return getattr(importlib.import_module(module), attribute)
 
 
 @dataclass
@@ -64,8 +70,7 @@ class Entry(Generic[T]):
     def load(self) -> T:
         if self._loaded is None:
             if isinstance(self.target, str):
-                module, _, attribute = self.target.partition(":")
-                self._loaded = cast(T, getattr(importlib.import_module(module), attribute))
+                self._loaded = cast(T, import_target(self.target))
             else:
                 self._loaded = self.target
         return self._loaded

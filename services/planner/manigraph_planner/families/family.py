@@ -18,14 +18,13 @@ registering a family and listing the policies stays torch-free.
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import Scene
-from manigraph_shared.registry import Registry
+from manigraph_shared.registry import Registry, import_target
 
 __all__ = ["FAMILIES", "PlannerFamily", "family_for_heads", "family_of"]
 
@@ -78,10 +77,7 @@ class PlannerFamily:
     def part(self, name: str) -> Any:
         """The part ``name`` (``network``, ``policy``, ``recipe``, ...) imported, or None."""
         path = getattr(self, name)
-        if path is None:
-            return None
-        module, _, attribute = path.partition(":")
-        return getattr(importlib.import_module(module), attribute)
+        return None if path is None else import_target(path)
 
 
 #: Every task family the planner knows, by name; each registers itself in its folder.

@@ -21,13 +21,12 @@ the skill runner's, so registering stays free of cycles).
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
 from manigraph_shared.messages import Action, Scene
-from manigraph_shared.registry import Registry
+from manigraph_shared.registry import Registry, import_target
 
 __all__ = ["FAMILIES", "SkillFamily", "family_of", "family_taking", "register_family"]
 
@@ -72,10 +71,7 @@ class SkillFamily:
     def part(self, name: str) -> Any:
         """The hook ``name`` imported, or None when the family has none."""
         path = getattr(self, name)
-        if path is None:
-            return None
-        module, _, attribute = path.partition(":")
-        return getattr(importlib.import_module(module), attribute)
+        return None if path is None else import_target(path)
 
 
 #: Every task family the skill runner knows, by name; each registers itself in its folder.
