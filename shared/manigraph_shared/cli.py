@@ -15,6 +15,7 @@ import argparse
 import errno
 import logging
 import os
+import signal
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -125,6 +126,16 @@ def one_line(error: BaseException) -> str:
     return text or type(error).__name__
 
 
+def interrupted_exit_code(interrupt: KeyboardInterrupt) -> int:
+    """The exit status of a command a stop signal ended: 130 for Ctrl-C (SIGINT), and 128 + the
+    signal's number for another one a command turned into ``KeyboardInterrupt(name)`` (``up``
+    stopped by SIGTERM: 143; a closing terminal, SIGHUP: 129), as a shell reports them."""
+    try:
+        return 128 + int(signal.Signals[str(interrupt)])
+    except KeyError:
+        return INTERRUPTED_EXIT_CODE
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     parser = build_parser(argv)
@@ -135,8 +146,8 @@ def main(argv: list[str] | None = None) -> int:
     except ManigraphError as exc:
         print(f"manigraph {args.command}: {one_line(exc)}", file=sys.stderr)
         return exc.exit_code
-    except KeyboardInterrupt:
-        return INTERRUPTED_EXIT_CODE
+    except KeyboardInterrupt as interrupt:
+        return interrupted_exit_code(interrupt)
     except OSError as exc:  # a path given that cannot be read or written, most often
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"manigraph {args.command}: {where}{exc.strerror or one_line(exc)}", file=sys.stderr)

@@ -135,6 +135,7 @@ def test_ctrl_c_then_sigterm_leaves_nothing_behind_20_times(tmp_path: Path) -> N
             up.wait(timeout=60)
             # up has stopped (and reaped) its children before it exits: nothing may be left
             _assert_nothing_left(port, children, log, within=0.5)
+            assert up.returncode == 130, log.read_text()  # the first signal says why: Ctrl-C
             assert "Traceback" not in log.read_text(errors="replace"), log.read_text()
 
 
@@ -161,3 +162,7 @@ def test_a_closing_terminal_or_a_killed_up_leaves_nothing_behind(
         up.wait(timeout=60)
         # after SIGKILL the children stop by themselves: as fast as on a stop, plus a margin
         _assert_nothing_left(port, children, log, within=15.0)
+        # As a shell reports it: 128 + the first signal's number (Ctrl-C 130, SIGHUP 129);
+        # a SIGKILL ends it before it can say anything (docs/running.md, "Exit codes").
+        killed = signal.SIGKILL in signals
+        assert up.returncode == (-signal.SIGKILL if killed else 128 + signals[0])

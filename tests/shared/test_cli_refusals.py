@@ -178,3 +178,14 @@ def test_an_output_path_that_cannot_be_written_is_one_line(
     assert code == CONFIG_EXIT_CODE
     assert len(lines) == 1 and lines[0].startswith("manigraph demos: "), lines
     assert str(blocker) in lines[0] and "internal error" not in lines[0]
+
+
+def test_a_stop_signal_exits_as_a_shell_reports_it() -> None:
+    from manigraph_shared.cli import interrupted_exit_code
+    from manigraph_shared.errors import INTERRUPTED_EXIT_CODE
+
+    assert interrupted_exit_code(KeyboardInterrupt()) == INTERRUPTED_EXIT_CODE == 130
+    assert interrupted_exit_code(KeyboardInterrupt("SIGINT")) == 130
+    assert interrupted_exit_code(KeyboardInterrupt("SIGTERM")) == 143  # up stopped by kill
+    assert interrupted_exit_code(KeyboardInterrupt("SIGHUP")) == 129  # its terminal closed
+    assert interrupted_exit_code(KeyboardInterrupt("something else")) == 130

@@ -137,6 +137,9 @@ class Supervisor:
         #: Set by a second stop signal: what still runs gets ``HURRIED_GRACE``, then SIGKILL.
         self._hurry = threading.Event()
         self._signalled = False
+        #: The name of the first stop signal (``SIGINT``), once one came: ``up`` exits as
+        #: that signal says (130 for Ctrl-C) after the stop.
+        self.stopped_by: str | None = None
         self._output_broken = False
         self._watcher: threading.Thread | None = None
         if log_dir is not None:
@@ -311,6 +314,7 @@ class Supervisor:
             self.hurry()
             return
         self._signalled = True
+        self.stopped_by = name
         raise KeyboardInterrupt(name)
 
     def hurry(self) -> None:

@@ -12,7 +12,7 @@ from pathlib import Path
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.errors import INTERRUPTED_EXIT_CODE, ConfigError
 from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
 from manigraph_tools.commands.common import emit_json, wait_services
@@ -82,6 +82,7 @@ def _replay_run(args: argparse.Namespace) -> int:
                 stop.set()
 
         print(f"replaying {len(replayer.messages)} messages from {args.file}", file=sys.stderr)
+        interrupted = False  # Ctrl-C: the summary so far, then the interrupted status
         try:
             while not stop.is_set():
                 replayer.play(stop, on_withheld=await_live_decision)
@@ -89,8 +90,9 @@ def _replay_run(args: argparse.Namespace) -> int:
                     break
         except KeyboardInterrupt:
             stop.set()
+            interrupted = True
         if not args.expect_actions:
-            return 0
+            return INTERRUPTED_EXIT_CODE if interrupted else 0
         stopped_early = diverged.is_set() and not args.keep_going
         problems = list(check.problems)
         if not stop.is_set():
@@ -116,6 +118,8 @@ def _replay_run(args: argparse.Namespace) -> int:
                 "identical": not problems,
             }
         )
+        if interrupted:
+            return INTERRUPTED_EXIT_CODE
         return 0 if not problems else 1
 
 

@@ -41,6 +41,8 @@ def _run_run(args: argparse.Namespace) -> int:
         wait_services(bus, ["sim", "planner", "skills"], timeout=180.0)
         summary = run_episodes(bus, plan)
     emit_json(summary, readable=not args.json)
+    if summary.get("interrupted"):  # Ctrl-C: the episodes so far, then the status it means
+        raise KeyboardInterrupt
     if "aborted" in summary:  # an engaged emergency stop: the episodes asked for did not run
         raise ManigraphError(str(summary["aborted"]))  # one line, the runtime exit status
     return 0

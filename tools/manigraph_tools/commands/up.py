@@ -433,6 +433,8 @@ def _up_run(args: argparse.Namespace) -> int:
         if any(supervisor.restarts.values()):
             summary["restarts"] = {k: v for k, v in supervisor.restarts.items() if v}
         emit_json(summary, readable=not args.json)
+    if supervisor.stopped_by is not None:  # stopped as asked: exit as the signal says (130)
+        raise KeyboardInterrupt(supervisor.stopped_by)
     return 0
 
 
