@@ -22,7 +22,14 @@ import zenoh
 
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.cells import cell_key
-from manigraph_shared.errors import BusError, ManigraphError, MessageError, RequestRefused
+from manigraph_shared.errors import (
+    RUNTIME_EXIT_CODE,
+    BusError,
+    ManigraphError,
+    MessageError,
+    RequestFailed,
+    RequestRefused,
+)
 from manigraph_shared.messages import Delivery, Message
 
 log = logging.getLogger(__name__)
@@ -226,10 +233,12 @@ class Bus:
                 reply = handler(request)
                 query.reply(key, reply.encode(), encoding=_encoding(type(reply)))
             except ManigraphError as exc:
-                query.reply_err(str(exc))
+                query.reply_err(str(exc), encoding=_error_encoding(exc.exit_code))
             except Exception as exc:
                 log.exception("queryable %s failed", key)
-                query.reply_err(f"internal error: {exc!r}")
+                query.reply_err(
+                    f"internal error: {exc!r}", encoding=_error_encoding(RUNTIME_EXIT_CODE)
+                )
 
         self._declared.append(self.session.declare_queryable(key, answer))
 
@@ -240,14 +249,17 @@ class Bus:
         timeout: float = DEFAULT_QUERY_TIMEOUT,
         key: str | None = None,
     ) -> R:
-        """Send ``request`` to its queryable and decode the one reply, or raise ``BusError``."""
+        """Send ``request`` to its queryable and decode the one reply, or raise ``BusError``:
+        ``RequestRefused`` for an error reply (``RequestFailed`` where the queryable said it
+        could not do it now, the runtime kind of error)."""
         key = self.scoped(key or request.key_for())
         replies = self.session.get(key, payload=request.encode(), timeout=timeout)
         for reply in replies:
             if reply.ok is not None:
                 return reply_type.decode(reply.ok.payload.to_bytes(), key)
             error = reply.err.payload.to_string() if reply.err is not None else "error reply"
-            raise RequestRefused(f"{key}: {error}")
+            runtime = reply.err is not None and reply.err.encoding == _RUNTIME_ERROR
+            raise (RequestFailed if runtime else RequestRefused)(f"{key}: {error}")
         raise BusError(f"{key}: no answer within {timeout:.1f} s (is the service running?)")
 
     # --- liveliness -------------------------------------------------------------------------
@@ -328,6 +340,16 @@ def _qos_for(delivery: Delivery) -> dict[str, Any]:
 
 
 @functools.cache
+def _error_encoding(exit_code: int) -> zenoh.Encoding:
+    """The encoding of an error reply: its text, and its kind by the exit status it means, so
+    the querier raises the same kind (``text/plain;manigraph-exit-1``: :class:`RequestFailed`;
+    any other, or none from an older service: :class:`RequestRefused`)."""
+    return zenoh.Encoding.TEXT_PLAIN.with_schema(f"manigraph-exit-{exit_code}")
+
+
+_RUNTIME_ERROR = _error_encoding(RUNTIME_EXIT_CODE)
+
+
 def _encoding(message_type: type[Message]) -> zenoh.Encoding:
     """The Zenoh encoding of a type's samples, built once per type (a publish is hot)."""
     return zenoh.Encoding.APPLICATION_JSON.with_schema(message_type.type_name())

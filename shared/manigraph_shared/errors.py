@@ -11,9 +11,9 @@ code  kind            when
 ====  ==============  =========================================================================
 0     success         the command did what it was asked
 1     runtime         it could not be done now: no stack answers, a service went away, the
-                      emergency stop is engaged, the stack stopped (:class:`BusError`,
-                      :class:`SkillError`, any other :class:`ManigraphError`). Trying again
-                      later may work.
+                      emergency stop is engaged, the stack stopped, a reset ran out of time
+                      (:class:`BusError`, :class:`SkillError`, :class:`RequestFailed`, any
+                      other :class:`ManigraphError`). Trying again later may work.
 2     usage           the command line does not parse: an unknown flag, a missing or
                       malformed argument (argparse's own status; it prints the subcommand's
                       usage).
@@ -88,6 +88,14 @@ class RequestRefused(BusError):
     (as opposed to no answer at all, a plain :class:`BusError`), so asking again fails again."""
 
     exit_code: ClassVar[int] = CONFIG_EXIT_CODE
+
+
+class RequestFailed(RequestRefused):
+    """A queryable answered with an error of the runtime kind: it could not do it now (a
+    reset that ran out of time, an engaged emergency stop, a bug), so asking again later may
+    work. A :class:`RequestRefused` still, for whoever tells refusals apart by their text."""
+
+    exit_code: ClassVar[int] = RUNTIME_EXIT_CODE
 
 
 class LogError(ManigraphError):

@@ -27,6 +27,11 @@ REFUSED = frozenset(
     {"outside_workspace", "unknown_object", "no_episode", "stopped", "bad_joints", "unsupported"}
 )
 
+#: Seconds a reset query waits for the service thread to lay the episode out; then it is
+#: answered ``reset_timeout``, an error of the runtime kind (``RequestFailed``, exit 1).
+RESET_ANSWER_SECONDS = 30.0
+RESET_TIMEOUT = "reset_timeout"
+
 
 class Cadence:
     """Says when something published at ``hz`` is due, keeping the rate over time (a late
@@ -122,7 +127,13 @@ class SimService(Service):
 
         if not self.call_soon(reset):
             raise BusError("sim busy: its inbox is full, try the reset again")
-        result = answer.get(timeout=30)
+        try:
+            result = answer.get(timeout=RESET_ANSWER_SECONDS)
+        except queue.Empty:  # the runtime kind: the querier exits 1 naming it, not 78
+            raise BusError(
+                f"{RESET_TIMEOUT}: the reset was not done within {RESET_ANSWER_SECONDS:g} s "
+                "(the sim is busy: a long task file or another reset); ask again later"
+            ) from None
         if isinstance(result, BaseException):
             # Raised from here, the exception's traceback holds this frame, which would hold
             # the exception: a cycle that kept the bus's answering frame, and with it the Zenoh
