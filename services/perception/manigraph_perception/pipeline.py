@@ -14,6 +14,7 @@ import numpy as np
 
 from manigraph_perception.calibration_file import Calibration
 from manigraph_perception.detection import ObjectPoser, detect, detector_for
+from manigraph_perception.image_guard import ImageProblem, opencv_reason, size_problem
 from manigraph_perception.world_belief import WorldConfig, WorldModel
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.markers import MarkerMap
@@ -81,16 +82,21 @@ class Perception:
         return self.world.layout
 
     def decode(self, image: CompressedImage) -> np.ndarray | None:
-        """The grey image, or None (counted) if it does not decode or has the wrong size."""
-        grey = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_GRAYSCALE)
-        if grey is None or grey.shape != (self.calibration.height, self.calibration.width):
+        """The grey image, or None (counted) if it does not decode or has the wrong size;
+        the size is read from the header first, so an oversized image is never decoded."""
+        width, height = self.calibration.width, self.calibration.height
+        problem = size_problem("image", image.data, width, height)
+        grey = None
+        if problem is None:
+            try:
+                grey = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_GRAYSCALE)
+            except cv2.error as exc:
+                problem = ImageProblem("unreadable", opencv_reason(exc, "decoding it"))
+        if problem is None and (grey is None or grey.shape != (height, width)):
+            problem = ImageProblem("unreadable", "image does not decode")
+        if problem is not None:
             self.counters.corrupt += 1
-            shape = None if grey is None else grey.shape
-            log.warning(
-                "frame %d skipped: undecodable or not the calibrated size (%s)",
-                image.sequence,
-                shape,
-            )
+            log.warning("frame %d skipped: %s", image.sequence, problem.reason)
             return None
         return grey
 
@@ -99,7 +105,12 @@ class Perception:
     ) -> tuple[Scene | None, MarkerDetections]:
         """One frame: the Scene (None before a layout) and what was detected."""
         self.counters.frames += 1
-        found = detect(self.detector, grey)
+        try:
+            found = detect(self.detector, grey)
+        except cv2.error as exc:
+            self.counters.corrupt += 1
+            log.warning("frame skipped: %s", opencv_reason(exc, "detecting markers"))
+            return None, MarkerDetections(camera=self.camera, stamp=stamp, markers=[])
         for marker in found:
             if marker.id not in self.known_ids and marker.id not in self.counters.unknown_markers:
                 self.counters.unknown_markers.add(marker.id)

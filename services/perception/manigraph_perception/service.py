@@ -11,10 +11,13 @@ from __future__ import annotations
 import threading
 import time
 
+import cv2
+
+from manigraph_perception.image_guard import opencv_reason
 from manigraph_perception.pipeline import Perception
 from manigraph_perception.sources import VideoSource
 from manigraph_shared.bus import Bus
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.errors import ConfigError, ManigraphError
 from manigraph_shared.messages import (
     Action,
     CameraInfo,
@@ -141,6 +144,13 @@ class PerceptionService(Service):
             self._last_stale_report = now
             waited = f"for {now - world.last_frame:.0f} s" if world.last_frame else "yet"
             self.last_error = f"{_NO_FRAME} {waited}"
+
+    def report_error(self, error: BaseException) -> None:
+        # An OpenCV error that got past the pipeline's own names: its short name, not its
+        # source path and assertion text.
+        if isinstance(error, cv2.error):
+            error = ManigraphError(opencv_reason(error, "handling a message"))
+        super().report_error(error)
 
     def publish_status(self, state: ServiceState, detail: str = "") -> None:
         summary = self.perception.counters.summary()

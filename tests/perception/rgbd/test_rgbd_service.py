@@ -6,6 +6,7 @@ again (stale, with its old stamp); a camera that stops, named. Frames are drawn 
 from __future__ import annotations
 
 import queue
+import re
 import time
 from pathlib import Path
 
@@ -28,6 +29,7 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_sim.physics.depth_noise import encode_depth_png
+from manigraph_testkit.hostile_images import zero_png
 from manigraph_testkit.testing import Stack, free_port, stack
 
 pytestmark = pytest.mark.integration
@@ -125,6 +127,63 @@ def test_frames_become_scenes_and_bad_ones_are_named_with_the_last_scene_kept(
             _status_saying(statuses, "no table plane")
             # The camera stops: said once nothing came for --stale-after.
             _status_saying(statuses, "no usable frame for")
+
+
+def _fresh_scene(scenes: queue.Queue[Scene]) -> Scene:
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:
+        scene = scenes.get(timeout=10)
+        if not scene.stale:
+            return scene
+    raise AssertionError("no fresh scene")
+
+
+def test_hostile_halves_are_refused_from_their_header_or_let_go_and_frames_go_on(
+    tmp_path: Path,
+) -> None:
+    calibration = load_calibration(CALIBRATION)
+    bgr, depth = draw(calibration, [(RED, 0.04, "red")])
+    with stack(tmp_path) as running:
+        running.start("router")
+        running.start(
+            "perception", "perception", "--pipeline", "rgbd", "--camera", "bus",
+            "--calibration", CALIBRATION,
+        )  # fmt: skip
+        with running.client() as bus:
+            running.wait_alive(bus, "perception")
+            scenes: queue.Queue[Scene] = queue.Queue()
+            statuses: queue.Queue[ServiceStatus] = queue.Queue()
+            bus.subscribe(Scene, scenes.put)
+            bus.subscribe(ServiceStatus, statuses.put, key="manigraph/status/perception")
+            bus.publish(_layout())
+            time.sleep(0.5)
+            # Issue 48's 630 kB depth, 18000 x 18000 zeros: named from its header, not decoded
+            # (which took ~6 s and 1.3 GB), and never held: the camera's own depth of that
+            # sequence, arriving after it, still pairs.
+            depth_image, image = _frame(bgr, depth, 1)
+            forged = DepthImage(
+                camera="front", stamp=image.stamp, sequence=1, data=zero_png(18000, 18000)
+            )
+            bus.publish(forged)
+            bus.publish(image)
+            status = _status_saying(statuses, "depth 18000 x 18000, calibrated for 640 x 480")
+            assert "refused from its PNG header, not decoded" in status.detail
+            assert any("wrong_size" in kind for kind in status.rejections), status.rejections
+            bus.publish(depth_image)
+            assert _fresh_scene(scenes).episode_id == "rgbd"
+            # 300 depth halves with descending sequences that never pair: let go, counted.
+            blank = zero_png(640, 480)
+            for sequence in range(1300, 1000, -1):
+                bus.publish(
+                    DepthImage(camera="front", stamp=time.time(), sequence=sequence, data=blank)
+                )
+                time.sleep(0.001)
+            for message in _frame(bgr, depth, 2000):
+                bus.publish(message)
+            assert _fresh_scene(scenes).episode_id == "rgbd"
+            status = _status_saying(statuses, "unpaired halves dropped")
+            dropped = int(re.search(r"unpaired halves dropped (\d+)", status.detail)[1])  # type: ignore[index]
+            assert dropped >= 100, status.detail
 
 
 def test_a_realsense_without_the_package_is_refused_by_name(tmp_path: Path) -> None:

@@ -60,14 +60,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frame", type=int, default=0, help="which RGB-D frame (0: first)")
     parser.add_argument("-o", "--output", required=True)
     args = parser.parse_args(argv)
-    perception = RgbdPerception(load_calibration(args.calibration))
+    calibration = load_calibration(args.calibration)
+    perception = RgbdPerception(calibration)
     layouts = [m.decode() for m in read_log(Path(args.recording), ["manigraph/world/layout"])]
-    source = McapRgbdSource(args.recording)
+    source = McapRgbdSource(args.recording, size=(calibration.width, calibration.height))
     result: RgbdFrameResult | BadFrame | None = None
+    frame = None
     try:
         # Every frame up to the one drawn goes through the pipeline: identity is tracked.
         for _ in range(args.frame + 1):
-            frame = source.read()
+            try:
+                frame = source.read()
+            except BadFrame as exc:
+                frame, result = None, exc
             if frame is None:
                 continue
             earlier = [x for x in layouts if isinstance(x, TaskLayout) and x.stamp <= frame.stamp]

@@ -21,7 +21,10 @@ def run_rgbd(args: argparse.Namespace) -> int:
         calibration, args.camera_name, WorldConfig(stale_after=args.stale_after)
     )
     layout = load_layout(args.layout) if args.layout is not None else None
-    source = None if args.camera == "bus" else open_rgbd_source(args.camera, args.camera_name)
+    size = (calibration.width, calibration.height)
+    source = None
+    if args.camera != "bus":
+        source = open_rgbd_source(args.camera, args.camera_name, size)
     services: list[RgbdPerceptionService] = []
 
     def make(bus: Bus) -> RgbdPerceptionService:

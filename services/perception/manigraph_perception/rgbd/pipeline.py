@@ -8,8 +8,8 @@ objects (``segment.py``), describe each (``objects.py``), match them to the layo
 (object permanence, ``filled`` with hysteresis, the carried-object rule, ``stale``), without
 its marker-specific resting (depth measures height directly).
 
-A frame that cannot be used (no table plane, depth of the wrong size) raises ``BadFrame``
-naming why; the caller keeps the last good Scene.
+A frame that cannot be used (no table plane, depth of the wrong size, an OpenCV error)
+raises ``BadFrame`` naming why; the caller keeps the last good Scene.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ import numpy as np
 
 from manigraph_perception.calibration_file import Calibration
 from manigraph_perception.detection import ObjectPose
+from manigraph_perception.image_guard import opencv_reason
 from manigraph_perception.rgbd.objects import (
     CHROMATIC,
     DetectedObject,
@@ -53,13 +54,18 @@ class RgbdCounters:
     frames: int = 0
     no_plane: int = 0
     wrong_size: int = 0
+    #: Refused before or while decoding: a header of the wrong size or format, an OpenCV error.
+    unreadable: int = 0
     unmatched: int = 0
     stale: int = 0
+    #: Colour or depth halves let go without their other half (``rgbd/pairing.py``).
+    unpaired: int = 0
 
     def summary(self) -> str:
         return (
             f"frames {self.frames}, no table plane {self.no_plane}, wrong size "
-            f"{self.wrong_size}, unmatched segments {self.unmatched}, stale {self.stale}"
+            f"{self.wrong_size}, unreadable {self.unreadable}, unmatched segments "
+            f"{self.unmatched}, stale {self.stale}, unpaired halves dropped {self.unpaired}"
         )
 
 
@@ -192,9 +198,12 @@ class RgbdPerception:
         (counted) if the frame cannot be used."""
         self.counters.frames += 1
         try:
-            result = self.measure(bgr, depth)
+            try:
+                result = self.measure(bgr, depth)
+            except cv2.error as exc:
+                raise BadFrame("unreadable", opencv_reason(exc, "measuring the frame")) from None
         except BadFrame as exc:
-            setattr(self.counters, exc.kind, getattr(self.counters, exc.kind) + 1)
+            self.count(exc)
             raise
         if self.tracker is None:
             return None, result
@@ -206,6 +215,10 @@ class RgbdPerception:
         if scene is not None and scene.stale:
             self.counters.stale += 1
         return scene, result
+
+    def count(self, problem: BadFrame) -> None:
+        """Count ``problem`` under its kind."""
+        setattr(self.counters, problem.kind, getattr(self.counters, problem.kind) + 1)
 
     def _pose(self, object_id: str, detection: DetectedObject) -> ObjectPose:
         assert self.tracker is not None

@@ -14,14 +14,21 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Any
 
+import cv2
 import msgspec
 
+from manigraph_perception.image_guard import (
+    ImageProblem,
+    depth_problem,
+    opencv_reason,
+    size_problem,
+)
+from manigraph_perception.rgbd.pairing import HalfBuffer
 from manigraph_perception.rgbd.pipeline import BadFrame, RgbdPerception
 from manigraph_perception.rgbd.sources import RgbdFrame, RgbdSource, decode_pair
 from manigraph_shared.bus import Bus
-from manigraph_shared.errors import ConfigError
+from manigraph_shared.errors import ConfigError, ManigraphError
 from manigraph_shared.messages import (
     Action,
     CameraInfo,
@@ -35,12 +42,6 @@ from manigraph_shared.messages import (
 from manigraph_shared.service import Service
 
 _NO_FRAME = "no usable frame"
-
-
-def _hold(held: dict[int, Any], sequence: int, message: Any) -> None:
-    held[sequence] = message
-    for old in [s for s in held if s < sequence - 4]:
-        del held[old]
 
 
 class RgbdPerceptionService(Service):
@@ -60,10 +61,12 @@ class RgbdPerceptionService(Service):
         self.fixed_layout = layout
         self.tick_period = poll_period if source is not None else 0.5
         self._lock = threading.Lock()
-        #: Halves of frames waiting for their other half, by sequence (a few at most).
-        self._depths: dict[int, DepthImage] = {}
-        self._images: dict[int, CompressedImage] = {}
+        #: Halves of frames waiting for their other half, by sequence (bounded: pairing.py).
+        self._depths: HalfBuffer[DepthImage] = HalfBuffer()
+        self._images: HalfBuffer[CompressedImage] = HalfBuffer()
         self._waiting: tuple[CompressedImage, DepthImage] | None = None
+        #: The newest half refused from its header, waiting to be named in the status.
+        self._refused: BadFrame | None = None
         self.last_good: Scene | None = None
         self.failed = False
         self.last_frame = 0.0
@@ -110,20 +113,55 @@ class RgbdPerceptionService(Service):
             )
 
     def _depth_arrived(self, depth: DepthImage) -> None:
-        with self._lock:  # Zenoh thread
-            image = self._images.pop(depth.sequence, None)
+        # Zenoh thread. The header first: a few bytes read, nothing decoded.
+        calibration = self.perception.calibration
+        problem = depth_problem(depth.data, calibration.width, calibration.height)
+        if problem is not None:
+            self._refuse(depth, problem)
+            return
+        with self._lock:
+            image = self._images.pop(depth.sequence)
             if image is None:
-                _hold(self._depths, depth.sequence, depth)
+                self._depths.hold(depth.sequence, depth)
+                self._count_unpaired()
                 return
         self._pair(image, depth)
 
     def _image_arrived(self, image: CompressedImage) -> None:
-        with self._lock:  # Zenoh thread
-            depth = self._depths.pop(image.sequence, None)
+        calibration = self.perception.calibration  # Zenoh thread, as above
+        problem = size_problem("colour image", image.data, calibration.width, calibration.height)
+        if problem is not None:
+            self._refuse(image, problem)
+            return
+        with self._lock:
+            depth = self._depths.pop(image.sequence)
             if depth is None:
-                _hold(self._images, image.sequence, image)  # its depth may come next
+                self._images.hold(image.sequence, image)  # its depth may come next
+                self._count_unpaired()
                 return
         self._pair(image, depth)
+
+    def _count_unpaired(self) -> None:
+        self.perception.counters.unpaired = self._depths.dropped + self._images.dropped
+
+    def _refuse(self, half: DepthImage | CompressedImage, problem: ImageProblem) -> None:
+        """Zenoh thread: a half refused from its header, neither held nor decoded. Counted
+        among the rejections and named in the status (one report waits at most, so a flood
+        of them costs the service thread one turn, not one per half); its partner, if it
+        comes, waits for another, and a camera's own half of that sequence still pairs."""
+        self.reject(half, problem.kind, f"#{half.sequence}: {problem.reason}")
+        with self._lock:
+            pending = self._refused is not None
+            self._refused = BadFrame(problem.kind, f"frame {half.sequence}: {problem.reason}")
+        if not pending:
+            self.call_soon(self._report_refused)
+
+    def _report_refused(self, _: object = None) -> None:
+        with self._lock:
+            problem, self._refused = self._refused, None
+        if problem is not None:
+            self.perception.count(problem)
+            self._bad(problem)
 
     def _pair(self, image: CompressedImage, depth: DepthImage) -> None:
         """A whole frame: keep only the newest waiting; schedule one processing."""
@@ -141,9 +179,12 @@ class RgbdPerceptionService(Service):
         layout = self.perception.layout
         if layout is not None and pair[0].stamp < layout.stamp:
             return  # taken before this episode was laid out
-        frame = decode_pair(*pair)
-        if frame is None:
-            self._bad(BadFrame("wrong_size", f"frame {pair[0].sequence} does not decode"))
+        calibration = self.perception.calibration
+        try:
+            frame = decode_pair(*pair, calibration.width, calibration.height)
+        except BadFrame as exc:
+            self.perception.count(exc)
+            self._bad(exc)
             return
         self._process(frame)
 
@@ -187,6 +228,10 @@ class RgbdPerceptionService(Service):
                 self.failed = True
                 self.stop_event.set()
                 return
+            except BadFrame as exc:
+                self.perception.count(exc)
+                self._bad(exc)
+                return
             if frame is not None:
                 self._process(frame)
             return
@@ -197,6 +242,13 @@ class RgbdPerceptionService(Service):
             if self.last_good is not None:
                 age = f"; last good scene {now - self.last_good.stamp:.1f} s old"
             self.last_error = f"{_NO_FRAME} {waited}{age}"
+
+    def report_error(self, error: BaseException) -> None:
+        # An OpenCV error that got past the pipeline's own names: its short name, not its
+        # source path and assertion text.
+        if isinstance(error, cv2.error):
+            error = ManigraphError(opencv_reason(error, "handling a message"))
+        super().report_error(error)
 
     def publish_status(self, state: ServiceState, detail: str = "") -> None:
         summary = self.perception.counters.summary()

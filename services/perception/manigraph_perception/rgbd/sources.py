@@ -15,6 +15,9 @@ from typing import Any, Protocol
 import cv2
 import numpy as np
 
+from manigraph_perception.image_guard import depth_problem, opencv_reason, size_problem
+from manigraph_perception.rgbd.pairing import HalfBuffer
+from manigraph_perception.rgbd.pipeline import BadFrame, decode_depth
 from manigraph_perception.sources import MAX_FAILED_READS
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import CameraInfo, CompressedImage, DepthImage
@@ -30,28 +33,46 @@ class RgbdFrame:
 
 class RgbdSource(Protocol):
     def read(self) -> RgbdFrame | None:
-        """The next frame, None for a dropped one; ``ConfigError`` once it has stopped."""
+        """The next frame, None for a dropped one, ``BadFrame`` for one that cannot be used;
+        ``ConfigError`` once it has stopped."""
 
     def close(self) -> None: ...
 
 
-def decode_pair(image: CompressedImage, depth: DepthImage) -> RgbdFrame | None:
-    """Colour and depth messages -> a frame; None if either does not decode."""
-    from manigraph_perception.rgbd.pipeline import decode_depth
-
-    bgr = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_COLOR)
-    metres = decode_depth(depth.data)
+def decode_pair(image: CompressedImage, depth: DepthImage, width: int, height: int) -> RgbdFrame:
+    """Colour and depth messages of a ``width`` x ``height`` camera -> a frame; ``BadFrame``
+    naming why not. The size is checked from each header before anything is decoded."""
+    problem = depth_problem(depth.data, width, height) or size_problem(
+        "colour image", image.data, width, height
+    )
+    if problem is not None:
+        raise BadFrame(problem.kind, f"frame {image.sequence}: {problem.reason}")
+    try:
+        bgr = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_COLOR)
+        metres = decode_depth(depth.data)
+    except cv2.error as exc:
+        raise BadFrame(
+            "unreadable", f"frame {image.sequence}: {opencv_reason(exc, 'decoding it')}"
+        ) from None
     if bgr is None or metres is None:
-        return None
+        raise BadFrame("unreadable", f"frame {image.sequence} does not decode")
     return RgbdFrame(bgr, metres, image.stamp, image.sequence)
 
 
 class McapRgbdSource:
     """Recorded frames: each ``CompressedImage`` of ``camera`` paired with the ``DepthImage``
     of the same sequence, in the file's order (at ``rate`` frames per second, 0: at once).
-    The recording's ``CameraInfo`` is in ``info`` (None if it has none)."""
+    The recording's ``CameraInfo`` is in ``info`` (None if it has none). Frames are checked
+    against ``size`` (width, height; by default the recording's ``CameraInfo``) before they
+    are decoded; one that does not fit raises ``BadFrame``."""
 
-    def __init__(self, path: str | Path, camera: str = "front", rate: float = 0.0) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        camera: str = "front",
+        rate: float = 0.0,
+        size: tuple[int, int] | None = None,
+    ) -> None:
         from manigraph_shared.mcap_log import read_log
 
         self.path = Path(path)
@@ -60,9 +81,11 @@ class McapRgbdSource:
         keys = [f"manigraph/camera/{camera}/{k}" for k in ("image", "depth", "info")]
         self._messages = (m.decode() for m in read_log(self.path, keys))
         self.rate = rate
+        self.size = size
         self.info: CameraInfo | None = None
-        self._depths: dict[int, DepthImage] = {}
-        self._images: dict[int, CompressedImage] = {}
+        # Read at once, not waited for: no age bound, only the count.
+        self._depths: HalfBuffer[DepthImage] = HalfBuffer(max_age=None)
+        self._images: HalfBuffer[CompressedImage] = HalfBuffer(max_age=None)
         self._ended = False
         self._next = 0.0
         self.frames = 0
@@ -75,7 +98,16 @@ class McapRgbdSource:
         pair = next(self._pairing, None)
         if pair is not None:
             self.frames += 1
-            return decode_pair(*pair)
+            size = self.size
+            if size is None and self.info is not None:
+                size = (self.info.width, self.info.height)
+            if size is None:
+                raise BadFrame(
+                    "unreadable",
+                    f"frame {pair[0].sequence}: no size to check it against (no CameraInfo "
+                    "before it in the recording, no calibration)",
+                )
+            return decode_pair(*pair, *size)
         raise ConfigError(
             "camera", f"recording {self.path.name} ended after {self.frames} RGB-D frames"
         )
@@ -85,19 +117,25 @@ class McapRgbdSource:
             if isinstance(message, CameraInfo):
                 self.info = message
                 continue
+            sequence = message.sequence
             if isinstance(message, DepthImage):
-                self._depths[message.sequence] = message
+                image = self._images.pop(sequence)
+                if image is None:
+                    self._depths.hold(sequence, message)
+                    continue
+                depth = message
             elif isinstance(message, CompressedImage):
-                self._images[message.sequence] = message
+                found = self._depths.pop(sequence)
+                if found is None:
+                    self._images.hold(sequence, message)
+                    continue
+                image, depth = message, found
             else:
                 continue
-            sequence = message.sequence
-            if sequence in self._depths and sequence in self._images:
-                # Older halves whose partner never came are dropped.
-                for held in (self._images, self._depths):
-                    for old in [s for s in held if s < sequence]:
-                        del held[old]
-                yield self._images.pop(sequence), self._depths.pop(sequence)
+            # Older halves whose partner never came are let go.
+            self._images.drop_older(sequence)
+            self._depths.drop_older(sequence)
+            yield image, depth
 
     def close(self) -> None:
         self._messages.close()
@@ -161,12 +199,15 @@ class RealSenseSource:
         self.pipeline.stop()
 
 
-def open_rgbd_source(spec: str, camera: str = "front") -> RgbdSource:
-    """``realsense`` or an ``.mcap`` recording (``ConfigError`` for anything else)."""
+def open_rgbd_source(
+    spec: str, camera: str = "front", size: tuple[int, int] | None = None
+) -> RgbdSource:
+    """``realsense`` or an ``.mcap`` recording (``ConfigError`` for anything else); ``size``:
+    the calibrated (width, height) a recording's frames are checked against."""
     if spec == "realsense":
         return RealSenseSource()
     if spec.endswith(".mcap"):
-        return McapRgbdSource(spec, camera)
+        return McapRgbdSource(spec, camera, size=size)
     raise ConfigError(
         "camera", f"'{spec}' is not an RGB-D source: 'bus', 'realsense' or a .mcap recording"
     )
