@@ -4,11 +4,14 @@
 from __future__ import annotations
 
 import contextlib
+import json
+import time
 from collections.abc import Callable, Iterator
 
 import pytest
 
 from manigraph_shared.bus import Bus
+from manigraph_shared.decision_failure import CannotDecide
 from manigraph_shared.errors import (
     CONFIG_EXIT_CODE,
     RUNTIME_EXIT_CODE,
@@ -17,7 +20,7 @@ from manigraph_shared.errors import (
     RequestRefused,
     TaskError,
 )
-from manigraph_shared.messages import EpisodeEvent, EpisodeRequest
+from manigraph_shared.messages import EpisodeEvent, EpisodeRequest, ServiceStatus
 from manigraph_testkit.testing import Stack
 
 pytestmark = pytest.mark.integration
@@ -81,3 +84,33 @@ def test_a_reset_timeout_ends_run_with_the_runtime_status_naming_it(
     assert result.returncode == RUNTIME_EXIT_CODE, result.stderr  # was 78: "refused"
     last = result.stderr.strip().splitlines()[-1]
     assert last.startswith("manigraph run: ") and "reset_timeout: " in last, result.stderr
+
+
+def test_a_planner_that_cannot_decide_ends_the_episode_and_run_at_once(
+    running_stack: Stack,
+) -> None:
+    """The planner says once that it cannot read the episode (its error status): the client
+    ends the episode with that reason at once, not ``no_progress`` after the stall timeout,
+    and the run with the configuration status naming it."""
+    why = "scene: block 'b0' colour 'mauve' is not in this policy's vocabulary (blue, red)"
+    holder: dict[str, Bus] = {}
+
+    def reset(request: EpisodeRequest) -> EpisodeEvent:
+        refusal = CannotDecide(request.episode_id, why)
+        holder["bus"].publish(
+            ServiceStatus(service="planner", state="error", detail=str(refusal), stamp=1.0)
+        )
+        return started(request)
+
+    with stand_in_stack(running_stack, reset) as services:
+        holder["bus"] = services
+        started_at = time.monotonic()
+        result = running_stack.run(
+            "run", "--episodes", "3", "--stall-timeout", "30", "-e", running_stack.endpoint
+        )
+        seconds = time.monotonic() - started_at
+    assert result.returncode == CONFIG_EXIT_CODE, result.stderr
+    assert result.stderr.strip().splitlines()[-1] == f"manigraph run: cannot_decide: {why}"
+    summary = json.loads(result.stdout.strip().splitlines()[-1])
+    assert summary["episodes"] == 1 and summary["aborted"] == f"cannot_decide: {why}"
+    assert seconds < 25  # not the 30 s stall timeout (a run client starts in ~2 s)

@@ -13,6 +13,11 @@ the run needs, and an episode is failed, with a named reason, and the run goes o
   episode (``no_progress``), e.g. a service alive but stuck;
 * it does not end within ``timeout`` seconds (``timeout``), or the reset fails (``reset_failed``).
 
+A planner that cannot read the episode's scenes (a value its checkpoint never saw) says so once
+in its error status; the episode ends at once with reason ``cannot_decide: <why>``
+(:mod:`manigraph_shared.decision_failure`), and, as the checkpoint cannot serve this task, the
+run ends too: ``aborted`` names it, and ``run`` and ``up --episodes`` exit 78.
+
 An engaged emergency stop ends the run instead: the sim refuses the reset at once, or cuts the
 episode under way, with reason ``estop_engaged: <why> (by <who>)``; that episode is the run's
 last, and the summary names the reason under ``aborted`` (``manigraph run`` then fails).
@@ -30,8 +35,15 @@ import time
 from typing import TextIO
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.errors import BusError, RequestRefused
-from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, SkillStatus
+from manigraph_shared.decision_failure import CANNOT_DECIDE, cannot_decide
+from manigraph_shared.errors import BusError, ManigraphError, PolicyError, RequestRefused
+from manigraph_shared.messages import (
+    Action,
+    EpisodeEvent,
+    EpisodePhase,
+    ServiceStatus,
+    SkillStatus,
+)
 from manigraph_shared.service_facts import ESTOP_ENGAGED
 from manigraph_tools.episode_plan import (
     EpisodeOptions,
@@ -98,23 +110,39 @@ class ServiceWatch:
 
 
 class EpisodeProgress:
-    """End events, and when the running episode last made progress (a decision or a status)."""
+    """End events, when the running episode last made progress (a decision or a status), and
+    why its planner cannot decide on it, once it said so."""
 
     def __init__(self, bus: Bus) -> None:
         self.ends: queue.SimpleQueue[EpisodeEvent] = queue.SimpleQueue()
         self.episode_id = ""
         self._decisions: set[str] = set()
+        self._cannot_decide: str | None = None
         self.last = time.monotonic()
         self._lock = threading.Lock()
         bus.subscribe(EpisodeEvent, self._on_event)
         bus.subscribe(Action, self._on_action)
         bus.subscribe(SkillStatus, self._on_status)
+        planner = ServiceStatus.key.format(service="planner")
+        bus.subscribe(ServiceStatus, self._on_planner_status, key=planner)
 
     def start(self, episode_id: str) -> None:
         with self._lock:
             self.episode_id = episode_id
             self._decisions.clear()
+            self._cannot_decide = None
             self.last = time.monotonic()
+
+    def _on_planner_status(self, status: ServiceStatus) -> None:
+        said = cannot_decide(status)
+        with self._lock:
+            if said is not None and said[0] == self.episode_id:
+                self._cannot_decide = said[1]
+
+    def cannot_decide(self) -> str | None:
+        """Why the planner cannot decide on the running episode, once it said so."""
+        with self._lock:
+            return self._cannot_decide
 
     def _on_event(self, event: EpisodeEvent) -> None:
         if event.phase is EpisodePhase.END:
@@ -134,6 +162,26 @@ class EpisodeProgress:
     def idle_for(self) -> float:
         with self._lock:
             return time.monotonic() - self.last
+
+
+#: Reasons that end the run with their episode: an engaged emergency stop, a planner that
+#: cannot read the task's scenes.
+ABORTING = (ESTOP_ENGAGED, CANNOT_DECIDE)
+
+
+def raise_if_aborted(summary: dict[str, object]) -> None:
+    """Fail the command whose run ``summary`` says it ended early (``aborted``; a cell's
+    too), naming why: a planner that cannot decide is a configuration the same run refuses
+    again (``PolicyError``, 78); an engaged stop is runtime (1)."""
+    cells = summary.get("cells")
+    runs = [summary, *cells.values()] if isinstance(cells, dict) else [summary]
+    for run in runs:
+        aborted = run.get("aborted") if isinstance(run, dict) else None
+        if aborted:
+            reason = str(aborted)
+            if reason.startswith(CANNOT_DECIDE):
+                raise PolicyError(reason)
+            raise ManigraphError(reason)
 
 
 def run_episodes(bus: Bus, plan: EpisodePlan, progress: TextIO = sys.stderr) -> dict[str, object]:
@@ -157,12 +205,12 @@ def run_episodes(bus: Bus, plan: EpisodePlan, progress: TextIO = sys.stderr) -> 
                 file=progress,
                 flush=True,
             )
-            if result.reason.startswith(ESTOP_ENGAGED):  # every later episode would be too
+            if result.reason.startswith(ABORTING):  # every later episode would be too
                 break
     except KeyboardInterrupt:
         interrupted = True
     summary = {**policy, **summarize(plan, results)}
-    if results and results[-1].reason.startswith(ESTOP_ENGAGED):
+    if results and results[-1].reason.startswith(ABORTING):
         summary["aborted"] = results[-1].reason
     if interrupted:
         summary["interrupted"] = True
@@ -207,6 +255,9 @@ def _run_one(
         lost = watch.lost()
         if lost:
             return failed(f"service_lost: {', '.join(lost)}", start)
+        why = events.cannot_decide()
+        if why is not None:  # said once by the planner: no point waiting for progress
+            return failed(f"{CANNOT_DECIDE}: {why}"[:256], start)
         if events.idle_for() > plan.stall_timeout:
             return failed(f"no_progress: nothing for {plan.stall_timeout:g} s", start)
         if time.monotonic() > deadline:

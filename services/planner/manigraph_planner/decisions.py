@@ -9,6 +9,8 @@ from collections.abc import Callable
 
 from manigraph_planner.policies.base import Decision, Policy
 from manigraph_planner.recovery import ProgressMonitor
+from manigraph_shared.decision_failure import CannotDecide
+from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene, SkillStatus
 
 _REMEMBERED = 1024
@@ -169,7 +171,14 @@ class DecisionMaker:
         return decision, 0, "exhausted"
 
     def _decide(self, scene: Scene) -> Action | None:
-        decision, rank, recovery = self._choose(scene)
+        try:
+            decision, rank, recovery = self._choose(scene)
+        except PolicyError as exc:
+            # The policy cannot read this episode's world (a value its vocabulary never saw):
+            # every later scene of it would be refused the same way, 10 a second. Refuse the
+            # episode once instead; the run client ends it (manigraph_shared.decision_failure).
+            _remember(self._ended, scene.episode_id, None)
+            raise CannotDecide(scene.episode_id, str(exc)) from None
         if decision is None:
             return None
         action = decision.to_action(

@@ -9,11 +9,10 @@ import time
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
-from manigraph_shared.errors import ManigraphError
 from manigraph_shared.options import add_option_arguments, options_from_args
 from manigraph_tools.commands.common import emit_json, wait_services
 from manigraph_tools.episode_plan import EpisodeOptions, EpisodePlan
-from manigraph_tools.episodes import run_episodes
+from manigraph_tools.episodes import raise_if_aborted, run_episodes
 
 
 def episode_arguments(parser: argparse.ArgumentParser) -> None:
@@ -43,8 +42,9 @@ def _run_run(args: argparse.Namespace) -> int:
     emit_json(summary, readable=not args.json)
     if summary.get("interrupted"):  # Ctrl-C: the episodes so far, then the status it means
         raise KeyboardInterrupt
-    if "aborted" in summary:  # an engaged emergency stop: the episodes asked for did not run
-        raise ManigraphError(str(summary["aborted"]))  # one line, the runtime exit status
+    # An engaged emergency stop (1), a planner that cannot decide (78): the episodes asked
+    # for did not run; one line, naming why.
+    raise_if_aborted(summary)
     return 0
 
 

@@ -31,7 +31,7 @@ from manigraph_tools.cell_episodes import run_cells
 from manigraph_tools.certs import IDENTITIES, make_certificates
 from manigraph_tools.commands.common import emit_json
 from manigraph_tools.commands.run import episode_arguments, plan_from_args
-from manigraph_tools.episodes import EpisodePlan, run_episodes
+from manigraph_tools.episodes import EpisodePlan, raise_if_aborted, run_episodes
 from manigraph_tools.supervisor import STOP_SIGNALS, ProcessSpec, Supervisor
 from manigraph_tools.up_guide import guide
 
@@ -433,6 +433,8 @@ def _up_run(args: argparse.Namespace) -> int:
         if any(supervisor.restarts.values()):
             summary["restarts"] = {k: v for k, v in supervisor.restarts.items() if v}
         emit_json(summary, readable=not args.json)
+        # As `run` says it: an engaged stop (1), a planner that cannot decide (78), a cell's too
+        raise_if_aborted(summary)
     if supervisor.stopped_by is not None:  # stopped as asked: exit as the signal says (130)
         raise KeyboardInterrupt(supervisor.stopped_by)
     return 0
