@@ -146,7 +146,8 @@ def test_every_key_a_goal_lists_must_match() -> None:
         'accepts = { colour = "red" }', 'accepts = { colour = "red", label = "nut" }'
     )
     with pytest.raises(
-        TaskError, match=r"goals\.0: red_goal cannot be filled: it accepts colour red, label nut"
+        TaskError,
+        match=r'goals\.0: red_goal cannot be filled: it accepts colour "red", label "nut"',
     ):
         parse_task_file(text)
 
@@ -204,8 +205,8 @@ def test_shuffle_permutes_an_attribute_among_the_objects_that_carry_it() -> None
                 ),
                 "",
             ),
-            "goals.0: red_goal cannot be filled: it accepts colour red, and no object that is not "
-            "a spare can be that",
+            'goals.0: red_goal cannot be filled: it accepts colour "red", and no object that is '
+            "not a spare can be that",
         ),
     ],
     ids=["one object for two goals", "no object of that colour", "only a spare has it"],

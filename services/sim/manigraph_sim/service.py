@@ -20,6 +20,7 @@ from manigraph_shared.service import Service
 from manigraph_shared.service_facts import stop_reason
 from manigraph_sim.backend_base import JointedArmBackend, SimBackend
 from manigraph_sim.manifest import JOINTS
+from manigraph_sim.tasks.from_request import check_request
 
 #: Failures that refuse a command outright (counted as rejections in the status), as opposed
 #: to a motion that was tried and failed.
@@ -117,9 +118,16 @@ class SimService(Service):
     def _reset_from_query(self, request: EpisodeRequest) -> EpisodeEvent:
         import queue
 
+        # A task file is checked here, on the Zenoh thread: a refusal never waits for, nor
+        # holds, the sim's thread.
+        check_request(request)
         answer: queue.SimpleQueue[EpisodeEvent | BaseException] = queue.SimpleQueue()
+        given_up = time.monotonic() + RESET_ANSWER_SECONDS
 
         def reset(_: object) -> None:
+            if time.monotonic() >= given_up:  # its querier has had its answer: do not run it
+                self.log.warning("reset %s not run: it waited too long", request.episode_id)
+                return
             try:
                 answer.put(self._reset(request))
             except BaseException as exc:  # handed back to the querier as an error reply

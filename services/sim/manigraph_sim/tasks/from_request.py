@@ -32,3 +32,13 @@ def episode_layout(request: EpisodeRequest, geometry: str = "geometric") -> Epis
     layout = task.layout(np.random.default_rng(request.seed))
     layout.validate()
     return EpisodeLayout(layout, request.max_steps or family.max_steps(task, layout), family)
+
+
+def check_request(request: EpisodeRequest) -> None:
+    """Refuse ``request``'s task file where the query arrives, before the sim's thread sees
+    it: read and checked (the goal matching included) on the thread that got the query, so a
+    hostile file never holds the thread that moves the robot. A file's outcome is kept
+    (``parse_task_file``): the reset lays a checked file out without checking it again.
+    Raises ``TaskError`` or ``ConfigError``; a request without a file is the reset's to check."""
+    if request.task_file is not None:
+        family_of(request).task(request)

@@ -19,9 +19,10 @@ from difflib import get_close_matches
 
 import numpy as np
 
-from manigraph_shared.acceptance import admits
 from manigraph_shared.errors import TaskError
-from manigraph_sim.families.blocks.goal_matching import Shortfall, shortfall
+from manigraph_shared.printable import quoted
+from manigraph_sim.families.blocks.fillable import fillable_rows
+from manigraph_sim.families.blocks.goal_matching import Shortfall, match, shortfall_of
 from manigraph_sim.families.blocks.task_file_specs import RESERVED, GoalSpec, ObjectSpec
 
 AttributeValue = str | float
@@ -52,28 +53,11 @@ class Wanted:
     accepts: Mapping[str, AttributeValue | Sequence[float]]
 
 
-def may_fill(goal: Wanted, item: Candidate) -> bool:
-    """Whether some draw gives ``item`` what ``goal`` accepts (every key matching)."""
-    if item.category != goal.category:
-        return False
-    for key, wanted in goal.accepts.items():
-        single = {key: wanted}
-        if key in ("id", "size"):
-            if not admits(single, item.id, item.size, {}):
-                return False
-        elif not any(
-            admits(single, item.id, item.size, {key: v}) for v in item.values.get(key, ())
-        ):
-            return False
-    return True
-
-
 def first_shortfall(goals: list[Wanted], objects: list[Candidate]) -> tuple[Shortfall, str] | None:
     """The goal that objects which are not spares cannot fill, with why; None if they can
-    fill every goal at once."""
-    usable = [i for i, item in enumerate(objects) if not item.spare]
-    admitted = [[i for i in usable if may_fill(goal, objects[i])] for goal in goals]
-    missing = shortfall(admitted)
+    fill every goal at once. The cheapest check first: a goal no object may fill alone is
+    named before any matching is tried."""
+    missing = _shortfall(goals, objects)
     if missing is None:
         return None
     goal = goals[missing.goal]
@@ -82,13 +66,21 @@ def first_shortfall(goals: list[Wanted], objects: list[Candidate]) -> tuple[Shor
         why = f"it accepts {wants}, and no object that is not a spare can be that"
     else:
         rivals = [goals[g].id for g in missing.goals]
-        takers = [objects[usable_i].id for usable_i in missing.objects]
+        takers = [objects[i].id for i in missing.objects]
         why = (
             f"it accepts {wants}; {len(rivals)} required goals ({names(rivals)}) share the "
             f"{len(takers)} object{'s' if len(takers) != 1 else ''} that can fill them "
             f"({names(takers)}), spares left out"
         )
     return missing, f"goals.{goal.index}: {goal.id} cannot be filled: {why}"
+
+
+def _shortfall(goals: list[Wanted], objects: list[Candidate]) -> Shortfall | None:
+    rows = fillable_rows(goals, objects)
+    for index, row in enumerate(rows):
+        if not row:
+            return Shortfall(index, [index], [])
+    return shortfall_of(rows, match(rows, complete=False))
 
 
 def required(goals: Sequence[GoalSpec]) -> list[Wanted]:
@@ -181,12 +173,14 @@ def possible_values(
     listed: Sequence[Mapping[str, AttributeValue | Sequence[AttributeValue]]],
     shuffle: Sequence[str],
 ) -> list[dict[str, list[AttributeValue]]]:
-    """Each object's attributes as every value some draw may give it."""
+    """Each object's attributes as every value some draw may give it. A shuffled attribute's
+    values are its carriers' pooled without repeats, one list shared by every carrier: pooled
+    per carrier with repeats, 130 objects of 64 values made each carrier's list 8,320 long."""
     possible: list[dict[str, list[AttributeValue]]] = [
         {name: _values(value) for name, value in attributes.items()} for attributes in listed
     ]
     for name in shuffle:
-        pooled = [v for attributes in possible for v in attributes.get(name, [])]
+        pooled = list(dict.fromkeys(v for a in possible for v in a.get(name, [])))
         for attributes in possible:
             if name in attributes:
                 attributes[name] = pooled
@@ -194,13 +188,12 @@ def possible_values(
 
 
 def describe(accepts: Mapping[str, AttributeValue | Sequence[float]]) -> str:
-    """``colour red, size [0.03, 0.03, 0.03]``: what a goal accepts, in words."""
+    """``colour "red", grade 2, size [0.03, 0.03, 0.03]``: what a goal accepts, in words,
+    text quoted (and made printable) so that ``"2"`` and ``2`` read differently."""
     parts = []
     for key, value in accepts.items():
-        if isinstance(value, str):
-            parts.append(f"{key} {value}")
-        elif isinstance(value, int | float):
-            parts.append(f"{key} {value:g}")
+        if isinstance(value, str | int | float):
+            parts.append(f"{key} {quoted(value)}")  # "2" (text) is not 2 (a number)
         else:
             parts.append(f"{key} [{', '.join(f'{v:g}' for v in value)}]")
     return ", ".join(parts)

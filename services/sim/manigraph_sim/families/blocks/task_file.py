@@ -70,12 +70,13 @@ goals closer than a block's width, and more required block (cover) goals than bl
 from __future__ import annotations
 
 import tomllib
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 from pydantic import BaseModel, Field, ValidationError, model_validator
 
 from manigraph_shared.errors import TaskError
+from manigraph_shared.printable import printable
 from manigraph_sim.families.blocks import task_attributes
 from manigraph_sim.families.blocks.options import BlockOptions, BlockTask
 from manigraph_sim.families.blocks.task_file_errors import describe_errors
@@ -308,14 +309,27 @@ class TaskFile(_Strict):
 
 def parse_task_file(text: str, source: str | None = None) -> TaskFile:
     """Validate a task file's text; ``TaskError`` names the line or the field. ``source``
-    (the file's path) names the file in the error; without it, "task file"."""
+    (the file's path) names the file in the error; without it, "task file". The message is
+    :func:`printable`: the file's text it quotes never reaches a terminal as control codes.
+
+    The last few files' outcomes are kept: the sim checks a file where a reset arrives, off
+    its own thread, and its thread then lays the same text out without checking it again."""
+    parsed = _parsed(text, source)
+    if isinstance(parsed, str):
+        raise TaskError(parsed)
+    return parsed
+
+
+@lru_cache(maxsize=8)
+def _parsed(text: str, source: str | None) -> TaskFile | str:
+    """The file, or why it is refused (a message, so that a refusal is kept too)."""
     prefix = f"task file {source}" if source else "task file"
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise TaskError(f"{prefix}: {exc}") from None
+        return printable(f"{prefix}: {exc}")
     except RecursionError:
-        raise TaskError(f"{prefix}: {NESTED_TOO_DEEPLY}") from None
+        return printable(f"{prefix}: {NESTED_TOO_DEEPLY}")
     try:
         return TaskFile.model_validate(data)
     except ValidationError as exc:
@@ -325,9 +339,9 @@ def parse_task_file(text: str, source: str | None = None) -> TaskFile:
             "containers": ContainerSpec,
         }
         problems = describe_errors(exc.errors(include_url=False), text, TaskFile, tables)
-        raise TaskError(f"{prefix}: " + "; ".join(problems)) from None
+        return printable(f"{prefix}: " + "; ".join(problems))
     except RecursionError:
-        raise TaskError(f"{prefix}: {NESTED_TOO_DEEPLY}") from None
+        return printable(f"{prefix}: {NESTED_TOO_DEEPLY}")
 
 
 #: Why a file of arrays or tables nested thousands deep is refused (Python's parser recurses).
