@@ -2,7 +2,14 @@
 
 from __future__ import annotations
 
-from manigraph_tools.episode_plan import EpisodeOptions, summarize
+import os
+from pathlib import Path
+
+import pytest
+
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.messages import EpisodeRequest
+from manigraph_tools.episode_plan import UNSET_BLOCKS, EpisodeOptions, read_task_file, summarize
 
 
 def test_a_dishwasher_run_is_named_and_summarised_by_its_dishes_not_blocks() -> None:
@@ -24,3 +31,54 @@ def test_a_block_run_keeps_blocks_and_stacks() -> None:
     assert options.label() == "multistack-3"
     assert summary["blocks"] == 3 and summary["stacks"] == 3 and "objects" not in summary
     assert options.plan(1).describe() == "multistack K=3"
+
+
+def test_a_65_block_task_file_plans_requests_without_tripping_the_blocks_bound(
+    tmp_path: Path,
+) -> None:
+    """The file's count names the run; the request's ``blocks`` (1-64) is not filled from it."""
+    rows = [
+        f'[[objects]]\nid = "b{i}"\ncategory = "block"\n'
+        f"position = [{0.12 + 0.05 * (i % 15):.2f}, {-0.55 + 0.05 * (i // 15):.2f}, 0.02]\n"
+        for i in range(65)
+    ]
+    path = tmp_path / "many.toml"
+    path.write_text(
+        "".join(rows) + '[[goals]]\nid = "g"\ncategory = "block"\nposition = [0.5, 0.3, 0.02]\n'
+    )
+    plan = EpisodeOptions(task_file=path).plan(1)
+    assert plan.blocks == 65 and summarize(plan, [])["blocks"] == 65
+    request = plan.request(0)
+    assert request.task == "file" and request.blocks == UNSET_BLOCKS
+
+
+@pytest.mark.parametrize("name", ["/dev/zero", "directory", "fifo"])
+def test_what_is_not_a_regular_file_is_refused_by_name_without_reading_it(
+    tmp_path: Path, name: str
+) -> None:
+    path = Path(name)
+    if name == "directory":
+        path = tmp_path
+    elif name == "fifo":
+        path = tmp_path / "pipe"
+        os.mkfifo(path)  # reading it would block forever: nothing writes to it
+    with pytest.raises(ConfigError, match="is not a regular file"):
+        read_task_file(path)
+
+
+def test_a_file_too_long_is_refused_having_read_at_most_the_limit(tmp_path: Path) -> None:
+    limit = EpisodeRequest.max_length("task_file")
+    path = tmp_path / "long.toml"
+    path.write_text("#" * (limit + 1))
+    with pytest.raises(ConfigError, match=f"has {limit + 1:,} characters"):
+        read_task_file(path)
+    path.write_bytes(b"#" * (4 * limit + 10))
+    with pytest.raises(ConfigError, match="has over"):
+        read_task_file(path)
+
+
+def test_control_characters_in_a_path_are_escaped_in_the_refusal(tmp_path: Path) -> None:
+    path = tmp_path / "evil\x1b[2J.toml"
+    with pytest.raises(ConfigError) as refused:
+        read_task_file(path)
+    assert "\x1b" not in str(refused.value) and "\\x1b[2J" in str(refused.value)

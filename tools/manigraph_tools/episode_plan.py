@@ -7,6 +7,7 @@ stack is :mod:`manigraph_tools.episodes`'."""
 from __future__ import annotations
 
 import re
+import stat
 import statistics
 import tomllib
 from dataclasses import asdict, dataclass
@@ -15,8 +16,11 @@ from pathlib import Path
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.options import Interval, Options, option
+from manigraph_shared.printable import printable
 
 AT_LEAST_ONE = Interval(1, None)
+#: ``EpisodeRequest.blocks`` as nobody set it: a task file's request sends this, not its count.
+UNSET_BLOCKS = 4
 #: The services an episode needs.
 RUN_SERVICES = ("sim", "planner", "skills")
 
@@ -134,10 +138,13 @@ class EpisodePlan:
 
     def request(self, index: int) -> EpisodeRequest:
         seed = self.seed + index
+        # A task file says its own blocks: ``blocks`` here only names it (up to 256), and
+        # the request's field (K of a registered task, 1-64) is left as nobody set it.
+        file = self.task_file is not None
         return EpisodeRequest(
             episode_id=f"{self.run_id}-{index:04d}",
-            task="file" if self.task_file is not None else self.task,
-            blocks=self.blocks,
+            task="file" if file else self.task,
+            blocks=UNSET_BLOCKS if file else self.blocks,
             stacks=self.stacks,
             objects=self.objects,
             preference=self.preference,
@@ -167,20 +174,40 @@ def describe_task_file(text: str) -> tuple[str | None, int] | None:
 
 def read_task_file(path: Path | None) -> str | None:
     """The text of a ``--task-file`` (its layout is validated later, by the sim), or None
-    without one. A file too long to travel in a reset request is refused here."""
+    without one. What is not a regular file (``/dev/zero``, a pipe, a directory) is refused by
+    name, and a file too long to travel in a reset request is refused having read at most the
+    limit: its size first, then never more than the limit's bytes and one."""
     if path is None:
         return None
-    try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
-        why = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
-        raise ConfigError("task-file", f"cannot read {path}: {why}") from None
     limit = _task_file_limit()
+    most = 4 * limit  # bytes: UTF-8 spends at most 4 on a character
+    try:
+        if not stat.S_ISREG(path.stat().st_mode):
+            raise ConfigError("task-file", f"{_shown(path)} is not a regular file")
+        with path.open("rb") as file:
+            data = file.read(most + 1)
+    except OSError as exc:
+        raise ConfigError("task-file", f"cannot read {_shown(path)}: {exc.strerror}") from None
+    if len(data) > most:
+        raise ConfigError(
+            "task-file",
+            f"{_shown(path)} has over {most:,} bytes; a task file holds at most "
+            f"{limit:,} characters",
+        )
+    try:
+        text = data.decode()
+    except UnicodeDecodeError:
+        raise ConfigError("task-file", f"cannot read {_shown(path)}: not UTF-8 text") from None
     if len(text) > limit:
         raise ConfigError(
-            "task-file", f"{path} has {len(text):,} characters; a task file holds at most {limit:,}"
+            "task-file",
+            f"{_shown(path)} has {len(text):,} characters; a task file holds at most {limit:,}",
         )
     return text
+
+
+def _shown(path: Path) -> str:
+    return printable(str(path))
 
 
 def _task_file_limit() -> int:
