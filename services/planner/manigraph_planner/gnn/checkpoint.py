@@ -18,7 +18,9 @@ key                           value
 ============================  ==============================================================
 
 Loading refuses, with a :class:`PolicyError` naming the field, anything that is not such a
-file, names an unknown architecture, or was built for a different feature spec.
+file, names an unknown architecture, or was built for a different feature spec; and, before
+paying for it, an archive, a declared network or a vocabulary beyond what
+:mod:`.checkpoint_limits` allows, or weights that are not finite.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from __future__ import annotations
 import os
 import pickle
 import zipfile
+from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -33,6 +36,7 @@ from typing import Any, NamedTuple
 
 import torch
 
+from manigraph_planner.gnn import checkpoint_limits as limits
 from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_planner.gnn.models.build import policy_net_for
@@ -132,20 +136,23 @@ def load_checkpoint(path: str | os.PathLike[str], message_passing: bool = True) 
         PolicyError: the file is unreadable or not a manigraph GNN checkpoint at all (``not
             a manigraph checkpoint: <path>: <why>``), its architecture is not registered,
             its feature spec differs from this code's, or its weights do not fit its
-            architecture. The message names the field.
+            architecture; or before reading or building more than it may, the archive, the
+            declared sizes or a vocabulary's order are beyond :mod:`.checkpoint_limits`, or
+            a weight is NaN or infinite. One line, naming the field (and the limit).
     """
     payload = _read_payload(Path(path))
     _check_envelope(payload, path)
+    limits.check_feature_columns(payload["feature_spec"])
     task_spec = _task_feature_spec(payload["feature_spec"], payload["model"])
     model = _model_config(payload["model"], task_spec)
+    limits.check_declared_sizes(model)
     _check_feature_spec(payload["feature_spec"], model.feature_spec)
+    # Shapes first, from a network on the meta device: what is built below is then no
+    # bigger than what the (size-checked) archive stored.
+    _refuse_misfit(model, _state_dict_problem(limits.expected_state(model), payload["state_dict"]))
+    limits.check_finite(payload["state_dict"])
     net = policy_net_for(model, message_passing)
-    problem = _state_dict_problem(net, payload["state_dict"])
-    if problem:
-        raise PolicyError(
-            f"checkpoint state_dict: does not fit architecture '{model.architecture}' "
-            f"(hidden_channels={model.hidden_channels}, num_layers={model.num_layers}): {problem}"
-        )
+    _refuse_misfit(model, _state_dict_problem(net.state_dict(), payload["state_dict"]))
     net.load_state_dict(payload["state_dict"], strict=True)
     net.eval()
     info = CheckpointInfo(
@@ -157,6 +164,14 @@ def load_checkpoint(path: str | os.PathLike[str], message_passing: bool = True) 
         metrics=payload["metrics"],
     )
     return LoadedCheckpoint(net, info)
+
+
+def _refuse_misfit(model: ModelConfig, problem: str) -> None:
+    if problem:
+        raise PolicyError(
+            f"checkpoint state_dict: does not fit architecture '{model.architecture}' "
+            f"(hidden_channels={model.hidden_channels}, num_layers={model.num_layers}): {problem}"
+        )
 
 
 def _read_payload(path: Path) -> Any:
@@ -173,9 +188,15 @@ def _read_payload(path: Path) -> Any:
     if not zipfile.is_zipfile(path):  # what torch.save writes, since torch 1.6
         raise PolicyError(f"{NOT_A_CHECKPOINT}: {path}: {_what_it_holds(head)}")
     # torch.load raises a zoo of types on a broken archive (UnpicklingError, RuntimeError from
-    # the zip reader, EOFError, ...); all of them mean the same thing here.
+    # the zip reader, EOFError, ...); all of them mean the same thing here. The archive that
+    # was size-checked is the one read: one open file for both.
     try:
-        return torch.load(path, map_location="cpu", weights_only=True)
+        with path.open("rb") as stream:
+            limits.check_archive(stream, path)
+            stream.seek(0)
+            return torch.load(stream, map_location="cpu", weights_only=True)
+    except PolicyError:
+        raise
     except Exception as exc:
         if isinstance(exc, pickle.UnpicklingError):
             why = "it holds pickled objects beyond plain types and tensors"
@@ -232,9 +253,12 @@ def _task_feature_spec(stored: dict[str, Any], model: dict[str, Any]) -> Feature
     if model.get("heads", "object-goal") != "object-goal":
         raise PolicyError("checkpoint feature_spec.task: only 'object-goal' heads take one")
     try:
-        return FeatureSpec.from_dict(stored)
+        spec = FeatureSpec.from_dict(stored)
     except (TypeError, ValueError) as exc:
         raise PolicyError(f"checkpoint feature_spec.{exc}") from None
+    assert spec.task is not None  # "task" in stored
+    limits.check_vocabulary_order(spec.task)
+    return spec
 
 
 def _check_feature_spec(stored: dict[str, Any], spec: FeatureSpec) -> None:
@@ -288,9 +312,9 @@ def _type_names(expected: type | tuple[type, ...]) -> str:
     return " or ".join("None" if t is type(None) else t.__name__ for t in types)
 
 
-def _state_dict_problem(net: PolicyNet, stored: dict[str, Any]) -> str:
-    """The first way ``stored`` does not fit ``net``, or ``""``."""
-    expected = net.state_dict()
+def _state_dict_problem(expected: Mapping[str, torch.Tensor], stored: dict[str, Any]) -> str:
+    """The first way ``stored`` does not fit a network whose state is ``expected``, or
+    ``""``."""
     missing = [key for key in expected if key not in stored]
     if missing:
         return f"missing {missing[:3]}"
@@ -301,6 +325,8 @@ def _state_dict_problem(net: PolicyNet, stored: dict[str, Any]) -> str:
         if not isinstance(value, torch.Tensor) or value.shape != expected[key].shape:
             have = tuple(value.shape) if isinstance(value, torch.Tensor) else type(value).__name__
             return f"{key} has shape {have}, expected {tuple(expected[key].shape)}"
+        if value.layout != torch.strided:
+            return f"{key} is a {value.layout} tensor, expected a dense one"
     return ""
 
 
