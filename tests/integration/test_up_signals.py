@@ -166,3 +166,40 @@ def test_a_closing_terminal_or_a_killed_up_leaves_nothing_behind(
         # a SIGKILL ends it before it can say anything (docs/running.md, "Exit codes").
         killed = signal.SIGKILL in signals
         assert up.returncode == (-signal.SIGKILL if killed else 128 + signals[0])
+
+
+def test_a_killed_secure_up_leaves_no_private_key_behind(tmp_path: Path) -> None:
+    """kill -9 of ``up --secure``: its certificate directory, every private key of the stack,
+    goes with its children (its watcher removes it; docs/security.md)."""
+    port = free_port()
+    log = tmp_path / "up.log"
+    with log.open("wb") as sink:
+        up = subprocess.Popen(
+            [*CLI, "up", "--secure", "--policy", "expert", "--port", str(port)],
+            stdout=sink,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        )
+    children: set[int] = set()
+    try:
+        deadline = time.monotonic() + 180
+        while b"stack is up" not in log.read_bytes():
+            assert up.poll() is None, log.read_text(errors="replace")[-3000:]
+            assert time.monotonic() < deadline, log.read_text(errors="replace")[-3000:]
+            time.sleep(0.05)
+        line = next(x for x in log.read_text().splitlines() if x.startswith("certificates: "))
+        certs = Path(line.split()[1])
+        assert sorted(certs.glob("*.key")), certs  # the keys are there while it runs
+        children = _children(up.pid)
+        up.send_signal(signal.SIGKILL)
+        up.wait(timeout=60)
+        deadline = time.monotonic() + 15.0
+        while certs.exists() or _alive(children) or not _port_is_free(port):
+            assert time.monotonic() < deadline, (certs.exists(), _alive(children))
+            time.sleep(0.05)
+    finally:
+        for pid in _alive({up.pid} | children):
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        up.wait()

@@ -5,11 +5,9 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import shutil
 import signal
 import socket
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -32,6 +30,7 @@ from manigraph_tools.certs import IDENTITIES, make_certificates
 from manigraph_tools.commands.common import emit_json
 from manigraph_tools.commands.run import episode_arguments, plan_from_args
 from manigraph_tools.episodes import EpisodePlan, raise_if_aborted, run_episodes
+from manigraph_tools.owned_dir import OwnedDirectory
 from manigraph_tools.supervisor import STOP_SIGNALS, ProcessSpec, Supervisor
 from manigraph_tools.up_guide import guide
 
@@ -320,7 +319,10 @@ def _up_run(args: argparse.Namespace) -> int:
         raise ConfigError("planner-per-cell", "only with --cells")
     # The options first: a run refused for them names them, whatever else is on the port.
     _refuse_busy_port(args.port)
-    tls_dir = Path(tempfile.mkdtemp(prefix="manigraph-certs-")) if args.secure else None
+    # Every private key of the stack: removed when up stops, and by a watcher should up be
+    # killed (owned_dir: it does not outlive up, even SIGKILLed).
+    certs = OwnedDirectory() if args.secure else None
+    tls_dir = certs.path if certs is not None else None
     endpoint = loopback_endpoint(args.port, tls=tls_dir is not None)
     bus_env = {
         "MANIGRAPH_ZENOH_MODE": "client",
@@ -423,8 +425,8 @@ def _up_run(args: argparse.Namespace) -> int:
             print("stopping the stack", file=sys.stderr)
     finally:
         supervisor.stop()
-        if tls_dir is not None:
-            shutil.rmtree(tls_dir, ignore_errors=True)
+        if certs is not None:
+            certs.remove()
     if supervisor.failure is not None:
         if supervisor.failure_is_configuration:  # exit as the refusal would in one process
             raise StackRefusedConfiguration(f"the stack stopped: {supervisor.failure}")
