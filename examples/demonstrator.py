@@ -13,7 +13,8 @@ them too; ``manigraph train`` learns from either (docs/task-files.md).
 
 On a secure stack (``up --secure``) it presents the ``demo-ui`` identity, the one the router
 lets both reset the world and publish actions: ``--tls-dir DIR --tls-identity demo-ui``
-(``up`` prints DIR). As any other identity its resets and actions are refused.
+(``up`` prints DIR). As any other identity its resets and actions are refused: a reset
+refused or unanswered ends it at once, in one line that says which (:func:`reset_problem`).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from manigraph_shared.acceptance import admits
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.demonstrations import DemonstrationLog, stamp_times
+from manigraph_shared.errors import BusError, RequestRefused
 from manigraph_shared.messages import (
     Action,
     EpisodeEvent,
@@ -38,6 +40,8 @@ from manigraph_shared.messages import (
 )
 
 POLICY = "demonstrator"
+#: Seconds a reset may take (a physics world lays out its objects in a few).
+RESET_WAIT = 30.0
 
 
 def decide(scene: Scene) -> tuple[str, str] | None:
@@ -64,7 +68,11 @@ def demonstrate(
     bus: Bus, request: EpisodeRequest, inbox: queue.Queue[object], wait: float
 ) -> Demonstration:
     """One episode: reset the world, then decide on each fresh scene until it ends."""
-    start = bus.request(request, EpisodeEvent, timeout=30.0)
+    asked = time.monotonic()
+    try:
+        start = bus.request(request, EpisodeEvent, timeout=RESET_WAIT)
+    except BusError as exc:
+        raise ResetFailed(reset_problem(bus, exc, time.monotonic() - asked)) from None
     steps: list[tuple[Scene, Action]] = []
     scene: Scene | None = None
     deadline = time.monotonic() + wait  # for the next decision, or the episode's end
@@ -97,6 +105,27 @@ def demonstrate(
         if end is not None:  # the world ended the episode before the skill's last word
             return start, steps, end
         deadline = time.monotonic() + wait
+
+
+class ResetFailed(Exception):
+    """The world could not be reset; the message says why, in one line."""
+
+
+def reset_problem(bus: Bus, error: BusError, seconds: float) -> str:
+    """Why a reset failed: refused by the sim (a bad task file, a stopped robot), or not
+    answered. The router ends at once, with no reply, a query this identity may not send, as
+    it does one nobody serves: the sim's liveliness tells the two apart."""
+    if isinstance(error, RequestRefused):
+        return f"the world refused the episode: {error}"
+    if "sim" not in bus.alive_services(timeout=1.0):
+        return "no sim answers resets on this bus: is a stack running (manigraph up --policy none)?"
+    if seconds < RESET_WAIT / 2:
+        return (
+            "the reset was refused without an answer although the sim is alive: this identity "
+            "may not reset the world (access denied by the router; on a secure stack present "
+            "--tls-identity demo-ui)"
+        )
+    return f"the sim did not answer the reset within {RESET_WAIT:g} s: is it busy?"
 
 
 def wait_for_skill(
@@ -150,6 +179,9 @@ def main() -> int:
             )
             try:
                 start, steps, end = demonstrate(bus, request, inbox, args.wait)
+            except ResetFailed as exc:
+                print(f"demonstrator: {exc}", file=sys.stderr)
+                return 1
             except queue.Empty:
                 print(
                     f"demonstrator: nothing came for {args.wait:g} s: is a stack running, and may "

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -70,6 +71,17 @@ def test_on_a_secure_stack_it_needs_the_demo_ui_identity(tmp_path: Path) -> None
         refused = demonstrator(running, tmp_path / "no.mcap", *as_client)
         assert refused.returncode != 0  # the client identity may reset the world, not decide
         assert "may this identity decide" in refused.stderr
+        # An identity that may not even reset: refused at once, in one line, no traceback
+        # (it was a traceback after the reset's 30 s).
+        started = time.monotonic()
+        denied = demonstrator(running, tmp_path / "none.mcap", *tls, "--tls-identity", "skills")
+        assert time.monotonic() - started < 20  # a fresh Python, a session: ~2-5 s
+        assert denied.returncode == 1, denied.stderr
+        assert denied.stderr.strip().splitlines() == [
+            "demonstrator: the reset was refused without an answer although the sim is alive: "
+            "this identity may not reset the world (access denied by the router; on a secure "
+            "stack present --tls-identity demo-ui)"
+        ]
         allowed = demonstrator(running, tmp_path / "yes.mcap", *tls, "--tls-identity", "demo-ui")
         assert allowed.returncode == 0, allowed.stderr
         assert "2/2 demonstrations succeeded" in allowed.stderr
