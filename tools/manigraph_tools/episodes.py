@@ -164,6 +164,10 @@ class EpisodeProgress:
             return time.monotonic() - self.last
 
 
+#: Seconds the client waits for a reset's answer: longer than the sim's own 30 s, so that a
+#: reset the sim could not finish is its named answer (``reset_timeout``, exit 1), not silence.
+RESET_WAIT = 32.0
+
 #: Reasons that end the run with their episode: an engaged emergency stop, a planner that
 #: cannot read the task's scenes.
 ABORTING = (ESTOP_ENGAGED, CANNOT_DECIDE)
@@ -241,7 +245,7 @@ def _run_one(
     watch.mark()
     events.start(request.episode_id)
     try:
-        start = bus.request(request, EpisodeEvent, timeout=min(plan.timeout, 30.0))
+        start = bus.request(request, EpisodeEvent, timeout=min(plan.timeout, RESET_WAIT))
     except RequestRefused as exc:  # the request itself was refused (a bad task file): abort
         stopped = str(exc).find(ESTOP_ENGAGED)
         if stopped >= 0:  # not the request's fault: the stack is stopped
