@@ -1,11 +1,19 @@
 from __future__ import annotations
 
+import os
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from manigraph_testkit.testing import Stack, stack
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Every stack a test starts keeps its emergency-stop latch under this run's own state
+    home (one directory per port), never the user's ``~/.local/state``."""
+    os.environ["XDG_STATE_HOME"] = tempfile.mkdtemp(prefix="manigraph-test-state-")
 
 
 @pytest.fixture

@@ -48,12 +48,14 @@ import zenoh
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.errors import ManigraphError, MessageError
+from manigraph_shared.estop_latch import FIRST_ANSWER_SECONDS, EstopLatch
 from manigraph_shared.health import HealthFile
-from manigraph_shared.inbox import DEFAULT_CAPACITY, Inbox
+from manigraph_shared.inbox import DEFAULT_CAPACITY, DEFAULT_LANE, Inbox
 from manigraph_shared.messages import (
     Checkpoint,
     Delivery,
     EmergencyStop,
+    EstopState,
     Message,
     Scene,
     ServiceState,
@@ -61,7 +63,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.messages.status import MAX_REJECTION_KINDS
 from manigraph_shared.scene_gate import SceneGate
-from manigraph_shared.service_facts import EstopWatch, package_version
+from manigraph_shared.service_facts import package_version
 
 M = TypeVar("M", bound=Message)
 HEARTBEAT_SECONDS = 1.0
@@ -139,8 +141,10 @@ class Service:
         self._activity_at_trim = 0
         self.version = package_version(type(self).__module__)
         self.started_at = time.time()
-        #: The emergency stop as this service last heard of it (every service listens).
-        self.estop = EstopWatch()
+        #: The emergency stop as this service knows it: unknown (acting as stopped) until the
+        #: stack's latch answers; every stop heard since (:mod:`manigraph_shared.estop_latch`).
+        self.estop = EstopLatch(on_change=self._estop_changed)
+        self._latch_thread: threading.Thread | None = None
         #: What the service serves, for its status (the planner sets them).
         self.policy: str | None = None
         self.checkpoint: Checkpoint | None = None
@@ -157,9 +161,11 @@ class Service:
         handler: Callable[[M], None],
         key: str | None = None,
         inline: bool = False,
+        lane: str = DEFAULT_LANE,
     ) -> None:
         """Run ``handler`` on the service thread for every valid ``message_type`` sample
-        (state streams coalesced to the newest waiting sample, the rest bounded).
+        (state streams coalesced to the newest waiting sample, the rest bounded per ``lane``:
+        what must never be pushed out by other traffic gets a lane of its own).
 
         ``inline``: when no handler is running and nothing waits, run it at once on the Zenoh
         thread that decoded the sample, not after a hand-over to the service thread (which
@@ -175,7 +181,7 @@ class Service:
         else:
 
             def enqueue(message: M) -> None:
-                self._inbox.put(handler, message)
+                self._inbox.put(handler, message, lane)
 
         def deliver(message: M) -> None:
             if not (inline and self._run_inline(handler, message)):
@@ -229,6 +235,31 @@ class Service:
 
     def setup(self) -> None:
         """Declare subscriptions, queryables and publishers."""
+
+    def on_estop(self, state: EstopState) -> None:
+        """The emergency stop changed (engaged, released, or learned): act on it at once, on
+        the thread that learned it. Runs once before :meth:`setup` with the unknown state,
+        which is engaged: a service that can move the robot halts it there."""
+
+    def _estop_changed(self, state: EstopState) -> None:
+        self.on_estop(state)
+        if state.engaged:
+            self.log.warning(
+                "EMERGENCY STOP %s: %s%s",
+                "engaged" if state.known else "state unknown, acting as engaged",
+                state.reason or "(no reason)",
+                f" (by {state.by})" if state.by else "",
+            )
+        else:
+            self.log.warning("emergency stop released: %s", state.reason or "(no reason)")
+        self.call_soon(lambda _: self.publish_status(ServiceState.OK, self.last_error))
+
+    def _follow_latch(self) -> None:
+        """Ask the stack's latch again now and then (a thread of its own: never the service
+        thread's time)."""
+        while not self.stop_event.wait(0.1):
+            if self.estop.due(time.monotonic()):
+                self.estop.ask(self.bus)
 
     def tick(self) -> None:
         """Periodic work (``tick_period``)."""
@@ -306,8 +337,12 @@ class Service:
         dropped = self._inbox.dropped
         if dropped > self._dropped_reported:
             self._dropped_reported = dropped
+            lanes = ", ".join(f"{lane} {n}" for lane, n in self._inbox.dropped_by_lane.items())
             self.report_error(
-                ManigraphError(f"inbox full ({self._inbox.capacity}): {dropped} samples dropped")
+                ManigraphError(
+                    f"inbox full ({self._inbox.capacity} a lane): {dropped} samples dropped "
+                    f"({lanes})"
+                )
             )
 
     def _trim_heap(self) -> None:
@@ -322,7 +357,16 @@ class Service:
         health = HealthFile.from_environment(self.bus.session)
         self.started_at = time.time()
         self.publish_status(ServiceState.STARTING)
-        self.bus.subscribe(EmergencyStop, self.estop.heard)  # before a handler can act on it
+        # Stopped until the stack's latch says otherwise; then every stop heard, and the
+        # latch again now and then, all before a handler can act.
+        self.on_estop(self.estop.state)
+        self.bus.subscribe(EmergencyStop, self.estop.heard)
+        if not self.estop.ask(self.bus, FIRST_ANSWER_SECONDS):
+            self.log.warning("no answer from the stack's emergency-stop latch: acting as stopped")
+        self._latch_thread = threading.Thread(
+            target=self._follow_latch, name="estop-latch", daemon=True
+        )
+        self._latch_thread.start()
         with self._turn:  # no inline handler before the service is set up
             self.setup()
         self._serve_status()

@@ -13,6 +13,7 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -78,6 +79,9 @@ class Stack:
             "MANIGRAPH_ZENOH_NO_MULTICAST_SCOUTING": "1",
             "MANIGRAPH_TLS_DIR": str(self.tls_dir or ""),
             "MANIGRAPH_TLS_IDENTITY": "",
+            # The stack's own emergency-stop latch: a stop one test leaves engaged must not
+            # reach another test's stack on a reused port.
+            "MANIGRAPH_STATE_DIR": str(self.log_dir / "state"),
             "PYTHONUNBUFFERED": "1",
         }
 
@@ -274,15 +278,25 @@ def run_up(
     env: dict[str, str] | None = None,
 ) -> subprocess.CompletedProcess[str]:
     """``manigraph up ARGS`` on a free port, to completion, with ``env`` over this process's
-    environment; with ``check`` it fails loudly if ``up`` fails."""
-    result = subprocess.run(
-        [sys.executable, "-m", "manigraph_shared.cli", "up", *args, "--port", str(free_port())],
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        check=False,
-        env={**os.environ, **(env or {})},
-    )
+    environment (and a state directory of its own unless ``env`` names one); with ``check``
+    it fails loudly if ``up`` fails."""
+    with tempfile.TemporaryDirectory(prefix="manigraph-state-") as state:
+        result = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "manigraph_shared.cli",
+                "up",
+                *args,
+                "--port",
+                str(free_port()),
+            ],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            check=False,
+            env={**os.environ, "MANIGRAPH_STATE_DIR": state, **(env or {})},
+        )
     if check and result.returncode != 0:
         raise AssertionError(f"manigraph up {' '.join(args)} failed:\n{result.stderr[-3000:]}")
     return result

@@ -149,6 +149,12 @@ GRANTS: tuple[Grant, ...] = (
         (ServiceStatus.key_pattern(), cell_key(ServiceStatus.key_pattern(), "*")),
         "asking the services' status is reading",
     ),
+    Grant(
+        tuple(name for name in IDENTITIES if name != ROUTER),  # (routers relay: their own row)
+        QUERY,
+        (EmergencyStop.key, cell_key(EmergencyStop.key, "*")),
+        "asking the stack's emergency-stop latch (kept by the router) is reading",
+    ),
     Grant(SERVICES, ANNOUNCE, (f"{ALIVE_PREFIX}/{{identity}}",), "each service its own token"),
     Grant(
         (ROUTER,),

@@ -37,6 +37,7 @@ from typing import TextIO
 from manigraph_shared.bus import Bus
 from manigraph_shared.decision_failure import CANNOT_DECIDE, cannot_decide
 from manigraph_shared.errors import BusError, ManigraphError, PolicyError, RequestRefused
+from manigraph_shared.estop_latch import ESTOP_ENGAGED
 from manigraph_shared.messages import (
     Action,
     EpisodeEvent,
@@ -44,7 +45,6 @@ from manigraph_shared.messages import (
     ServiceStatus,
     SkillStatus,
 )
-from manigraph_shared.service_facts import ESTOP_ENGAGED
 from manigraph_tools.episode_plan import (
     EpisodeOptions,
     EpisodePlan,

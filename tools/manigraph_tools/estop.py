@@ -10,7 +10,9 @@ stop it heard and reports it in its status, so ``manigraph status`` and ``doctor
 engaged stop with its reason, who and since when. While it is engaged the sim refuses new
 episodes and cuts the one under way (reason ``estop_engaged``).
 
-A service started after the stop has not seen it: send ``manigraph stop`` again.
+The stop is latched by the stack (the router keeps it across restarts:
+:mod:`manigraph_tools.estop_keeper`): a service started, or restarted, after it learns it
+before it moves. Both commands say whether the latch holds what they sent.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import time
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
+from manigraph_shared.estop_latch import EstopLatch
 from manigraph_shared.messages import EmergencyStop, ServiceStatus
 
 ENGAGED = "emergency stop engaged"
@@ -37,6 +40,20 @@ def operator() -> str:
     except (OSError, KeyError):  # no user entry (a container) and no $USER
         user = "unknown"
     return f"{user}@{socket.gethostname()}"[:128]
+
+
+def latched(bus: Bus, engaged: bool, wait: float = 1.0) -> bool:
+    """Whether the stack's latch holds ``engaged`` now (asked until ``wait`` runs out)."""
+    deadline = time.monotonic() + wait
+    while True:
+        latch = EstopLatch()
+        if latch.ask(bus, timeout=max(0.1, deadline - time.monotonic())) and (
+            latch.engaged == engaged
+        ):
+            return True
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(0.05)
 
 
 def send(bus: Bus, engaged: bool, reason: str, wait: float, by: str = "") -> bool:
@@ -68,12 +85,18 @@ def _run(args: argparse.Namespace, engaged: bool) -> int:
     reason = args.reason or ("manigraph stop" if engaged else "manigraph resume")
     with Bus.open(bus_config_from_args(args, wait_seconds=5.0)) as bus:
         ok = send(bus, engaged, reason, args.wait, by=args.by or operator())
+        held = latched(bus, engaged)
     what = "engaged" if engaged else "released"
+    latch = (
+        "latched by the stack"
+        if held
+        else "NOT confirmed by the stack's latch (is the router a manigraph router?)"
+    )
     if ok:
-        print(f"emergency stop {what}; skills acknowledged", file=sys.stderr)
-        return 0
+        print(f"emergency stop {what}, {latch}; skills acknowledged", file=sys.stderr)
+        return 0 if held else 1
     print(
-        f"emergency stop {what} (published), but skills did not acknowledge within "
+        f"emergency stop {what} (published, {latch}), but skills did not acknowledge within "
         f"{args.wait:g} s: is it running?",
         file=sys.stderr,
     )

@@ -1,5 +1,8 @@
 """``manigraph router``: a Zenoh router in this Python process, so no separate binary is needed.
 
+It also keeps the stack's emergency-stop latch (:mod:`manigraph_tools.estop_keeper`): a stop
+lasts, across restarts of any service, of the router and of ``manigraph up``, until resume.
+
 With TLS (``--tls-dir``) the router requires a client certificate from every connection and
 enforces the access-control policy of ``manigraph_tools.access``: deny unless granted.
 """
@@ -11,11 +14,13 @@ import os
 import signal
 import threading
 import time
+from pathlib import Path
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.health import HealthFile
 from manigraph_tools.access import access_control, read_cell_identities
+from manigraph_tools.estop_keeper import EstopKeeper, state_dir
 
 log = logging.getLogger("manigraph.router")
 
@@ -41,7 +46,9 @@ def _watch_supervisor(stop: threading.Event) -> None:
     threading.Thread(target=watch, name="supervisor-watch", daemon=True).start()
 
 
-def run_router(config: BusConfig) -> int:
+def run_router(config: BusConfig, state: Path | None = None) -> int:
+    """Route until SIGINT/SIGTERM, keeping the stack's emergency-stop latch in ``state`` (the
+    state directory; default: :func:`~manigraph_tools.estop_keeper.state_dir`)."""
     stop = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
@@ -52,6 +59,8 @@ def run_router(config: BusConfig) -> int:
     health = HealthFile.from_environment()
     health.clear()  # a killed predecessor's file says nothing about this router
     with Bus.open(config, overrides) as bus:
+        keeper = EstopKeeper(bus.session, state_dir(state, config.listen))
+        keeper.start()  # before the token: a service that sees the router can ask it
         bus.declare_alive("router")
         log.info("zenoh router listening on %s", ",".join(config.listen))
         if config.connect:
@@ -69,6 +78,7 @@ def run_router(config: BusConfig) -> int:
             health.beat()
         health.clear()
         log.info("stopping")
+        keeper.close()
         # Closing the session must not keep a stopped router alive on its port.
         timer = threading.Timer(STOP_GRACE, os._exit, args=(0,))
         timer.daemon = True

@@ -10,8 +10,11 @@ with what its token says, nothing more.
 What is shown: the endpoint and the cells, whether the stack is secure (and the certificate
 directory this client used), each service alive or not with its version and uptime, the
 planner's policy and checkpoint (file and SHA-256), the emergency stop (``estop_engaged`` with
-reason, who and since when), and warnings, such as two deciders (the planner, or a person on
-the demonstration page) alive in one cell: both would send actions to one robot.
+reason, who and since when) as the stack's latch holds it (the router keeps it:
+:mod:`manigraph_tools.estop_keeper`) and as each service knows it, and warnings: a service
+whose view of the stop disagrees with the latch, or that does not know it yet; two processes
+of one service in one cell (two deciders, the planner or a person on the demonstration page,
+would both send actions to one robot; two skills would both move it).
 """
 
 from __future__ import annotations
@@ -29,7 +32,8 @@ from manigraph_shared.bus import ALIVE_PREFIX, Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.cells import PREFIX, RESERVED, cell_key
 from manigraph_shared.errors import MessageError
-from manigraph_shared.messages import EstopState, ServiceStatus
+from manigraph_shared.estop_latch import EstopLatch
+from manigraph_shared.messages import EmergencyStop, EstopState, ServiceStatus
 
 #: The services that send ``Action``s: more than one alive in a cell is a mistake.
 DECIDERS = ("planner", "demo-ui")
@@ -86,6 +90,7 @@ class ServiceReport:
             }
         if status.estop is not None:
             out["estop_engaged"] = status.estop.engaged
+            out["estop"] = {"engaged": status.estop.engaged, "known": status.estop.known}
         return out
 
 
@@ -95,6 +100,9 @@ class StackStatus:
     secure: bool
     certificate_dir: str | None
     services: list[ServiceReport] = field(default_factory=list)
+    #: Each cell's stop as the stack's latch (the router) holds it; a cell whose latch did not
+    #: answer is missing.
+    latches: dict[Cell, EstopState] = field(default_factory=dict)
     #: Seconds the answer took, from opening the bus to the last status.
     seconds: float = 0.0
 
@@ -106,8 +114,13 @@ class StackStatus:
         return [report for report in self.services if report.cell == cell]
 
     def estop(self, cell: Cell) -> EstopState | None:
-        """The cell's emergency stop as its services heard it: engaged if any alive service
-        says so (the latest such stop), else the latest release; None if none has heard."""
+        """The cell's emergency stop: as the stack's latch holds it, or engaged if any alive
+        service says so (the latest such stop); else the latest release; None if nobody
+        knows."""
+        latched = self.latches.get(cell)
+        views = [r.status.estop for r in self.in_cell(cell) if r.alive and r.status]
+        if latched is not None and (latched.engaged or not any(v and v.engaged for v in views)):
+            return latched
         heard = [
             r.status.estop
             for r in self.in_cell(cell)
@@ -142,9 +155,38 @@ class StackStatus:
                     f"two deciders alive in {where} ({names}): both send actions to one "
                     "robot; stop one"
                 )
+            for report in self.in_cell(cell):
+                if report.alive and report.tokens > 1 and report.name not in DECIDERS:
+                    found.append(
+                        f"{report.tokens} {report.name} processes alive in {where}: both act "
+                        "on one robot; stop one"
+                    )
+            found += self._estop_disagreements(cell, where)
             missing = [r.name for r in self.in_cell(cell) if not r.alive]
             if missing:
                 found.append(f"not alive in {where}: {', '.join(missing)}")
+        return found
+
+    def _estop_disagreements(self, cell: Cell, where: str) -> list[str]:
+        latched = self.latches.get(cell)
+        found = []
+        for report in self.in_cell(cell):
+            view = report.status.estop if report.alive and report.status else None
+            if view is None:
+                continue
+            if not view.known:
+                found.append(
+                    f"{report.name} in {where} does not know the emergency stop yet "
+                    "(no answer from the latch): it acts as stopped"
+                )
+            elif latched is not None and view.engaged != latched.engaged:
+                found.append(
+                    f"{report.name} in {where} says the emergency stop is "
+                    f"{'engaged' if view.engaged else 'released'}, the stack's latch says "
+                    f"{'ENGAGED' if latched.engaged else 'released'}"
+                )
+        if latched is None and any(r.alive for r in self.in_cell(cell)):
+            found.append(f"no emergency-stop latch answered for {where}")
         return found
 
     def as_json(self, now: float | None = None) -> dict[str, object]:
@@ -165,6 +207,10 @@ class StackStatus:
             ),
             "estop_engaged": self.estop_engaged,
             "estop": _estop_json(estop, engaged[0][0] if engaged else None),
+            "estop_latch": {
+                (cell or "default"): _estop_json(state, cell)
+                for cell, state in self.latches.items()
+            },
             "warnings": self.warnings(),
             "seconds": round(self.seconds, 3),
         }
@@ -238,6 +284,7 @@ def gather(
                 break
         time.sleep(0.02)
     cells = list(dict.fromkeys([None, *sorted({c for c, _ in tokens if c}, key=str)]))
+    latches = _ask_latches(bus, cells, max(0.05, deadline - time.monotonic()))
     # The default cell is expected to hold a stack unless the stack is one of named cells
     # (``up --cells N``): then only the router is there, and that is no fault.
     only_named = len(cells) > 1 and {n for c, n in tokens if c is None} <= NO_STATUS
@@ -258,8 +305,38 @@ def gather(
         secure=config.tls,
         certificate_dir=str(config.tls_dir) if config.tls_dir is not None else None,
         services=reports,
+        latches=latches,
         seconds=time.monotonic() - started,
     )
+
+
+def _ask_latches(bus: Bus, cells: list[Cell], timeout: float) -> dict[Cell, EstopState]:
+    """Each cell's stop as the stack's latch holds it (the cells whose latch answered); the
+    cells are asked at once."""
+    pending = {
+        cell: bus.session.get(
+            cell_key(EmergencyStop.key, cell),
+            target=zenoh.QueryTarget.ALL,
+            consolidation=zenoh.ConsolidationMode.NONE,
+            timeout=timeout,
+        )
+        for cell in cells
+    }
+    found: dict[Cell, EstopState] = {}
+    for cell, replies in pending.items():
+        answers = []
+        for reply in replies:
+            if reply.ok is None:
+                continue
+            try:
+                answers.append(EmergencyStop.decode(reply.ok.payload.to_bytes()))
+            except MessageError:
+                continue
+        if answers:
+            latch = EstopLatch()
+            latch.answered(answers)
+            found[cell] = latch.state
+    return found
 
 
 def _alive() -> str:
@@ -272,6 +349,18 @@ def _when(stamp: float | None) -> str:
         return "?"
     moment = datetime.fromtimestamp(stamp, UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
     return f"{moment} ({max(0.0, time.time() - stamp):.0f} s ago)"
+
+
+def _view(report: ServiceReport) -> str:
+    """A service's own view of the stop: ``engaged``, ``released``, ``unknown`` or ``-``."""
+    if report.name == "router":
+        return "keeps the latch"
+    view = report.status.estop if report.alive and report.status else None
+    if view is None:
+        return "-"
+    if not view.known:
+        return "unknown (stopped)"
+    return "ENGAGED" if view.engaged else "released"
 
 
 def _uptime(seconds: float | None) -> str:
@@ -309,7 +398,11 @@ def text(status: StackStatus) -> str:
         if checkpoint is not None:
             served += f" from {checkpoint.path} (sha256 {checkpoint.sha256})"
         lines.append(served)
-    lines += ["", "| service | cell | state | version | uptime |", "|---|---|---|---|---|"]
+    lines += [
+        "",
+        "| service | cell | state | estop (its view) | version | uptime |",
+        "|---|---|---|---|---|---|",
+    ]
     now = time.time()
     for report in status.services:
         row = report.as_json(now)
@@ -318,7 +411,7 @@ def text(status: StackStatus) -> str:
             silent = "alive" if report.name in NO_STATUS else "alive (no status heard)"
             state = str(row.get("state", silent))
         lines.append(
-            f"| {report.name} | {report.cell or 'default'} | {state} | "
+            f"| {report.name} | {report.cell or 'default'} | {state} | {_view(report)} | "
             f"{row.get('version') or '-'} | {_uptime(row.get('uptime_s'))} |"  # type: ignore[arg-type]
         )
     lines += [f"WARNING: {warning}" for warning in status.warnings()]

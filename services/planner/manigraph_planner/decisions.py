@@ -15,6 +15,10 @@ from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene,
 
 _REMEMBERED = 1024
 _HELD = 256
+#: After skills refused a decision because the robot is stopped, seconds of scenes the planner
+#: lets pass before it decides again: a planner that has not (yet) heard the stop asks at most
+#: once a second instead of once per refusal (thousands a second).
+STOPPED_BACKOFF = 1.0
 #: Decisions whose scenes are kept so they can be explained afterwards.
 KEPT_DECISIONS = 64
 
@@ -111,6 +115,10 @@ class DecisionMaker:
         self.progress.on_status(status)
         self.pending = None
         self.ready_after = status.stamp
+        if status.reason == "stopped":  # the robot is stopped, whatever this planner heard
+            self.ready_after += STOPPED_BACKOFF
+            self._held.clear()
+            return None
         return self._decide_on_held()
 
     def give_up(self, now: float, skills_alive: bool = True) -> str | None:

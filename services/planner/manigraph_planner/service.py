@@ -13,8 +13,8 @@ from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import (
     Action,
     Checkpoint,
-    EmergencyStop,
     EpisodeEvent,
+    EstopState,
     ExplainRequest,
     Scene,
     SkillStatus,
@@ -98,9 +98,6 @@ class PlannerService(Service):
             inline=inline,
         )
         self.on(Scene, self._on_scene, inline=inline)
-        self.on(
-            EmergencyStop, lambda message: self.decisions.on_stop(message.engaged), inline=inline
-        )
         self.bus.watch_alive(self._on_liveliness)
         self.bus.serve(ExplainRequest, self.explain)
         self.log.info(
@@ -112,6 +109,12 @@ class PlannerService(Service):
             # Explain queries may come any time: build the explainer beside the decisions
             # rather than in the first query's time (the service answers scenes meanwhile).
             threading.Thread(target=self._prepare_explainer, name="explainer", daemon=True).start()
+
+    def on_estop(self, state: EstopState) -> None:
+        # Any thread: no decision from now on (unknown, before the latch answers, is engaged);
+        # what was held is dropped on the service thread.
+        self.decisions.stopped = state.engaged
+        self.call_soon(lambda _: self.decisions.on_stop(state.engaged))
 
     def _prepare_explainer(self) -> None:
         try:

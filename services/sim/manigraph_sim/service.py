@@ -7,17 +7,17 @@ from collections.abc import Callable
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import BusError, ManigraphError
+from manigraph_shared.estop_latch import stop_reason
 from manigraph_shared.messages import (
-    EmergencyStop,
     EpisodeEvent,
     EpisodeRequest,
+    EstopState,
     JointTrajectoryCommand,
     RobotCommand,
     ServiceState,
     SkillStatus,
 )
 from manigraph_shared.service import Service
-from manigraph_shared.service_facts import stop_reason
 from manigraph_sim.backend_base import JointedArmBackend, SimBackend
 from manigraph_sim.manifest import JOINTS
 from manigraph_sim.tasks.from_request import check_request
@@ -32,6 +32,9 @@ REFUSED = frozenset(
 #: answered ``reset_timeout``, an error of the runtime kind (``RequestFailed``, exit 1).
 RESET_ANSWER_SECONDS = 30.0
 RESET_TIMEOUT = "reset_timeout"
+
+#: The sim's inbox lane for what moves the robot (``manigraph_shared.inbox``).
+ROBOT_LANE = "robot"
 
 
 class Cadence:
@@ -87,27 +90,23 @@ class SimService(Service):
         self._next_frame = 0.0
 
     def setup(self) -> None:
-        # The emergency stop acts in the Zenoh thread that delivers it: the service thread may
-        # be busy moving the arm, and the motion must stop now, not after it.
-        self.bus.subscribe(EmergencyStop, self._on_estop, self._rejected)
         # Resets arrive on a Zenoh thread; hand them to the service thread and wait.
         self.bus.serve(EpisodeRequest, self._reset_from_query)
-        self.on(RobotCommand, self._execute)
+        # Robot commands in a lane of their own: skills' statuses (one for every action it
+        # refuses, and anyone may send it actions to refuse) can never push one out.
+        self.on(RobotCommand, self._execute, lane=ROBOT_LANE)
         self.on(SkillStatus, self._on_skill_status)
         if JOINTS in self.backend.abilities:
-            self.on(JointTrajectoryCommand, self._execute_trajectory)
+            self.on(JointTrajectoryCommand, self._execute_trajectory, lane=ROBOT_LANE)
 
-    def _on_estop(self, message: EmergencyStop) -> None:
+    def on_estop(self, state: EstopState) -> None:
+        # On the thread that learned it: the service thread may be busy moving the arm, and
+        # the motion must stop now, not after it. Unknown is engaged: the arm holds still.
         halt: Callable[[bool], None] | None = getattr(self.backend, "emergency_stop", None)
         if halt is not None:
-            halt(message.engaged)
-        self.log.warning(
-            "emergency stop %s: %s",
-            "engaged" if message.engaged else "released",
-            message.reason or "(no reason)",
-        )
-        if message.engaged:  # the episode under way ends, saying why, once the arm is still
-            self.call_soon(self._cut_episode, stop_reason(message.reason, message.by))
+            halt(state.engaged)
+        if state.engaged and state.known:  # the episode under way ends, saying why, once
+            self.call_soon(self._cut_episode, stop_reason(state.reason, state.by))
 
     def _cut_episode(self, reason: str) -> None:
         cut: Callable[[str], bool] | None = getattr(self.backend, "cut", None)

@@ -17,7 +17,8 @@ Nothing a sender does can block the threads that receive messages:
   forged for unknown episodes cost the next real episode milliseconds (each held the worker
   for ``scene_wait`` before, and 200 of them delayed the next episode by 3.5 s);
 * the worker waits at most ``scene_wait`` seconds for the scene an action was decided on;
-* ``EmergencyStop`` is acted on in the Zenoh thread that delivers it: the driver is stopped,
+* the emergency stop (:meth:`on_estop`, from the stack's latch: unknown until it answers,
+  and unknown is stopped) is acted on in the thread that learns it: the driver is stopped,
   the skill under way is reported failed with reason ``stopped`` from that thread at once
   (``ActionInFlight``: the worker may be planning or waiting for a scene; what it reports
   for that decision afterwards is dropped), queued actions are refused, and so is every
@@ -38,9 +39,9 @@ from collections.abc import Callable
 from manigraph_shared.bus import Bus
 from manigraph_shared.messages import (
     Action,
-    EmergencyStop,
     EpisodeEvent,
     EpisodePhase,
+    EstopState,
     Scene,
     ServiceState,
     SkillState,
@@ -84,8 +85,10 @@ class SkillsService(Service):
         self.scenes = SceneCache()
         self.scene_wait = scene_wait
         self.robot_service = robot_service
+        #: Set while the stop is engaged or not yet known (before the latch answers).
         self.stopped = threading.Event()
-        self.stop_reason = ""
+        self.stopped.set()
+        self.stop_reason = self.estop.state.reason
         self._actions: queue.Queue[Action] = queue.Queue(queue_capacity)
         self.in_flight = ActionInFlight(bus.publish, SKILL)
         self._running: Action | None = None  # the action the worker executes
@@ -95,7 +98,6 @@ class SkillsService(Service):
         sys.setswitchinterval(GIL_SWITCH_INTERVAL)
         self.bus.subscribe(EpisodeEvent, self._on_episode, on_error=self._rejected)
         self.bus.subscribe(Scene, self._on_scene, on_error=self._rejected)
-        self.bus.subscribe(EmergencyStop, self._on_estop, on_error=self._rejected)
         self.bus.subscribe(Action, self._on_action, on_error=self._rejected)
         self.bus.watch_alive(self._on_liveliness)
         self._worker.start()
@@ -153,23 +155,21 @@ class SkillsService(Service):
             except queue.Full:
                 self._refuse(action, "skills_busy", f"{self._actions.maxsize} actions queued")
 
-    def _on_estop(self, message: EmergencyStop) -> None:
-        if message.engaged:
+    def on_estop(self, state: EstopState) -> None:
+        if state.engaged:  # (also at start, while the stop is unknown: the driver refuses)
             self.stopped.set()
-            self.stop_reason = message.reason
+            self.stop_reason = state.reason
             self.driver.stop()
-            self.in_flight.stop(f"emergency stop engaged: {message.reason}")
+            self.in_flight.stop(f"emergency stop engaged: {state.reason}")
             while True:  # what was queued is not done either
                 try:
                     self._refuse(self._actions.get_nowait(), "stopped", "emergency stop engaged")
                 except queue.Empty:
                     break
-            self.log.warning("EMERGENCY STOP engaged: %s", message.reason or "(no reason)")
         else:
             self.driver.resume()
             self.stopped.clear()
-            self.log.warning("emergency stop released: %s", message.reason or "(no reason)")
-        self.call_soon(lambda _: self.publish_status(ServiceState.OK, self._detail()))
+            self.stop_reason = ""
 
     def _on_liveliness(self, service: str, alive: bool) -> None:
         if service == self.robot_service and not alive:

@@ -33,9 +33,18 @@ class Checkpoint(Struct, frozen=True, kw_only=True):
 
 
 class EstopState(Struct, frozen=True, kw_only=True):
-    """The emergency stop as one service last heard of it."""
+    """The emergency stop as one service knows it: from the stack's latch (the router keeps
+    it across restarts) and every stop heard since. ``known`` came later (default true, so
+    older logs decode as they meant)."""
 
     engaged: bool = False
+    known: Annotated[
+        bool,
+        Meta(
+            description="false: the service has not yet learned the stop from the stack's "
+            "latch, and acts as stopped (`engaged` is then true)"
+        ),
+    ] = True
     reason: Annotated[str, Meta(max_length=256, description="the stop's reason")] = ""
     by: Annotated[str, Meta(max_length=128, description="who engaged (or released) it")] = ""
     since: Annotated[
