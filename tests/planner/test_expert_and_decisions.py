@@ -133,3 +133,14 @@ def test_a_scene_of_an_ended_episode_is_never_decided_on() -> None:
     )
     assert maker.on_scene(ended) is None
     assert maker.on_scene(scene(*world, stamp=2.0, seq=2)) is None  # the episode stays over
+
+
+def test_a_decision_refused_because_the_robot_is_stopped_holds_the_planner_a_second() -> None:
+    maker = DecisionMaker(ExpertPolicy())
+    world = ([obj("a", 0.5, 0)], [slot("g0", 0.3, 0)])
+    assert maker.on_scene(scene(*world, stamp=1.0)) is not None
+    stopped = SkillStatus(decision_id="e:0", skill="p", state="failed", reason="stopped", stamp=2.0)
+    assert maker.on_status(stopped) is None  # no decision on the held scenes either
+    assert maker.on_scene(scene(*world, stamp=2.5, seq=2)) is None  # within the back-off
+    again = maker.on_scene(scene(*world, stamp=3.1, seq=3))
+    assert again is not None and again.decision_id == "e:1"

@@ -140,3 +140,19 @@ def test_status_sees_every_cell_its_stop_and_two_planners_in_one(running_stack: 
     assert report["estop"]["reason"] == "left door"  # type: ignore[index]
     (warning,) = report["warnings"]  # type: ignore[misc]
     assert warning.startswith("two deciders alive in cell left (planner x2)")
+
+
+def test_status_flags_a_second_skills_process_and_each_services_view_of_the_stop(
+    running_stack: Stack,
+) -> None:
+    start(running_stack, "sim", "skills")
+    running_stack.start("skills-2", "skills")  # a second skills on the same robot
+    with running_stack.client() as bus:
+        running_stack.wait_alive(bus, "sim", "skills", timeout=STARTUP)
+        time.sleep(1.5)  # both heartbeats
+    report = status_json(running_stack)
+    warnings = report["warnings"]
+    assert any(w.startswith("2 skills processes alive in the default cell") for w in warnings)
+    services = services_of(report)
+    assert services["sim"]["estop"] == {"engaged": False, "known": True}
+    assert report["estop_latch"]["default"]["engaged"] is False  # type: ignore[index]

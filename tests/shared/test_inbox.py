@@ -56,3 +56,27 @@ def test_get_waits_for_work_from_another_thread() -> None:
 def test_capacity_must_be_positive() -> None:
     with pytest.raises(ValueError, match="capacity"):
         Inbox(0)
+
+
+def test_a_flood_in_one_lane_never_pushes_out_another_lanes_sample() -> None:
+    inbox = Inbox(capacity=4)
+    flood = [inbox.put(handler, f"status {i}") for i in range(2_000)]
+    assert flood.count(True) == 4 and inbox.dropped == 1_996
+    assert inbox.put(other, "robot command", lane="robot")  # its lane has room
+    assert inbox.dropped_by_lane == {"default": 1_996}
+    arrived = [inbox.get(0.0) for _ in range(5)]
+    assert [work[1] for work in arrived if work] == [  # arrival order across lanes
+        "status 0",
+        "status 1",
+        "status 2",
+        "status 3",
+        "robot command",
+    ]
+
+
+def test_each_lane_is_bounded_on_its_own() -> None:
+    inbox = Inbox(capacity=2)
+    assert [inbox.put(handler, i, lane="robot") for i in range(3)] == [True, True, False]
+    assert inbox.dropped_by_lane == {"robot": 1}
+    inbox.get(0.0)
+    assert inbox.put(handler, 3, lane="robot")  # a slot freed in its own lane
