@@ -12,6 +12,10 @@ loopback) takes, in turn:
 * **explain bomb**: three explain requests at once, each a 256-object + 256-goal scene;
 * **oversized task file**: a reset request past the 1 MiB payload limit, and one with a
   64 KiB task file of 256 overlapping blocks;
+* **issue #48's cases** (``bench/soak_hostile.py``): 13 and 60 KB task files whose goals
+  accept a value nobody has; 10,000 forged Actions while real episodes run (no robot command
+  dropped); the emergency-stop latch across kill -9 of sim and skills (nothing moves, resume
+  works);
 
 and after each check it records whether every process is alive and healthy (``doctor``: no
 service missing or stalled), RSS of every service (``--settle`` s after the check) and what the
@@ -38,6 +42,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from soak_episodes import EpisodesMeanwhile  # bench/soak_episodes.py
+from soak_hostile import estop_latch, forged_actions, hostile_task_files  # bench/soak_hostile.py
 from soak_memory import RSS_TOLERANCE, KeyReading, RssFloor, fuzz_trends  # bench/soak_memory.py
 from soak_payloads import big_scene, overlapping_task_file  # bench/soak_payloads.py
 from soak_stack import SERVICES, SoakStack, soak_stack  # bench/soak_stack.py
@@ -384,6 +389,9 @@ def main() -> None:
         soak.check("invalid scene flood", soak.flood(False, args.flood_seconds, args.flood_rate))
         soak.check("explain bomb (256+256 nodes, x3)", soak.explain_bomb())
         soak.check("oversized task file", soak.oversized_task_file())
+        soak.check("hostile task files (matching, 13 + 60 KB)", hostile_task_files(stack))
+        soak.check("10,000 forged Actions during episodes", forged_actions(stack))
+        soak.check("e-stop latch across kill -9 of sim and skills", estop_latch(stack))
         final = stack.running.run("run", "--blocks", "4", "--episodes", "3", "--json", timeout=1800)
         summary = json.loads(final.stdout.strip().splitlines()[-1]) if final.returncode == 0 else {}
         episodes_ok = summary.get("success_rate") == 1.0
