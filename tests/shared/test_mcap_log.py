@@ -115,12 +115,12 @@ def test_a_log_names_its_contract_version_and_older_logs_still_decode(tmp_path: 
     path = tmp_path / "now.mcap"
     writer = McapLogWriter(path)
     writer.close()
-    assert contract_version(path) == CONTRACT_VERSION == 2
+    assert contract_version(path) == CONTRACT_VERSION == 3
     golden = GOLDEN / "sage-stack4.mcap"
     assert contract_version(golden) == 1  # written before versions were recorded
     scenes = [m for m in decode_log(golden) if isinstance(m, Scene)]
     assert scenes and all(o.attributes == {} for s in scenes for o in s.objects)
-    assert all(g.accepts == {} for s in scenes for g in s.goals)
+    assert all(g.accepts == {} and g.attributes == {} for s in scenes for g in s.goals)
     text = tmp_path / "notes.txt"
     text.write_text("# not a log\n")
     with pytest.raises(LogError, match="not an MCAP file"):

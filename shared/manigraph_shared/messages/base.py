@@ -42,7 +42,9 @@ PREFIX = "manigraph"
 #: * 2: objects' ``attributes`` and goals' ``accepts`` (Scene, TaskLayout); the end event's
 #:   ``goals_wrong_object``; ServiceStatus's version, start, policy, checkpoint and e-stop;
 #:   EmergencyStop's ``by``; the ``explainer_warming_up`` refusal; DepthImage.
-CONTRACT_VERSION = 2
+#: * 3: goals' ``attributes`` (Scene, TaskLayout); EpisodeRequest's ``rules``; the end event's
+#:   ``rule_violations``.
+CONTRACT_VERSION = 3
 
 Identifier = Annotated[
     str,

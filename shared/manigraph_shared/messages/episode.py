@@ -37,6 +37,14 @@ class EpisodeRequest(Message, frozen=True, kw_only=True):
         Annotated[str, Meta(max_length=65_536)] | None,
         Meta(description="TOML text of a user layout (with task 'file')"),
     ] = None
+    rules: Annotated[
+        Annotated[str, Meta(max_length=65_536)] | None,
+        Meta(
+            description="TOML text of rules only the judge knows (with task 'file'): the sim "
+            "decides success, wrong objects and rule violations by them; never in a Scene or "
+            "TaskLayout"
+        ),
+    ] = None
 
 
 class EpisodePhase(StrEnum):
@@ -61,6 +69,14 @@ class EpisodeEvent(Message, frozen=True, kw_only=True):
     goals_wrong_object: Annotated[
         int,
         Meta(ge=0, description="goals holding an object their ``accepts`` does not admit"),
+    ] = 0
+    rule_violations: Annotated[
+        int,
+        Meta(
+            ge=0,
+            description="placements into a goal the request's rules do not accept, counted "
+            "even when later undone (0 without rules)",
+        ),
     ] = 0
     success: Annotated[bool | None, Meta(description="all goals filled; set at end")] = None
     reason: Annotated[str, Meta(max_length=256, description="why it ended")] = ""

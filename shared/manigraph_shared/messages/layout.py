@@ -18,6 +18,7 @@ from manigraph_shared.messages.scene import (
     MAX_ENTITIES,
     Accepts,
     Attributes,
+    GoalAttributes,
     GoalCategory,
     ObjectCategory,
 )
@@ -43,6 +44,7 @@ class LayoutGoal(Struct, frozen=True, kw_only=True):
     position: Annotated[Vector3, Meta(description="where the object's centre should be, metres")]
     optional: Annotated[bool, Meta(description="may stay empty at the end (cover storage)")] = False
     accepts: Accepts = msgspec.field(default_factory=dict)
+    attributes: GoalAttributes = msgspec.field(default_factory=dict)
 
 
 class LayoutContainer(Struct, frozen=True, kw_only=True):

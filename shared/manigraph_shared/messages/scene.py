@@ -45,6 +45,14 @@ Attributes = Annotated[
         description="what the task tells objects apart by (colour, label, ...): text or number",
     ),
 ]
+GoalAttributes = Annotated[
+    dict[AttributeName, AttributeValue],
+    Meta(
+        max_length=MAX_ATTRIBUTES,
+        description="what the task tells goals apart by (a bin's colour, a rack's side): text "
+        "or number",
+    ),
+]
 Accepts = Annotated[
     dict[AttributeName, AcceptValue],
     Meta(
@@ -110,6 +118,7 @@ class SceneGoal(Struct, frozen=True, kw_only=True):
         Identifier | None, Meta(description="the dishwasher rack holding this slot")
     ] = None
     accepts: Accepts = msgspec.field(default_factory=dict)
+    attributes: GoalAttributes = msgspec.field(default_factory=dict)
 
 
 class SceneRack(Struct, frozen=True, kw_only=True):
