@@ -43,6 +43,9 @@ FIRST_ANSWER_SECONDS = 3.0
 #: What an unknown stop says, in statuses and refusals.
 UNKNOWN_REASON = "stop state not yet known: no answer from the stack's latch (the router)"
 
+#: What the latch answers for a cell whose stop was never sent.
+NEVER_ENGAGED = "never engaged"
+
 #: The state of a service that has not yet learned the stop.
 UNKNOWN = EstopState(engaged=True, known=False, reason=UNKNOWN_REASON)
 

@@ -48,7 +48,7 @@ import zenoh
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.errors import ManigraphError, MessageError
-from manigraph_shared.estop_latch import FIRST_ANSWER_SECONDS, EstopLatch
+from manigraph_shared.estop_latch import FIRST_ANSWER_SECONDS, NEVER_ENGAGED, EstopLatch
 from manigraph_shared.health import HealthFile
 from manigraph_shared.inbox import DEFAULT_CAPACITY, DEFAULT_LANE, Inbox
 from manigraph_shared.messages import (
@@ -243,7 +243,9 @@ class Service:
 
     def _estop_changed(self, state: EstopState) -> None:
         self.on_estop(state)
-        if state.engaged:
+        if not state.engaged and state.reason == NEVER_ENGAGED:  # the usual start: no news
+            self.log.info("emergency stop: released (never engaged on this stack)")
+        elif state.engaged:
             self.log.warning(
                 "EMERGENCY STOP %s: %s%s",
                 "engaged" if state.known else "state unknown, acting as engaged",

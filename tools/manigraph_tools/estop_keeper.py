@@ -30,6 +30,7 @@ from typing import Any
 import zenoh
 
 from manigraph_shared.errors import MessageError
+from manigraph_shared.estop_latch import NEVER_ENGAGED
 from manigraph_shared.messages import EmergencyStop
 from manigraph_shared.messages.base import PREFIX
 
@@ -117,7 +118,7 @@ class EstopKeeper:
                 by="latch",
                 stamp=0.0,
             )
-        return EmergencyStop(engaged=False, reason="never engaged", by="latch", stamp=0.0)
+        return EmergencyStop(engaged=False, reason=NEVER_ENGAGED, by="latch", stamp=0.0)
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         key = str(sample.key_expr)
