@@ -135,7 +135,10 @@ def test_ctrl_c_then_sigterm_leaves_nothing_behind_20_times(tmp_path: Path) -> N
             up.wait(timeout=60)
             # up has stopped (and reaped) its children before it exits: nothing may be left
             _assert_nothing_left(port, children, log, within=0.5)
-            assert up.returncode == 130, log.read_text()  # the first signal says why: Ctrl-C
+            # The first signal says why: Ctrl-C, 130. Sent back to back, the two arrive
+            # together and either may be handled first (SIGTERM: 143); a late SIGTERM, after
+            # the stop, must not kill up as it exits (it was -15 now and then).
+            assert up.returncode in ((130, 143) if gap == 0 else (130,)), log.read_text()
             assert "Traceback" not in log.read_text(errors="replace"), log.read_text()
 
 

@@ -307,15 +307,26 @@ class Supervisor:
             signal.signal(signum, self._on_signal)
 
     def _on_signal(self, signum: int, _frame: FrameType | None) -> None:
-        name = signal.Signals(signum).name
         if self._signalled or self._stopping.is_set():
             if not self._hurry.is_set():
+                name = signal.Signals(signum).name
                 self._say(f"{name}: killing what still runs in {HURRIED_GRACE:g} s")
             self.hurry()
             return
+        # First, before any other call: a second signal handled meanwhile (Python may run its
+        # handler inside this one) then hurries instead of taking the first one's place.
         self._signalled = True
-        self.stopped_by = name
+        self.stopped_by = name = signal.Signals(signum).name
         raise KeyboardInterrupt(name)
+
+    @staticmethod
+    def ignore_signals() -> None:
+        """From the main thread, once everything is stopped: ignore ``STOP_SIGNALS``. Nothing
+        is left to stop, and Python's finalization gives a handled signal its default action
+        back, so a late one would kill the process as it exits, and its status would be the
+        late signal's, not the first one's."""
+        for signum in STOP_SIGNALS:
+            signal.signal(signum, signal.SIG_IGN)
 
     def hurry(self) -> None:
         """Give every child still running ``HURRIED_GRACE`` seconds from now, then SIGKILL."""
