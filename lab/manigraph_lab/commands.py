@@ -10,7 +10,7 @@ import json
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 from manigraph_lab.sweep import SweepOptions, add_sweep_options
 from manigraph_planner.threads import add_threads_option, use_threads
@@ -107,6 +107,11 @@ demos_command = Command(
 class EvalOptions(Options):
     policy: str = option("expert", help="policy name or checkpoint file")
     noise: float = option(0.0, help="observation noise sigma", within=Interval(0, None), unit="m")
+    accepts_filter: Literal["on", "off"] = option(
+        "on",
+        help="a policy learned from a task file takes only pairs whose goal accepts the object "
+        "(on); off: the network's own choice, to measure what it learned (docs/training.md)",
+    )
 
 
 def _eval_configure(parser: argparse.ArgumentParser) -> None:
@@ -152,10 +157,12 @@ def _eval_run(args: argparse.Namespace) -> int:
         preference=episodes.preference,
     )
     progress = None if episodes.json else sys.stderr
-    policy = load_policy(options.policy)
+    policy = load_policy(options.policy, accepts_filter=options.accepts_filter)
     checkpoint = None if options.policy in POLICIES else checkpoint_field(options.policy)
     summary = rounded(evaluate(policy, spec, progress, checkpoint))
     assert isinstance(summary, dict)
+    if policy.accepts_filter is not None:  # what was judged: the network alone, or filtered
+        summary["accepts_filter"] = "on" if policy.accepts_filter else "off"
     if episodes.json:
         print(json.dumps(summary))
     else:

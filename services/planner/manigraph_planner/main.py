@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
@@ -30,6 +30,11 @@ class PlannerOptions(Options):
         "skills service is noticed at once)",
         within=Interval(0, 3600, low_open=True),
         unit="s",
+    )
+    accepts_filter: Literal["on", "off"] = option(
+        "on",
+        help="a policy learned from a task file takes only pairs whose goal accepts the object "
+        "(on); off: the network's own choice, to measure what it learned (docs/training.md)",
     )
     cells: str | None = option(
         None,
@@ -65,8 +70,10 @@ def _run(args: argparse.Namespace) -> int:
     if cells is not None and bus_config.cell is not None:
         raise ConfigError("cells", "give --cells or --cell, not both")
     try:
-        policy = load_policy(options.policy)
+        policy = load_policy(options.policy, accepts_filter=options.accepts_filter)
     except PolicyError as exc:  # a missing or unreadable policy: restarting cannot help
+        if str(exc).startswith("accepts-filter:"):
+            raise ConfigError("accepts-filter", str(exc).removeprefix("accepts-filter: ")) from exc
         raise ConfigError("policy", str(exc).removeprefix("policy: ")) from exc
     if options.explain_decisions:
         from manigraph_planner.policies.gnn import GNNPolicy

@@ -118,20 +118,68 @@ def test_a_goal_accepting_a_size_shows_it_in_the_objects_size_columns() -> None:
     assert x[1, column(spec, "size:any")] == 0
 
 
-def test_a_value_outside_the_vocabulary_is_refused_naming_object_and_values() -> None:
+def test_a_value_outside_the_vocabulary_reads_as_other_with_one_warning(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
     spec = FeatureSpec.for_task(TaskFeatures.learn([COLOURS]))
-    green = scene([obj("block_3", 0.4, colour="green")], [goal("g", 0.4)])
-    with pytest.raises(PolicyError) as caught:
-        scene_to_graph(green, spec)
-    assert str(caught.value) == (
-        "scene: block_3 colour 'green' is not in this policy's vocabulary (blue, red)"
+    values = [column(spec, "colour=blue"), column(spec, "colour=red")]
+    stone = scene(
+        [obj("block_3", 0.4, colour="stone_x"), obj("block_4", 0.5, colour="stone_x")],
+        [goal("g", 0.4)],
     )
-    asks = scene([obj("b", 0.4, colour="red")], [goal("slot_9", 0.4, colour="green")])
-    with pytest.raises(PolicyError, match="goal slot_9 accepts colour 'green' is not in"):
-        scene_to_graph(asks, spec)
+    with caplog.at_level("WARNING", logger="manigraph_planner.gnn.task_features"):
+        x = scene_to_graph(stone, spec).x
+        scene_to_graph(stone, spec)
+    assert x[0, values].tolist() == [0.0, 0.0] and x[1, values].tolist() == [0.0, 0.0]
+    warned = [r.getMessage() for r in caplog.records]
+    assert warned == [
+        "scene: block_3 colour 'stone_x' is not in this policy's vocabulary (blue, red): "
+        "read as other"
+    ]
+    asks = scene([obj("b", 0.4, colour="red")], [goal("slot_9", 0.4, colour="green_x")])
+    x = scene_to_graph(asks, spec).x
+    assert x[1, values].tolist() == [0.0, 0.0] and x[1, column(spec, "colour:any")] == 0
+    task = spec.task
+    assert task is not None and not bool(task.admits(x[:1], x[1:]).any())  # admits nothing
     unknown = scene([obj("b", 0.4)], [goal("slot_2", 0.4, label="bolt")])
     with pytest.raises(PolicyError, match="goal slot_2 accepts by 'label', which this policy"):
         scene_to_graph(unknown, spec)
+    number = scene([obj("b", 0.4, colour=3.0)], [goal("g", 0.4)])
+    with pytest.raises(PolicyError, match=r"b colour 3\.0 is a number; this policy knows words"):
+        scene_to_graph(number, spec)
+
+
+def test_a_goals_own_attributes_become_columns_like_an_objects(tmp_path: Path) -> None:
+    bins = scene(
+        [obj("block_0", 0.4, colour="red"), obj("block_1", 0.5, colour="blue")],
+        [
+            SceneGoal(
+                id="bin_0",
+                category="block",
+                position=Vector3(x=0.4, y=0.2, z=0.02),
+                attributes={"colour": "blue"},
+            ),
+            goal("bin_1", 0.5),
+        ],
+    )
+    task = TaskFeatures.learn([bins])
+    assert task is not None and task.goal_attributes == ("colour",)
+    spec = FeatureSpec.for_task(task)
+    assert spec.names[-2:] == ("goal.colour=blue", "goal.colour=red")
+    x = scene_to_graph(bins, spec).x
+    own = [column(spec, "goal.colour=blue"), column(spec, "goal.colour=red")]
+    assert x[2, own].tolist() == [1.0, 0.0]  # bin_0 is blue
+    assert x[3, own].tolist() == [0.0, 0.0] and x[0, own].tolist() == [0.0, 0.0]
+    assert x[2, column(spec, "colour:any")] == 1  # being blue is not accepting only blue
+    assert bool(task.admits(x[:2], x[2:]).all())
+    torch.manual_seed(0)
+    net = PolicyNet(ModelConfig("sage", features=spec))
+    path = save_checkpoint(tmp_path / "bins.pt", net, training_config={}, data_hash="h")
+    loaded, _ = load_checkpoint(path, message_passing=False)
+    assert loaded.config.feature_spec == spec
+    assert torch.load(path, weights_only=True)["feature_spec"]["task"]["goal_attributes"] == [
+        "colour"
+    ]
 
 
 def test_text_and_numbers_for_one_attribute_cannot_be_learned() -> None:
@@ -158,9 +206,7 @@ def test_the_task_spec_is_stamped_and_the_policy_builds_graphs_with_it(tmp_path:
     policy = load_policy(str(path))
     assert isinstance(policy, GNNPolicy)
     assert policy.decide(COLOURS) is not None
-    green = scene([obj("block_3", 0.4, colour="green")], [goal("g", 0.4)])
-    with pytest.raises(PolicyError, match="block_3 colour 'green'"):
-        policy.decide(green)
+    assert "goal_attributes" not in stamped["task"]  # no goal carries one: the stamp of before
 
 
 def test_a_tampered_task_stamp_is_refused_naming_the_field(tmp_path: Path) -> None:
@@ -199,3 +245,16 @@ def test_a_task_policy_takes_only_pairs_whose_goal_accepts_the_object(tmp_path: 
         ("block_1", "any_slot"),
         ("block_1", "part"),
     }
+
+
+def test_the_accepts_filter_turned_off_leaves_the_networks_own_choice(tmp_path: Path) -> None:
+    path, _ = task_checkpoint(tmp_path)
+    policy = load_policy(str(path), accepts_filter="off")
+    assert policy.accepts_filter is False
+    pairs = {d.pair for d in policy.ranked(COLOURS)}
+    assert len(pairs) == 6 and ("block_1", "red_slot") in pairs  # 2 blocks x 3 block goals
+    assert load_policy(str(path)).accepts_filter is True
+    with pytest.raises(PolicyError, match="'expert' has no accepts filter to turn off"):
+        load_policy("expert", accepts_filter="off")
+    with pytest.raises(PolicyError, match="no accepts filter"):
+        load_policy(str(REPO / "checkpoints" / "sage.pt"), accepts_filter="off")

@@ -153,6 +153,13 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         help="GNN policies: publish an Explanation beside every decision (lands in --record)",
     )
     parser.add_argument(
+        "--accepts-filter",
+        choices=["on", "off"],
+        default="on",
+        help="a GNN policy learned from a task file takes only pairs whose goal accepts the "
+        "object (on, the default); off: the network's own choice (docs/training.md)",
+    )
+    parser.add_argument(
         "--cells",
         type=int,
         help="start N robot cells (cell-1 ... cell-N: each its own sim and skills under "
@@ -221,6 +228,8 @@ def _planner_argv(args: argparse.Namespace, plan: EpisodePlan | None) -> list[st
     planner = ["planner", "--policy", args.policy]
     if args.explain_decisions:
         planner.append("--explain-decisions")
+    if args.accepts_filter == "off":
+        planner += ["--accepts-filter", "off"]
     if plan is not None:
         # A decision may run as long as the run lets an episode go without news (a physics
         # PickAndPlace that turns a dish over first takes 20-60 s).
@@ -311,6 +320,8 @@ def _up_run(args: argparse.Namespace) -> int:
         )
     if args.policy in (HUMAN, NOBODY) and args.explain_decisions:
         raise ConfigError("explain-decisions", f"needs a GNN planner, not --policy {args.policy}")
+    if args.policy in (HUMAN, NOBODY) and args.accepts_filter == "off":
+        raise ConfigError("accepts-filter", f"needs a GNN planner, not --policy {args.policy}")
     if args.policy.endswith(".pt") and not Path(args.policy).is_file():
         raise ConfigError("policy", f"no such checkpoint file: {args.policy}")
     if args.cells is not None and (args.policy in (HUMAN, NOBODY) or args.scene_source != "sim"):

@@ -15,16 +15,27 @@ whose goals list what they ``accepts`` (``colour = "red"``, ``id = "part_2"``, `
 * per numeric attribute (``weight``): its value scaled to ``(value - offset) / span`` (the
   demonstrations' range maps to [0, 1]), then ``weight:any``.
 
+* per attribute some goal itself carries (``attributes = { colour = "red" }`` on a goal: a
+  bin's colour, a rack's side), after all of the above: ``goal.colour=blue``,
+  ``goal.colour=red`` (the same vocabulary as ``colour``'s), or ``goal.weight`` scaled alike:
+  the goal's own value, as an object's value is the object's; zeros on objects and on goals
+  without it. These columns are not part of what a goal accepts (:meth:`TaskFeatures.admits`).
+
 What the columns are is learned from the demonstrations' scenes (:meth:`TaskFeatures.learn`)
-and stamped in the checkpoint (``feature_spec.task``); a scene whose object or goal has a
-value outside a categorical vocabulary, or a goal asking by a key the policy never saw, is
-refused with a :class:`~manigraph_shared.errors.PolicyError` naming both.
+and stamped in the checkpoint (``feature_spec.task``). A text value outside a categorical
+vocabulary (a stone distractor where training saw only red and blue) reads as *other*: zeros
+in that attribute's value columns, what an object without the attribute shows, and one
+warning per attribute and value (logger ``manigraph_planner.gnn.task_features``); a goal
+asking for such a value admits nothing. A goal asking by a key the policy never saw, or a
+number where the policy knows words (or the reverse), is refused with a
+:class:`~manigraph_shared.errors.PolicyError` naming both.
 """
 
 from __future__ import annotations
 
+import logging
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,7 +45,13 @@ from torch import Tensor
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject
 
-__all__ = ["SIZE_SCALE", "AttributeColumns", "TaskFeatures"]
+__all__ = ["GOAL_PREFIX", "SIZE_SCALE", "AttributeColumns", "TaskFeatures", "goal_attributes_of"]
+
+_log = logging.getLogger(__name__)
+#: (attribute, value) pairs already warned about as "other": one warning each per process.
+_WARNED_OTHER: set[tuple[str, str]] = set()
+#: Prefix of the columns of a goal's own attributes (not a character an attribute name has).
+GOAL_PREFIX = "goal."
 
 #: Size columns are in decimetres: a 4 cm block reads 0.4, beside positions in metres.
 SIZE_SCALE = 10.0
@@ -92,12 +109,29 @@ class AttributeColumns:
             if isinstance(value, str):
                 raise PolicyError(f"scene: {who} {value!r} is text; this policy knows numbers")
             return [(float(value) - self.offset) / self.span]
-        if not isinstance(value, str) or value not in self.vocabulary:
-            raise PolicyError(
-                f"scene: {who} {value!r} is not in this policy's vocabulary "
-                f"({', '.join(self.vocabulary)})"
+        if not isinstance(value, str):
+            raise PolicyError(f"scene: {who} {value!r} is a number; this policy knows words")
+        if value not in self.vocabulary and (self.name, value) not in _WARNED_OTHER:
+            _WARNED_OTHER.add((self.name, value))
+            _log.warning(
+                "scene: %s %r is not in this policy's vocabulary (%s): read as other",
+                who,
+                value,
+                ", ".join(self.vocabulary),
             )
         return [1.0 if value == known else 0.0 for known in self.vocabulary]
+
+    @property
+    def goal_columns(self) -> tuple[str, ...]:
+        """The columns of a goal's own value of this attribute (``goal.colour=red``)."""
+        return tuple(GOAL_PREFIX + column for column in self.columns[:-1])
+
+    def own_cells(self, attributes: Mapping[str, str | float], who: str) -> list[float]:
+        """A goal's own value (zeros without one), in :attr:`goal_columns`."""
+        value = attributes.get(self.name)
+        if value is None:
+            return [0.0] * len(self.goal_columns)
+        return self._cells(value, f"{who} {self.name}")
 
     def to_dict(self) -> dict[str, Any]:
         if self.numeric:
@@ -132,6 +166,8 @@ class TaskFeatures:
 
     attributes: tuple[AttributeColumns, ...] = ()
     size_scale: float = SIZE_SCALE
+    #: Names of the attributes goals themselves carry (sorted; each one of ``attributes``).
+    goal_attributes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         names = [a.name for a in self.attributes]
@@ -139,14 +175,35 @@ class TaskFeatures:
             raise ValueError(f"attributes: names must be unique and not 'size', got {names}")
         if not (math.isfinite(self.size_scale) and self.size_scale > 0):
             raise ValueError("size_scale: must be a positive number")
+        if list(self.goal_attributes) != sorted(set(self.goal_attributes)) or not set(
+            self.goal_attributes
+        ) <= set(names) - {"id"}:
+            raise ValueError(
+                f"goal_attributes: sorted names of attributes ({', '.join(names)}), "
+                f"got {list(self.goal_attributes)}"
+            )
+
+    @property
+    def _goal_owned(self) -> tuple[AttributeColumns, ...]:
+        return tuple(a for a in self.attributes if a.name in self.goal_attributes)
 
     @property
     def names(self) -> tuple[str, ...]:
-        return (*SIZE_COLUMNS, *(column for a in self.attributes for column in a.columns))
+        return (
+            *SIZE_COLUMNS,
+            *(column for a in self.attributes for column in a.columns),
+            *(column for a in self._goal_owned for column in a.goal_columns),
+        )
 
     def object_row(self, obj: SceneObject) -> list[float]:
         size = [extent * self.size_scale for extent in obj.size.as_tuple()]
-        return [*size, 0.0, *(cell for a in self.attributes for cell in a.object_cells(obj))]
+        own = [0.0 for a in self._goal_owned for _ in a.goal_columns]
+        return [
+            *size,
+            0.0,
+            *(cell for a in self.attributes for cell in a.object_cells(obj)),
+            *own,
+        ]
 
     def goal_row(self, goal: SceneGoal) -> list[float]:
         self._check_keys(goal)
@@ -157,7 +214,12 @@ class TaskFeatures:
             cells = [0.0, 0.0, 0.0, 1.0]
         else:
             raise PolicyError(f"scene: goal {goal.id} accepts size {size!r}, not [x, y, z]")
-        return [*cells, *(cell for a in self.attributes for cell in a.goal_cells(goal))]
+        carried = goal_attributes_of(goal)
+        return [
+            *cells,
+            *(cell for a in self.attributes for cell in a.goal_cells(goal)),
+            *(cell for a in self._goal_owned for cell in a.own_cells(carried, f"goal {goal.id}")),
+        ]
 
     def _check_keys(self, goal: SceneGoal) -> None:
         known = {"size", *(a.name for a in self.attributes)}
@@ -197,25 +259,33 @@ class TaskFeatures:
         return ok
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        values: dict[str, Any] = {
             "size_scale": self.size_scale,
             "attributes": [a.to_dict() for a in self.attributes],
         }
+        if self.goal_attributes:  # a stamp without goal attributes stays what it was
+            values["goal_attributes"] = list(self.goal_attributes)
+        return values
 
     @classmethod
     def from_dict(cls, values: Any) -> TaskFeatures:
         """Raises ``ValueError`` naming the field (below ``task``)."""
         if not isinstance(values, dict):
             raise ValueError("task: must be a table")
-        unknown = sorted(set(values) - {"size_scale", "attributes"})
+        unknown = sorted(set(values) - {"size_scale", "attributes", "goal_attributes"})
         if unknown:
             raise ValueError(f"task.{unknown[0]}: unexpected key")
         attributes = values.get("attributes", [])
         if not isinstance(attributes, list | tuple):
             raise ValueError("task.attributes: must be a list")
+        owned = values.get("goal_attributes", [])
+        if not isinstance(owned, list | tuple) or not all(isinstance(n, str) for n in owned):
+            raise ValueError("task.goal_attributes: must be a list of names")
         try:
             scale = float(values.get("size_scale", SIZE_SCALE))
-            return cls(tuple(AttributeColumns.from_dict(a) for a in attributes), scale)
+            return cls(
+                tuple(AttributeColumns.from_dict(a) for a in attributes), scale, tuple(owned)
+            )
         except (TypeError, ValueError) as exc:
             raise ValueError(f"task.{exc}") from None
 
@@ -229,6 +299,7 @@ class TaskFeatures:
         """
         values: dict[str, list[str | float]] = {}
         ids: set[str] = set()
+        owned: set[str] = set()
         seen = False
         for scene in scenes:
             for obj in scene.objects:
@@ -236,7 +307,11 @@ class TaskFeatures:
                 for name, value in obj.attributes.items():
                     values.setdefault(name, []).append(value)
             for goal in scene.goals:
-                seen = seen or bool(goal.accepts)
+                carried = goal_attributes_of(goal)
+                seen = seen or bool(goal.accepts) or bool(carried)
+                for name, value in carried.items():
+                    owned.add(name)
+                    values.setdefault(name, []).append(value)
                 for name, accepted in goal.accepts.items():
                     if name == "id" and isinstance(accepted, str):
                         ids.add(accepted)
@@ -247,7 +322,12 @@ class TaskFeatures:
         columns = [_columns(name, found) for name, found in sorted(values.items())]
         if ids:
             columns.append(AttributeColumns("id", tuple(sorted(ids))))
-        return cls(tuple(columns))
+        return cls(tuple(columns), goal_attributes=tuple(sorted(owned)))
+
+
+def goal_attributes_of(goal: SceneGoal) -> Mapping[str, str | float]:
+    """The goal's own attributes (``SceneGoal.attributes``: a bin's colour)."""
+    return goal.attributes
 
 
 def _columns(name: str, values: list[str | float]) -> AttributeColumns:

@@ -59,6 +59,10 @@ class Policy(ABC):
     #: Passed-over pairs with one object before the planner's recovery passes over every
     #: pair with it (``recovery.ProgressMonitor``).
     object_escalation: int = 2
+    #: Whether it takes only the pairs whose goal accepts the object, as the scene's own
+    #: columns say (a learned task policy: on by default, ``--accepts-filter off`` turns it
+    #: off to judge the network alone); None: the policy has no such filter.
+    accepts_filter: bool | None = None
 
     @abstractmethod
     def decide(self, scene: Scene) -> Decision | None:
@@ -103,8 +107,28 @@ RETIRED_POLICIES = {
 }
 
 
-def load_policy(spec: str) -> Policy:
-    """A registered policy by name, or a policy file (checkpoint) by path."""
+#: ``--accepts-filter``'s values: on (the default) or off.
+ACCEPTS_FILTER_CHOICES = ("on", "off")
+
+
+def load_policy(spec: str, *, accepts_filter: str = "on") -> Policy:
+    """A registered policy by name, or a policy file (checkpoint) by path; ``accepts_filter``
+    ``"off"`` lets a learned task policy take pairs its goals do not accept (what the network
+    alone chooses), and is refused for a policy without the filter."""
+    if accepts_filter not in ACCEPTS_FILTER_CHOICES:
+        raise PolicyError(f"accepts-filter: must be on or off, not {accepts_filter!r}")
+    policy = _load(spec)
+    if accepts_filter == "off":
+        if policy.accepts_filter is None:
+            raise PolicyError(
+                f"accepts-filter: '{spec}' has no accepts filter to turn off (only a policy "
+                "learned from a task file's demonstrations has one)"
+            )
+        policy.accepts_filter = False
+    return policy
+
+
+def _load(spec: str) -> Policy:
     if spec in POLICIES:
         return POLICIES[spec]()
     if spec in RETIRED_POLICIES:

@@ -57,6 +57,8 @@ class GNNPolicy(Policy):
     A policy with a task's feature spec also takes only pairs whose goal accepts the object,
     as the scene's own columns say (``TaskFeatures.admits``):
     the task file states that rule; which pair of those comes first is what was learned.
+    ``accepts_filter = False`` (``--accepts-filter off``) drops that filter, so the network's
+    own choice is what is judged (docs/training.md).
     Sets torch to one thread: a single small graph is latency-bound, and the planner shares
     a 2-core machine with the simulator. For the same reason the network runs its dense path
     for one complete graph (:meth:`PolicyNet.forward_complete`) rather than PyG message
@@ -72,6 +74,7 @@ class GNNPolicy(Policy):
         self.net = net.eval()
         self.info = info
         self.name = f"gnn-{net.architecture}"
+        self.accepts_filter = True if net.config.feature_spec.task is not None else None
 
     @classmethod
     def from_checkpoint(cls, path: str | Path) -> GNNPolicy:
@@ -85,9 +88,10 @@ class GNNPolicy(Policy):
         return scene_to_graph(scene, self.net.config.feature_spec)
 
     def admitted(self, graph: GraphState) -> Tensor | None:
-        """Which (object, goal) node pairs the task's accepts allow, or None: any."""
+        """Which (object, goal) node pairs the task's accepts allow, or None: any (no task
+        columns, or the filter turned off)."""
         task = self.net.config.feature_spec.task
-        if task is None:
+        if task is None or not self.accepts_filter:
             return None
         k = graph.num_objects
         return task.admits(graph.x[:k], graph.x[k:])
