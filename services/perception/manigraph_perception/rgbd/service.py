@@ -39,9 +39,13 @@ from manigraph_shared.messages import (
     ServiceState,
     TaskLayout,
 )
-from manigraph_shared.service import Service
+from manigraph_shared.service import Service, malloc_trim
 
 _NO_FRAME = "no usable frame"
+#: Halves let go or refused since the last heap trim that make another worthwhile: each
+#: was a ~0.5-1 MB sample, freed into glibc's heap, which keeps it otherwise (10,000
+#: unpaired halves of 400 kB left +256 MB without a trim).
+TRIM_AFTER_HALVES = 200
 
 
 class RgbdPerceptionService(Service):
@@ -67,6 +71,9 @@ class RgbdPerceptionService(Service):
         self._waiting: tuple[CompressedImage, DepthImage] | None = None
         #: The newest half refused from its header, waiting to be named in the status.
         self._refused: BadFrame | None = None
+        self._halves_refused = 0
+        self._halves_at_trim = 0
+        self._halves_last_tick = 0
         self.last_good: Scene | None = None
         self.failed = False
         self.last_frame = 0.0
@@ -151,6 +158,7 @@ class RgbdPerceptionService(Service):
         comes, waits for another, and a camera's own half of that sequence still pairs."""
         self.reject(half, problem.kind, f"#{half.sequence}: {problem.reason}")
         with self._lock:
+            self._halves_refused += 1
             pending = self._refused is not None
             self._refused = BadFrame(problem.kind, f"frame {half.sequence}: {problem.reason}")
         if not pending:
@@ -220,6 +228,7 @@ class RgbdPerceptionService(Service):
     # --- periodic ---------------------------------------------------------------------------
     def tick(self) -> None:
         now = time.time()
+        self._trim_after_flood()
         if self.source is not None:
             try:
                 frame = self.source.read()
@@ -242,6 +251,19 @@ class RgbdPerceptionService(Service):
             if self.last_good is not None:
                 age = f"; last good scene {now - self.last_good.stamp:.1f} s old"
             self.last_error = f"{_NO_FRAME} {waited}{age}"
+
+    def _trim_after_flood(self) -> None:
+        """Give the heap back while and after many halves are let go or refused (the base
+        class trims after messages handled; halves are never handed to a handler): every
+        ``TRIM_AFTER_HALVES``, and once more when they stop."""
+        with self._lock:
+            halves = self.perception.counters.unpaired + self._halves_refused
+        since = halves - self._halves_at_trim
+        quiet = halves == self._halves_last_tick
+        self._halves_last_tick = halves
+        if since >= TRIM_AFTER_HALVES or (since > 0 and quiet):
+            self._halves_at_trim = halves
+            malloc_trim()
 
     def report_error(self, error: BaseException) -> None:
         # An OpenCV error that got past the pipeline's own names: its short name, not its
