@@ -12,6 +12,13 @@ and prints a table: success and wrong-object goals at the larger size, and the w
 each step with "teach to run" (their sum; target <= 120 s on the 2-core machine). The load
 average is printed beside it: take timings with nothing else running. Not a test.
 
+**The baseline beside every learned figure** (issue #49): the same network trained on the
+same demonstrations for 1 epoch (``--epochs 1``: untrained, loss ~2) is scored on the same
+episodes, with the accepts filter on (what a user gets) and off (``--accepts-filter off``:
+the network's own choice). Where the baseline's success is within ``--margin`` (default
+0.10) of the learned policy's, the row says ``no learning``: the filter, not the
+demonstrations, made the figure.
+
     uv run python bench/bench_task_files.py                      # every family
     uv run python bench/bench_task_files.py --family size-sort   # one
 """
@@ -52,11 +59,31 @@ def manigraph(*args: str) -> tuple[float, str]:
     return seconds, result.stdout
 
 
+def verdict(learned: float, baseline: float, margin: float) -> str:
+    """``no learning`` where the 1-epoch baseline scores within ``margin`` of the learned."""
+    return "no learning" if baseline >= learned - margin else "learned"
+
+
+def score(model: Path, evaluated: str, episodes: int, accepts_filter: str) -> tuple[float, dict]:
+    seconds, stdout = manigraph(
+        "eval", "--policy", str(model), "--task-file", str(TASKS / evaluated),
+        "--episodes", str(episodes), "--seed", "2000", "--json",
+        "--accepts-filter", accepts_filter,
+    )  # fmt: skip
+    return seconds, json.loads(stdout.strip().splitlines()[-1])
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--family", choices=sorted(FAMILIES), action="append")
     parser.add_argument("--episodes", type=int, default=50, help="evaluation episodes per file")
     parser.add_argument("--arch", default="sage", help="GNN architecture (default sage)")
+    parser.add_argument(
+        "--margin",
+        type=float,
+        default=0.10,
+        help="a baseline within this much of the learned success: no learning (default 0.10)",
+    )
     args = parser.parse_args()
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench-task-files-") as scratch:
@@ -64,6 +91,7 @@ def main() -> int:
         for family in args.family or list(FAMILIES):
             small, large = FAMILIES[family]
             demos, model = out / f"{family}.mcap", out / f"{family}.pt"
+            baseline = out / f"{family}-1-epoch.pt"
             t_demos, _ = manigraph(
                 "demos", "--task-file", str(TASKS / small), "--trajectories", "20",
                 "--seed", "0", "-o", str(demos),
@@ -71,34 +99,47 @@ def main() -> int:
             t_train, _ = manigraph(
                 "train", str(demos), "--arch", args.arch, "--seed", "0", "-o", str(model)
             )
+            manigraph(
+                "train", str(demos), "--arch", args.arch, "--seed", "0", "--epochs", "1",
+                "-o", str(baseline),
+            )  # fmt: skip
             for index, evaluated in enumerate(large):
-                t_eval, stdout = manigraph(
-                    "eval", "--policy", str(model), "--task-file", str(TASKS / evaluated),
-                    "--episodes", str(args.episodes), "--seed", "2000", "--json",
-                )  # fmt: skip
-                summary = json.loads(stdout.strip().splitlines()[-1])
-                teach = t_demos + t_train + t_eval
-                row = {
-                    "family": family,
-                    "demonstrated": small,
-                    "evaluated": evaluated,
-                    "success": summary["success_rate"],
-                    "wrong_object": summary.get("wrong_object", 0),
-                    "demos_s": round(t_demos, 1),
-                    "train_s": round(t_train, 1),
-                    "eval_s": round(t_eval, 1),
-                    "teach_to_run_s": round(teach, 1) if index == 0 else None,
-                    "load": round(os.getloadavg()[0], 2),
-                }
-                rows.append(row)
-                print(json.dumps(row), file=sys.stderr, flush=True)
-    print("| family | demonstrated | evaluated | success | wrong object | demos s | train s "
-          "| eval s | teach to run s | load |")  # fmt: skip
-    print("|---|---|---|---|---|---|---|---|---|---|")
+                for accepts_filter in ("on", "off"):
+                    t_eval, summary = score(model, evaluated, args.episodes, accepts_filter)
+                    _, base = score(baseline, evaluated, args.episodes, accepts_filter)
+                    teach = t_demos + t_train + t_eval
+                    first = index == 0 and accepts_filter == "on"
+                    row = {
+                        "family": family,
+                        "demonstrated": small,
+                        "evaluated": evaluated,
+                        "accepts_filter": accepts_filter,
+                        "success": summary["success_rate"],
+                        "baseline_1_epoch": base["success_rate"],
+                        "verdict": verdict(
+                            summary["success_rate"], base["success_rate"], args.margin
+                        ),
+                        "wrong_object": summary.get("wrong_object", 0),
+                        "rule_violations": summary.get("rule_violations"),
+                        "demos_s": round(t_demos, 1),
+                        "train_s": round(t_train, 1),
+                        "eval_s": round(t_eval, 1),
+                        "teach_to_run_s": round(teach, 1) if first else None,
+                        "load": round(os.getloadavg()[0], 2),
+                    }
+                    rows.append(row)
+                    print(json.dumps(row), file=sys.stderr, flush=True)
+    print(
+        f"| family | demonstrated | evaluated | filter | success | 1-epoch baseline "
+        f"| (margin {args.margin:.2f}) | wrong object | demos s | train s | eval s "
+        "| teach to run s | load |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         teach = "-" if r["teach_to_run_s"] is None else f"{r['teach_to_run_s']:.1f}"
         print(
-            f"| {r['family']} | {r['demonstrated']} | {r['evaluated']} | {r['success']:.2f} "
+            f"| {r['family']} | {r['demonstrated']} | {r['evaluated']} | {r['accepts_filter']} "
+            f"| {r['success']:.2f} | {r['baseline_1_epoch']:.2f} | {r['verdict']} "
             f"| {r['wrong_object']} | {r['demos_s']:.1f} | {r['train_s']:.1f} "
             f"| {r['eval_s']:.1f} | {teach} | {r['load']:.2f} |"
         )
