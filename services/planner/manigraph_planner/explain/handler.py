@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from manigraph_planner.decisions import DecisionHistory
 from manigraph_planner.explain.config import ExplainerConfig
 from manigraph_planner.policies.base import Policy
-from manigraph_shared.errors import ManigraphError, PolicyError
+from manigraph_shared.errors import ConfigError, ManigraphError, PolicyError
 from manigraph_shared.messages import (
     EXPLAINER_WARMING_UP,
     Action,
@@ -94,9 +94,10 @@ class ExplainHandler:
             if found is None:
                 kept = self.history.ids()
                 known = f"{kept[0]} .. {kept[-1]}" if kept else "none made yet"
-                raise ManigraphError(
-                    f"decision_id: '{request.decision_id}' is not one of the planner's last "
-                    f"{self.history.capacity} decisions ({known})"
+                raise ConfigError(  # a refusal: asking again fails again
+                    "decision_id",
+                    f"'{request.decision_id}' is not one of the planner's last "
+                    f"{self.history.capacity} decisions ({known})",
                 )
         scene, action = found
         limits.check_size(scene)
