@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Literal
 from manigraph_lab.sweep import SweepOptions, add_sweep_options
 from manigraph_planner.threads import add_threads_option, use_threads
 from manigraph_shared.cli import Command
+from manigraph_shared.errors import ConfigError
 from manigraph_shared.options import (
     Interval,
     Options,
@@ -25,6 +26,7 @@ from manigraph_shared.options import (
 
 if TYPE_CHECKING:
     from manigraph_lab.demos import DemoProtocol
+    from manigraph_tools.episode_plan import EpisodeOptions
 
 
 def _demos_configure(parser: argparse.ArgumentParser) -> None:
@@ -66,33 +68,64 @@ def _demos_configure(parser: argparse.ArgumentParser) -> None:
         help="demonstrate your own TOML layout instead of --tasks (docs/task-files.md), by the "
         "expert that solves any task file",
     )
+    parser.add_argument(
+        "--rules",
+        type=Path,
+        help="with --task-file: rules only the teacher and the judge know (docs/task-files.md); "
+        "the expert follows them, the recorded scenes never show them",
+    )
 
 
 def _demos_run(args: argparse.Namespace) -> int:
     from manigraph_lab.demos import DemoProtocol, record_demos
 
     protocol = DemoProtocol(tuple(args.tasks), tuple(args.blocks), args.trajectories, args.seed)
+    if args.rules is not None and args.task_file is None:
+        raise ConfigError("rules", "rules judge a task file's goals; give --task-file too")
     if args.task_file is not None:
-        protocol = _task_file_protocol(args.task_file, protocol)
+        protocol = _task_file_protocol(args.task_file, protocol, args.rules)
     # Each task's own expert (planner's TASK_EXPERTS), ``expert`` for the paper's tasks.
     summary = record_demos(None, protocol, args.output, sys.stderr)
     print(json.dumps(summary))
     return 0
 
 
-def _task_file_protocol(path: Path, protocol: DemoProtocol) -> DemoProtocol:
-    """``protocol``'s episodes drawn from the task file at ``path`` (a bad file stops here,
-    naming the field, before any episode)."""
+def _task_file_protocol(
+    path: Path, protocol: DemoProtocol, rules: Path | None = None
+) -> DemoProtocol:
+    """``protocol``'s episodes drawn from the task file at ``path``, judged (and taught) by the
+    rules file at ``rules`` (a bad file stops here, naming the field, before any episode)."""
     from dataclasses import replace
 
-    from manigraph_sim.families.blocks.task_file import parse_task_file
     from manigraph_tools.episode_plan import EpisodeOptions
 
-    episodes = EpisodeOptions(task_file=path)
-    text = episodes.task_text()
+    episodes = EpisodeOptions(task_file=path, rules=rules)
+    text, blocks, rules_text = _checked_files(episodes)
     assert text is not None
-    blocks = parse_task_file(text, str(path)).blocks
-    return replace(protocol, blocks=(blocks,), task_file=text, task_file_name=episodes.label())
+    return replace(
+        protocol,
+        blocks=(blocks,),
+        task_file=text,
+        task_file_name=episodes.label(),
+        rules=rules_text,
+    )
+
+
+def _checked_files(episodes: EpisodeOptions) -> tuple[str | None, int, str | None]:
+    """The task file's text and blocks, and the rules file's text, each checked here (a bad
+    one stops the command naming the file, the line and the field); no task file: None, the
+    ``--blocks`` asked for, None."""
+    task_file = episodes.task_text()
+    rules = episodes.rules_text()
+    if task_file is None:
+        return None, episodes.blocks, None
+    from manigraph_sim.families.blocks.rules_file import parse_rules_file
+    from manigraph_sim.families.blocks.task_file import parse_task_file
+
+    blocks = parse_task_file(task_file, str(episodes.task_file)).blocks
+    if rules is not None:
+        parse_rules_file(rules, task_file, str(episodes.rules))
+    return task_file, blocks, rules
 
 
 demos_command = Command(
@@ -132,18 +165,14 @@ def _eval_configure(parser: argparse.ArgumentParser) -> None:
 def _eval_run(args: argparse.Namespace) -> int:
     from manigraph_lab.evaluate import EvalSpec, evaluate
     from manigraph_planner.policies import POLICIES, load_policy
+    from manigraph_planner.policies.teacher_rules import TEACHERS, with_rules
     from manigraph_shared.results import checkpoint_field, rounded
     from manigraph_tools.episode_plan import EpisodeOptions
 
     options = options_from_args(EvalOptions, args)
     episodes = options_from_args(EpisodeOptions, args)
-    task_file = episodes.task_text()
-    blocks = episodes.blocks
-    if task_file is not None:
-        from manigraph_sim.families.blocks.task_file import parse_task_file
-
-        # A bad file stops here, naming the file and the field.
-        blocks = parse_task_file(task_file, str(episodes.task_file)).blocks
+    # A bad file stops here, naming the file, the line and the field.
+    task_file, blocks, rules = _checked_files(episodes)
     spec = EvalSpec(
         "file" if task_file else episodes.task,
         blocks,
@@ -155,9 +184,12 @@ def _eval_run(args: argparse.Namespace) -> int:
         episodes.label() if task_file is not None else None,
         objects=episodes.objects,
         preference=episodes.preference,
+        rules=rules,
     )
     progress = None if episodes.json else sys.stderr
     policy = load_policy(options.policy, accepts_filter=options.accepts_filter)
+    if rules is not None and options.policy in TEACHERS:  # the teacher is told them
+        policy = with_rules(policy, rules, str(episodes.rules))
     checkpoint = None if options.policy in POLICIES else checkpoint_field(options.policy)
     summary = rounded(evaluate(policy, spec, progress, checkpoint))
     assert isinstance(summary, dict)

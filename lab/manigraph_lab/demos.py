@@ -19,7 +19,9 @@ from typing import TextIO
 
 from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.policies.base import Policy, expert_for
+from manigraph_planner.policies.teacher_rules import with_rules
 from manigraph_shared.demonstrations import DemonstrationLog
+from manigraph_shared.errors import DrawRefused
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.progress import Progress
 
@@ -39,6 +41,9 @@ class DemoProtocol:
     #: are then unused); ``task_file_name`` names the episodes.
     task_file: str | None = None
     task_file_name: str = "task-file"
+    #: Rules only the teacher and the judge know (``--rules``): the expert follows them, the
+    #: recorded scenes never show them.
+    rules: str | None = None
 
     def requests(self) -> list[EpisodeRequest]:
         if self.task_file is not None:
@@ -49,6 +54,7 @@ class DemoProtocol:
                     blocks=self.blocks[0] if self.blocks else 1,
                     seed=self.seed + i,
                     task_file=self.task_file,
+                    rules=self.rules,
                 )
                 for i in range(self.trajectories)
             ]
@@ -77,10 +83,18 @@ def record_demos(
     requests = protocol.requests()
     bar = Progress(len(requests), "demos", unit="episode", stream=progress)
     tasks = {request.task for request in requests}
-    experts = {task: expert if expert is not None else expert_for(task) for task in tasks}
+    experts = {
+        task: with_rules(expert if expert is not None else expert_for(task), protocol.rules)
+        for task in tasks
+    }
     try:
         for request in requests:
-            record = run_episode(experts[request.task], request)
+            try:
+                record = run_episode(experts[request.task], request)
+            except DrawRefused as exc:  # this seed's draw only: the others still run
+                bar.update()
+                bar.note(f"  refused {protocol.task_file_name}, seed {request.seed}: {exc}")
+                continue
             bar.update()
             if not record.success:
                 bar.note(f"  skipped {request.episode_id}: the expert failed")

@@ -9,6 +9,7 @@ from typing import TextIO
 
 from manigraph_lab.episode_loop import EpisodeRecord, run_episode
 from manigraph_planner.policies.base import Policy
+from manigraph_shared.errors import DrawRefused
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.progress import Progress
 
@@ -23,6 +24,7 @@ class EvalSpec:
     noise: float = 0.0
     task_file: str | None = None  # TOML text of a user layout
     task_file_name: str | None = None  # what episodes and the summary are named after
+    rules: str | None = None  # TOML text of rules only the judge (and the teacher) know
     objects: int | None = None  # dishwasher
     preference: str | None = None  # dishwasher
 
@@ -38,6 +40,7 @@ class EvalSpec:
                 preference=self.preference,
                 seed=self.seed + i,
                 task_file=self.task_file,
+                rules=self.rules,
             )
             for i in range(self.episodes)
         ]
@@ -52,18 +55,28 @@ def evaluate(
     """Play ``spec``'s episodes; ``progress``: stream for a bar, drawn only on a terminal;
     ``checkpoint``: the policy's file (``results.checkpoint_field``), named in the summary."""
     records: list[EpisodeRecord] = []
+    refused: list[dict[str, object]] = []
     started = time.perf_counter()
     decisions = 0
     label = f"eval {policy.name} {spec.task_file_name or spec.task} K={spec.blocks}"
     with Progress(spec.episodes, label, unit="episode", stream=progress) as bar:
         for request in spec.requests():
-            record = run_episode(policy, request, noise=spec.noise)
+            try:
+                record = run_episode(policy, request, noise=spec.noise)
+            except DrawRefused as exc:  # this seed's draw only: the others still run
+                refused.append({"seed": request.seed, "reason": str(exc)})
+                bar.note(f"  refused {spec.task_file_name}, seed {request.seed}: {exc}")
+                bar.update()
+                continue
             records.append(record)
             decisions += len(record.steps)
             bar.status(f"success {sum(r.success for r in records) / len(records):.3f}")
             bar.update()
     seconds = time.perf_counter() - started
-    return summarize(policy.name, spec, records, seconds, decisions, checkpoint)
+    summary = summarize(policy.name, spec, records, seconds, decisions, checkpoint)
+    if refused:
+        summary["refused_seeds"] = refused
+    return summary
 
 
 def success_rate(policy: Policy, spec: EvalSpec, progress: TextIO | None = None) -> float:
@@ -106,6 +119,12 @@ def summarize(
         "mean_steps": statistics.fmean(len(r.steps) for r in records) if count else 0.0,
         # Goals left holding an object they do not accept, over all episodes' ends.
         "wrong_object": sum(r.end.goals_wrong_object for r in records),
+        # Placements the judge's rules refused, counted even when later undone.
+        **(
+            {"rule_violations": sum(r.end.rule_violations for r in records)}
+            if spec.rules is not None
+            else {}
+        ),
         "infeasible_actions": failures,
         "decisions_per_second": decisions / seconds if seconds > 0 else 0.0,
         "seconds": round(seconds, 3),

@@ -110,6 +110,14 @@ class TaskError(ManigraphError, ValueError):
     exit_code: ClassVar[int] = CONFIG_EXIT_CODE
 
 
+class DrawRefused(TaskError):
+    """One seed's draw of a valid task file leaves a required goal unfillable (by the file, or
+    by the judge's rules): that seed is refused, the others still run (``refused_seeds``)."""
+
+    #: Words every such refusal says, so a client that gets it as a bus reply's text knows it.
+    MARK: ClassVar[str] = "for this seed"
+
+
 class SkillError(ManigraphError):
     """A skill could not be executed; ``reason`` is the short machine-readable cause."""
 

@@ -19,6 +19,8 @@ from manigraph_shared.options import Interval, Options, option
 from manigraph_shared.printable import printable
 
 AT_LEAST_ONE = Interval(1, None)
+#: An episode's reason when the sim refused its seed's draw (``DrawRefused``): not run.
+SEED_REFUSED = "seed_refused"
 #: ``EpisodeRequest.blocks`` as nobody set it: a task file's request sends this, not its count.
 UNSET_BLOCKS = 4
 #: The services an episode needs.
@@ -32,6 +34,11 @@ class EpisodeOptions(Options):
 
     task: str = option("stack", help="task name")
     task_file: Path | None = option(None, help="your own TOML layout (docs/running.md)")
+    rules: Path | None = option(
+        None,
+        help="with --task-file: rules only the teacher and the judge know (docs/task-files.md): "
+        "success and rule violations are judged by them; the Scene never shows them",
+    )
     blocks: int = option(4, help="blocks per stack K", within=AT_LEAST_ONE)
     stacks: int = option(1, help="number of stacks s", within=AT_LEAST_ONE)
     objects: int | None = option(
@@ -61,6 +68,13 @@ class EpisodeOptions(Options):
         """The task file's text (validated later, by the sim), or None without one."""
         return read_task_file(self.task_file)
 
+    def rules_text(self) -> str | None:
+        """The rules file's text (checked later, by the sim, against the task file), or None
+        without one; rules without a task file are refused."""
+        if self.rules is not None and self.task_file is None:
+            raise ConfigError("rules", "rules judge a task file's goals; give --task-file too")
+        return read_task_file(self.rules, field="rules")
+
     def label(self) -> str:
         """What episodes are named after: the task file's name (its stem, as an identifier),
         else the task and K."""
@@ -76,6 +90,7 @@ class EpisodeOptions(Options):
         return EpisodePlan(
             task="file" if task_file is not None else self.task,
             task_file=task_file,
+            rules=self.rules_text(),
             task_file_name=self.label() if task_file is not None else None,
             name=about[0] if about else None,
             blocks=about[1] if about else self.blocks,
@@ -105,6 +120,8 @@ class EpisodeResult:
     sim_seconds: float | None = None
     #: Goals holding an object they do not accept at the end.
     goals_wrong_object: int = 0
+    #: Placements into a goal the rules do not accept (with rules), even if later undone.
+    rule_violations: int = 0
 
 
 @dataclass(frozen=True)
@@ -117,6 +134,7 @@ class EpisodePlan:
     timeout: float = 120.0
     run_id: str = "run"
     task_file: str | None = None  # TOML text of a user layout
+    rules: str | None = None  # TOML text of rules only the judge (and teacher) know
     task_file_name: str | None = None  # what the file is called (its stem)
     name: str | None = None  # the file's own ``name``
     #: No decision and no skill status of the episode for this long fails it.
@@ -150,6 +168,7 @@ class EpisodePlan:
             preference=self.preference,
             seed=seed,
             task_file=self.task_file,
+            rules=self.rules,
         )
 
 
@@ -172,22 +191,23 @@ def describe_task_file(text: str) -> tuple[str | None, int] | None:
     return (name if isinstance(name, str) else None, max(blocks, 1))
 
 
-def read_task_file(path: Path | None) -> str | None:
+def read_task_file(path: Path | None, field: str = "task-file") -> str | None:
     """The text of a ``--task-file`` (its layout is validated later, by the sim), or None
     without one. What is not a regular file (``/dev/zero``, a pipe, a directory) is refused by
     name, and a file too long to travel in a reset request is refused having read at most the
-    limit: its size first, then never more than the limit's bytes and one."""
+    limit: its size first, then never more than the limit's bytes and one. ``field`` names
+    the flag in a refusal (``rules`` for a ``--rules`` file, read the same way)."""
     if path is None:
         return None
     limit = _task_file_limit()
     most = 4 * limit  # bytes: UTF-8 spends at most 4 on a character
     try:
         if not stat.S_ISREG(path.stat().st_mode):
-            raise ConfigError("task-file", f"{_shown(path)} is not a regular file")
+            raise ConfigError(field, f"{_shown(path)} is not a regular file")
         with path.open("rb") as file:
             data = file.read(most + 1)
     except OSError as exc:
-        raise ConfigError("task-file", f"cannot read {_shown(path)}: {exc.strerror}") from None
+        raise ConfigError(field, f"cannot read {_shown(path)}: {exc.strerror}") from None
     if len(data) > most:
         raise ConfigError(
             "task-file",
@@ -197,7 +217,7 @@ def read_task_file(path: Path | None) -> str | None:
     try:
         text = data.decode()
     except UnicodeDecodeError:
-        raise ConfigError("task-file", f"cannot read {_shown(path)}: not UTF-8 text") from None
+        raise ConfigError(field, f"cannot read {_shown(path)}: not UTF-8 text") from None
     if len(text) > limit:
         raise ConfigError(
             "task-file",
@@ -240,9 +260,24 @@ def summarize(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, obje
         "mean_steps": statistics.fmean(r.steps for r in results) if count else 0.0,
         # Goals left holding an object they do not accept, over all episodes' ends.
         "wrong_object": sum(r.goals_wrong_object for r in results),
+        **_judged(plan, results),
         "mean_seconds": statistics.fmean(r.seconds for r in results) if count else 0.0,
         **_simulated(results),
         "results": [asdict(r) for r in results],
+    }
+
+
+def _judged(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, object]:
+    """Placements the rules refused (with ``--rules``), and the seeds whose draw was refused
+    (each with why) while the others ran."""
+    refused = [
+        {"seed": r.seed, "reason": r.reason.removeprefix(SEED_REFUSED + ": ")}
+        for r in results
+        if r.reason.startswith(SEED_REFUSED)
+    ]
+    return {
+        **({"rule_violations": sum(r.rule_violations for r in results)} if plan.rules else {}),
+        **({"refused_seeds": refused} if refused else {}),
     }
 
 

@@ -36,7 +36,13 @@ from typing import TextIO
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.decision_failure import CANNOT_DECIDE, cannot_decide
-from manigraph_shared.errors import BusError, ManigraphError, PolicyError, RequestRefused
+from manigraph_shared.errors import (
+    BusError,
+    DrawRefused,
+    ManigraphError,
+    PolicyError,
+    RequestRefused,
+)
 from manigraph_shared.estop_latch import ESTOP_ENGAGED
 from manigraph_shared.messages import (
     Action,
@@ -46,6 +52,7 @@ from manigraph_shared.messages import (
     SkillStatus,
 )
 from manigraph_tools.episode_plan import (
+    SEED_REFUSED,
     EpisodeOptions,
     EpisodePlan,
     EpisodeResult,
@@ -250,6 +257,8 @@ def _run_one(
         stopped = str(exc).find(ESTOP_ENGAGED)
         if stopped >= 0:  # not the request's fault: the stack is stopped
             return failed(str(exc)[stopped:][:256])
+        if DrawRefused.MARK in str(exc):  # this seed's draw only: the next seed may run
+            return failed(f"{SEED_REFUSED}: {plan.task_file_name}, seed {request.seed}: {exc}")
         raise
     except BusError as exc:
         lost = watch.lost_within(0.5)  # killed while it answered? Its token goes too: say so
@@ -282,4 +291,5 @@ def _run_one(
                 reason=end.reason,
                 sim_seconds=end.sim_seconds,
                 goals_wrong_object=end.goals_wrong_object,
+                rule_violations=end.rule_violations,
             )

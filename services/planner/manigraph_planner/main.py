@@ -12,6 +12,7 @@ from manigraph_shared.cli import Command
 from manigraph_shared.options import Interval, Options, add_option_arguments, option
 
 if TYPE_CHECKING:
+    from manigraph_planner.policies.base import Policy
     from manigraph_shared.bus import Bus
 
 
@@ -36,6 +37,11 @@ class PlannerOptions(Options):
         help="a policy learned from a task file takes only pairs whose goal accepts the object "
         "(on); off: the network's own choice, to measure what it learned (docs/training.md)",
     )
+    rules: Path | None = option(
+        None,
+        help="rules only the teacher and the judge know (docs/task-files.md): the expert "
+        "decides by them; a learned policy is refused them",
+    )
     cells: str | None = option(
         None,
         help="serve these robot cells, comma-separated (cell-1,cell-2): one planner thread "
@@ -54,6 +60,21 @@ class PlannerOptions(Options):
 def _configure(parser: argparse.ArgumentParser) -> None:
     add_option_arguments(parser, PlannerOptions)
     add_bus_arguments(parser)
+
+
+def _told_the_rules(policy: Policy, path: Path) -> Policy:
+    """``policy`` deciding by the rules file at ``path`` (``ConfigError`` naming ``rules``)."""
+    from manigraph_planner.policies.teacher_rules import with_rules
+    from manigraph_shared.errors import ConfigError, PolicyError
+
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError("rules", f"cannot read {path}: {exc}") from None
+    try:
+        return with_rules(policy, text, str(path))
+    except PolicyError as exc:
+        raise ConfigError("rules", str(exc).removeprefix("rules: ")) from exc
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -75,6 +96,8 @@ def _run(args: argparse.Namespace) -> int:
         if str(exc).startswith("accepts-filter:"):
             raise ConfigError("accepts-filter", str(exc).removeprefix("accepts-filter: ")) from exc
         raise ConfigError("policy", str(exc).removeprefix("policy: ")) from exc
+    if options.rules is not None:
+        policy = _told_the_rules(policy, options.rules)
     if options.explain_decisions:
         from manigraph_planner.policies.gnn import GNNPolicy
 

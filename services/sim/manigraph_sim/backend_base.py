@@ -195,6 +195,7 @@ def episode_event(
         goals_filled=evaluation.filled,
         steps=steps,
         goals_wrong_object=wrong_object,
+        rule_violations=evaluation.rule_violations if ended else 0,
         success=success,
         reason=reason,
         sim_seconds=None if sim_seconds is None else round(sim_seconds, 3),

@@ -37,6 +37,7 @@ def layout_message(layout: Layout, episode_id: str, stamp: float) -> TaskLayout:
                 position=vector(goal.position),
                 optional=goal.id in layout.optional_goals,
                 accepts=dict(goal.accepts),
+                attributes=dict(goal.attributes),
             )
             for goal in layout.goals
         ],

@@ -9,6 +9,7 @@ tasks and the task files all build on these records; this module imports nothing
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Final
 
@@ -60,6 +61,8 @@ class Goal:
     #: What an object must carry to fill it: every key must match (an attribute's value,
     #: ``id``, or ``size`` within 1 mm); empty: any object of its category.
     accepts: dict[str, str | float | list[float]] = field(default_factory=dict)
+    #: What the task tells goals apart by (a bin's colour, a rack's side): text or number.
+    attributes: dict[str, str | float] = field(default_factory=dict)
 
     def admits(self, body: Body) -> bool:
         """Whether ``body`` may fill this goal: its category, and all that ``accepts`` lists."""
@@ -93,6 +96,27 @@ class Container:
 
 
 @dataclass
+class Judge:
+    """Rules only the judge knows (an ``EpisodeRequest``'s ``rules``, docs/task-files.md):
+    each goal as the rules see it (its ``accepts`` the file's and the rules' together), and
+    the placements that broke them, counted even when later undone. Never part of a Scene."""
+
+    goals: dict[str, Goal]
+    #: Placements into a goal the rules do not accept, so far this episode.
+    violations: int = 0
+    _standing: set[tuple[str, str]] | None = None
+
+    def watch(self, wrong: Mapping[str, str]) -> None:
+        """Count each (goal, object) pair in ``wrong`` (goal id -> the object standing in it
+        that the rules refuse) that was not there at the last look; the first look, the laid
+        out scene, counts nothing (nobody placed it)."""
+        now = set(wrong.items())
+        if self._standing is not None:
+            self.violations += len(now - self._standing)
+        self._standing = now
+
+
+@dataclass
 class Layout:
     """A task's seeded episode: what lies where, which goals must be filled."""
 
@@ -102,6 +126,9 @@ class Layout:
     #: Goals that may stay empty at the end (storage places for covers).
     optional_goals: set[str] = field(default_factory=set)
     partially_observable: bool = False
+    #: The judge's rules, where the request brought some: success, wrong objects and rule
+    #: violations are decided by them; the Scene and TaskLayout never see them.
+    judge: Judge | None = None
 
     def required_goals(self) -> set[str]:
         return {goal.id for goal in self.goals} - self.optional_goals

@@ -230,6 +230,10 @@ def _planner_argv(args: argparse.Namespace, plan: EpisodePlan | None) -> list[st
         planner.append("--explain-decisions")
     if args.accepts_filter == "off":
         planner += ["--accepts-filter", "off"]
+    rules = getattr(args, "rules", None)  # a namespace of up's flags has it
+    if rules is not None and args.policy == "expert":
+        # The teacher is told the rules (the sim's judge gets them in every reset request).
+        planner += ["--rules", str(Path(rules).resolve())]
     if plan is not None:
         # A decision may run as long as the run lets an episode go without news (a physics
         # PickAndPlace that turns a dish over first takes 20-60 s).

@@ -59,6 +59,8 @@ class Evaluation:
     filled_goals: frozenset[str]
     success: bool
     wrong_object_goals: frozenset[str] = frozenset()
+    #: Placements into a goal the judge's rules do not accept (0 without rules).
+    rule_violations: int = 0
 
     @property
     def filled(self) -> int:
@@ -151,6 +153,8 @@ class SimFamily(ABC):
         """The request's task with this family's options (``TaskError`` naming a bad one)."""
         if request.task == "file" or request.task_file is not None:
             return self.file_task(request)
+        if request.rules is not None:
+            raise ConfigError("rules", "rules are for a task file's goals; give its text too")
         return TASKS[request.task](self.options(request, geometry))
 
     def file_task(self, request: EpisodeRequest) -> Task[Any]:

@@ -24,6 +24,7 @@ from manigraph_sim.families.base import (
 from manigraph_sim.families.blocks import boxes, pyramid, stack  # noqa: F401  (register tasks)
 from manigraph_sim.families.blocks.geometric_world import GeometricWorld
 from manigraph_sim.families.blocks.options import BlockOptions, BlockTask
+from manigraph_sim.families.blocks.rules_file import parse_rules_file
 from manigraph_sim.families.blocks.scene import observed_scene
 from manigraph_sim.families.blocks.task_file import FileTask, parse_task_file
 from manigraph_sim.world_model import Layout
@@ -58,16 +59,28 @@ class BlocksFamily(SimFamily):
         if request.task_file is None:
             raise TaskError("task_file: task 'file' needs the task file's text")
         self.options(request)  # refuses another family's field
-        return FileTask(parse_task_file(request.task_file))
+        spec = parse_task_file(request.task_file)
+        rules = (
+            None if request.rules is None else parse_rules_file(request.rules, request.task_file)
+        )
+        return FileTask(spec, rules)
 
     def evaluate(self, layout: Layout, world: GeometricWorld) -> Evaluation:
+        """By the judge's rules where the request brought some (``Layout.judge``): each look
+        counts the placements into a goal they refuse that are new since the last."""
         required = frozenset(self.required_goals(layout))
-        filled = required & set(world.occupancy())
+        judge = layout.judge
+        judged = judge.goals if judge is not None else None
+        filled = required & set(world.occupancy(judged))
+        wrong = world.wrong_objects(judged)
+        if judge is not None:
+            judge.watch(wrong)
         return Evaluation(
             required,
             filled,
             success=filled == required,
-            wrong_object_goals=frozenset(world.wrong_objects()),
+            wrong_object_goals=frozenset(wrong),
+            rule_violations=judge.violations if judge is not None else 0,
         )
 
     def geometric_world(self, layout: Layout, goal_tolerance: float) -> BlocksWorld:

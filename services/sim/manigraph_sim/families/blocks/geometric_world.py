@@ -16,6 +16,8 @@ one (a cover) rests on the rim and closes the box; what is inside a closed box c
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from manigraph_shared.errors import SkillError
@@ -203,9 +205,11 @@ class GeometricWorld:
                 held[goal.id] = bodies[column].id
         return held
 
-    def occupancy(self) -> dict[str, str]:
+    def occupancy(self, judged: Mapping[str, Goal] | None = None) -> dict[str, str]:
         """Goal id -> id of the body it holds (``holdings``), for each goal that accepts that
-        body and whose supporting goals (``goal_supports``) are all filled."""
+        body and whose supporting goals (``goal_supports``) are all filled. ``judged``: the
+        goals as the judge's rules see them (``world_model.Judge``), else as laid out."""
+        rule = judged or self.goals
         held = self.holdings()
         supports = self.goal_supports()
         filled: dict[str, str] = {}
@@ -214,17 +218,18 @@ class GeometricWorld:
             body = held.get(goal.id)
             if (
                 body is not None
-                and goal.admits(self.bodies[body])
+                and rule.get(goal.id, goal).admits(self.bodies[body])
                 and all(below in filled for below in supports[goal.id])
             ):
                 filled[goal.id] = body
         return {goal_id: filled[goal_id] for goal_id in self.goals if goal_id in filled}
 
-    def wrong_objects(self) -> dict[str, str]:
+    def wrong_objects(self, judged: Mapping[str, Goal] | None = None) -> dict[str, str]:
         """Goal id -> id of a resting body of its category that stands in it but that it does
         not accept: within ``goal_tolerance`` of it in x and y, the goal's centre inside the
         body's height (so a 7 cm block in a 3 cm block's goal, its centre 2 cm higher, is
-        counted), the nearest such body."""
+        counted), the nearest such body. ``judged``: as :meth:`occupancy`."""
+        rule = judged or self.goals
         wrong: dict[str, str] = {}
         for goal in self.goals.values():
             standing = [
@@ -238,7 +243,7 @@ class GeometricWorld:
             if not standing:
                 continue
             body = min(standing, key=lambda b: float(np.linalg.norm(b.position - goal.position)))
-            if not goal.admits(body):
+            if not rule.get(goal.id, goal).admits(body):
                 wrong[goal.id] = body.id
         return wrong
 

@@ -54,6 +54,7 @@ def observed_scene(
             filled=goal.id in occupancy,
             visible=not world.is_hidden(goal.position),
             accepts=dict(goal.accepts),
+            attributes=dict(goal.attributes),
         )
         for goal in world.goals.values()
     ]

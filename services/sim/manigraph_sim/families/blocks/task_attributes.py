@@ -19,7 +19,7 @@ from difflib import get_close_matches
 
 import numpy as np
 
-from manigraph_shared.errors import TaskError
+from manigraph_shared.errors import DrawRefused
 from manigraph_shared.printable import quoted
 from manigraph_sim.families.blocks.fillable import fillable_rows
 from manigraph_sim.families.blocks.goal_matching import Shortfall, match, shortfall_of
@@ -83,15 +83,47 @@ def _shortfall(goals: list[Wanted], objects: list[Candidate]) -> Shortfall | Non
     return shortfall_of(rows, match(rows, complete=False))
 
 
-def required(goals: Sequence[GoalSpec]) -> list[Wanted]:
-    """The goals that must be filled, as the matching sees them."""
-    return [Wanted(i, g.id, g.category, g.accepts) for i, g in enumerate(goals) if not g.optional]
+def required(
+    goals: Sequence[GoalSpec],
+    same: Sequence[str] = (),
+    drawn: Sequence[Mapping[str, AttributeValue]] | None = None,
+    shuffle: Sequence[str] = (),
+) -> list[Wanted]:
+    """The goals that must be filled, as the matching sees them: each one's ``accepts``, and
+    under ``same`` its own value of those attributes (``drawn``: this episode's values; left
+    out, the values that are certain before a draw: a single value not in ``shuffle``)."""
+    wanted = []
+    for i, goal in enumerate(goals):
+        if goal.optional:
+            continue
+        own = drawn[i] if drawn is not None else _certain(goal.attributes, shuffle)
+        wanted.append(Wanted(i, goal.id, goal.category, same_accepts(goal.accepts, own, same)))
+    return wanted
+
+
+def same_accepts(
+    accepts: Mapping[str, AttributeValue | Sequence[float]],
+    attributes: Mapping[str, AttributeValue],
+    same: Sequence[str],
+) -> dict[str, AttributeValue | Sequence[float]]:
+    """A goal's ``accepts`` with, for each attribute named in ``same`` that the goal carries,
+    its own value (a key the goal's ``accepts`` lists itself stays as listed)."""
+    merged = {name: attributes[name] for name in same if name in attributes}
+    return merged | dict(accepts)
+
+
+def _certain(
+    attributes: Mapping[str, AttributeValue | Sequence[AttributeValue]], shuffle: Sequence[str]
+) -> dict[str, AttributeValue]:
+    return {
+        k: v for k, v in attributes.items() if isinstance(v, str | int | float) and k not in shuffle
+    }
 
 
 def candidates(objects: Sequence[ObjectSpec], shuffle: Sequence[str]) -> list[Candidate]:
     """The objects as the matching sees them, each attribute with every value a draw may
     give it."""
-    possible = possible_values([o.attributes for o in objects], shuffle)
+    possible = possible_values([o.attributes for o in objects], shuffle, [o.spare for o in objects])
     return [
         Candidate(o.id, o.category, o.size, values, o.spare)
         for o, values in zip(objects, possible, strict=True)
@@ -118,35 +150,69 @@ def unknown_attributes(
                 problems.append(f"goals.{i}.accepts.id: {goal.id} accepts {value}: no such object")
             elif key not in RESERVED and key not in carried:
                 problems.append(unknown(f"goals.{i}.accepts.{key}", key))
-    problems += [unknown(f"shuffle.{i}", n) for i, n in enumerate(shuffle) if n not in carried]
+    goal_carried = {name for g in goals for name in g.attributes}
+    problems += [
+        unknown(f"shuffle.{i}", n)
+        for i, n in enumerate(shuffle)
+        if n not in carried and n not in goal_carried
+    ]
+    return problems
+
+
+def unknown_same(
+    objects: Sequence[ObjectSpec], goals: Sequence[GoalSpec], same: Sequence[str], field: str
+) -> list[str]:
+    """Names in ``same`` (at ``field``) that no goal, or no object, carries."""
+    problems = []
+    for i, name in enumerate(same):
+        if not any(name in g.attributes for g in goals):
+            problems.append(f"{field}.{i}: no goal carries an attribute {name}")
+        elif not any(name in o.attributes for o in objects):
+            problems.append(f"{field}.{i}: no object carries an attribute {name}")
     return problems
 
 
 def episode_attributes(
     rng: np.random.Generator,
     objects: Sequence[ObjectSpec],
+    goals: Sequence[GoalSpec],
     shuffle: Sequence[str],
-    goals: list[Wanted],
-) -> list[dict[str, AttributeValue]]:
-    """Each object's attributes for one episode: drawn (:func:`draw`) until the objects that
-    are not spares can fill every required goal, at most :data:`MAX_DRAWS` times."""
+    same: Sequence[str] = (),
+) -> tuple[list[dict[str, AttributeValue]], list[dict[str, AttributeValue]]]:
+    """Each object's and each goal's attributes for one episode: drawn (:func:`draw`, the
+    objects' then the goals') until the objects that are not spares can fill every required
+    goal, at most :data:`MAX_DRAWS` times. Goals are drawn only where some goal has a draw,
+    so a file without one lays out as before goals carried attributes."""
     listed = [o.attributes for o in objects]
+    spares = [o.spare for o in objects]
+    goal_listed = [g.attributes for g in goals]
     drawing = bool(shuffle) or any(not _single(v) for a in listed for v in a.values())
-    if not drawing:
-        return [{k: _one_of(rng, v) for k, v in a.items()} for a in listed]  # no draw: single
+    goals_drawing = any(not _single(v) for a in goal_listed for v in a.values()) or any(
+        name in a for a in goal_listed for name in shuffle
+    )
+    if not drawing and not goals_drawing:  # no draw: single values
+        return (
+            [{k: _one_of(rng, v) for k, v in a.items()} for a in listed],
+            [{k: _one_of(rng, v) for k, v in a.items()} for a in goal_listed],
+        )
     missing = None
     for _ in range(MAX_DRAWS):
-        drawn = draw(rng, listed, shuffle)
+        drawn = draw(rng, listed, shuffle, spares)
+        drawn_goals = (
+            draw(rng, goal_listed, shuffle)
+            if goals_drawing
+            else [{k: _one_of(rng, v) for k, v in a.items()} for a in goal_listed]
+        )
         items = [
             Candidate(o.id, o.category, o.size, {k: [v] for k, v in a.items()}, o.spare)
             for o, a in zip(objects, drawn, strict=True)
         ]
-        missing = first_shortfall(goals, items)
+        missing = first_shortfall(required(goals, same, drawn_goals), items)
         if missing is None:
-            return drawn
+            return drawn, drawn_goals
     assert missing is not None
-    raise TaskError(
-        f"task file: {missing[1]} in {MAX_DRAWS} draws of the attributes for this seed; "
+    raise DrawRefused(
+        f"task file: {missing[1]} in {MAX_DRAWS} draws of the attributes {DrawRefused.MARK}; "
         "list values that can fill every goal"
     )
 
@@ -155,14 +221,17 @@ def draw(
     rng: np.random.Generator,
     listed: Sequence[Mapping[str, AttributeValue | Sequence[AttributeValue]]],
     shuffle: Sequence[str],
+    spares: Sequence[bool] | None = None,
 ) -> list[dict[str, AttributeValue]]:
-    """One draw of every object's attributes: one value of each list, then each shuffled
-    attribute's values permuted among the objects that carry it."""
+    """One draw of every object's (or goal's) attributes: one value of each list, then each
+    shuffled attribute's values permuted among the items that carry it, spares left out (a
+    spare keeps its value, or draws its own from its list)."""
     drawn = [
         {name: _one_of(rng, value) for name, value in attributes.items()} for attributes in listed
     ]
+    spare = spares or [False] * len(drawn)
     for name in shuffle:
-        carriers = [i for i, attributes in enumerate(drawn) if name in attributes]
+        carriers = [i for i, attributes in enumerate(drawn) if name in attributes and not spare[i]]
         values = [drawn[i][name] for i in carriers]
         for i, j in zip(carriers, rng.permutation(len(carriers)), strict=True):
             drawn[i][name] = values[int(j)]
@@ -172,6 +241,7 @@ def draw(
 def possible_values(
     listed: Sequence[Mapping[str, AttributeValue | Sequence[AttributeValue]]],
     shuffle: Sequence[str],
+    spares: Sequence[bool] | None = None,
 ) -> list[dict[str, list[AttributeValue]]]:
     """Each object's attributes as every value some draw may give it. A shuffled attribute's
     values are its carriers' pooled without repeats, one list shared by every carrier: pooled
@@ -179,11 +249,12 @@ def possible_values(
     possible: list[dict[str, list[AttributeValue]]] = [
         {name: _values(value) for name, value in attributes.items()} for attributes in listed
     ]
-    for name in shuffle:
-        pooled = list(dict.fromkeys(v for a in possible for v in a.get(name, [])))
-        for attributes in possible:
-            if name in attributes:
-                attributes[name] = pooled
+    spare = spares or [False] * len(possible)
+    for name in shuffle:  # spares keep their own values
+        shuffled = [a for a, s in zip(possible, spare, strict=True) if name in a and not s]
+        pooled = list(dict.fromkeys(v for a in shuffled for v in a[name]))
+        for attributes in shuffled:
+            attributes[name] = pooled
     return possible
 
 

@@ -70,7 +70,9 @@ goals closer than a block's width, and more required block (cover) goals than bl
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Mapping, Sequence
 from functools import cached_property, lru_cache
+from typing import Protocol
 
 import numpy as np
 from pydantic import BaseModel, Field, ValidationError, model_validator
@@ -92,7 +94,13 @@ from manigraph_sim.families.blocks.task_file_specs import (
     Position,
     _Strict,
 )
-from manigraph_sim.world_model import Body, Container, Goal, Layout
+from manigraph_sim.world_model import Body, Container, Goal, Judge, Layout
+
+
+class Rules(Protocol):
+    """The judge's rules of an episode (``rules_file.Rules``)."""
+
+    def judge(self, layout: Layout) -> Judge: ...
 
 
 class TaskFile(_Strict):
@@ -104,6 +112,8 @@ class TaskFile(_Strict):
     containers: list[ContainerSpec] = Field(default_factory=list, max_length=16)
     #: Attributes whose values are permuted among the objects carrying them, per episode.
     shuffle: list[AttributeName] = Field(default_factory=list, max_length=16)
+    #: Attributes a goal carrying them matches: it accepts only objects of its own value.
+    same: list[AttributeName] = Field(default_factory=list, max_length=16)
 
     @model_validator(mode="after")
     def _consistent(self) -> TaskFile:
@@ -223,7 +233,10 @@ class TaskFile(_Strict):
         return problems
 
     def _unknown_attributes(self) -> list[str]:
-        return task_attributes.unknown_attributes(self.objects, self.goals, self.shuffle)
+        return [
+            *task_attributes.unknown_attributes(self.objects, self.goals, self.shuffle),
+            *task_attributes.unknown_same(self.objects, self.goals, self.same, "same"),
+        ]
 
     def _unsatisfiable(self) -> list[str]:
         """The first required goal the objects that are not spares cannot fill while the
@@ -234,7 +247,7 @@ class TaskFile(_Strict):
     @property
     def required(self) -> list[task_attributes.Wanted]:
         """The goals that must be filled, as the matching sees them."""
-        return task_attributes.required(self.goals)
+        return task_attributes.required(self.goals, self.same, shuffle=self.shuffle)
 
     @property
     def candidates(self) -> list[task_attributes.Candidate]:
@@ -348,8 +361,10 @@ def _parsed(text: str, source: str | None) -> TaskFile | str:
 NESTED_TOO_DEEPLY = "arrays or tables nested too deeply to read (a task file needs a few levels)"
 
 
-def _accepts(goal: GoalSpec) -> dict[str, str | float | list[float]]:
-    return {k: list(v) if isinstance(v, tuple) else v for k, v in goal.accepts.items()}
+def _accepts(
+    accepts: Mapping[str, str | float | Sequence[float]],
+) -> dict[str, str | float | list[float]]:
+    return {k: v if isinstance(v, str | int | float) else list(v) for k, v in accepts.items()}
 
 
 class FileTask(BlockTask):
@@ -369,30 +384,43 @@ class FileTask(BlockTask):
 
     name = "file"
 
-    def __init__(self, spec: TaskFile) -> None:
+    def __init__(self, spec: TaskFile, rules: Rules | None = None) -> None:
         self.spec = spec
+        #: The judge's rules (an ``EpisodeRequest``'s ``rules``): never in the layout's goals.
+        self.rules = rules
         super().__init__(BlockOptions(blocks=spec.blocks))
 
     def layout(self, rng: np.random.Generator) -> Layout:
         r = self.spec.randomize_xy
         shift = np.array([*rng.uniform(-r, r, 2), 0.0]) if r > 0 else np.zeros(3)
         positions = self._positions(rng)
+        spec = self.spec
+        drawn, drawn_goals = task_attributes.episode_attributes(
+            rng, spec.objects, spec.goals, spec.shuffle, spec.same
+        )
         bodies = [
             Body(o.id, o.category, np.array(o.size), position + shift, attributes)
-            for o, position, attributes in zip(
-                self.spec.objects, positions, self._attributes(rng), strict=True
-            )
+            for o, position, attributes in zip(spec.objects, positions, drawn, strict=True)
         ]
         goals = [
-            Goal(g.id, g.category, np.array(g.position) + shift, _accepts(g))
-            for g in self.spec.goals
+            Goal(
+                g.id,
+                g.category,
+                np.array(g.position) + shift,
+                _accepts(task_attributes.same_accepts(g.accepts, own, spec.same)),
+                own,
+            )
+            for g, own in zip(spec.goals, drawn_goals, strict=True)
         ]
         containers = [
             Container(c.id, np.array(c.centre) + shift[:2], np.array(c.inner), c.wall, c.height)
             for c in self.spec.containers
         ]
         optional = {g.id for g in self.spec.goals if g.optional}
-        return Layout(bodies, goals, containers, optional, self.spec.partially_observable)
+        layout = Layout(bodies, goals, containers, optional, self.spec.partially_observable)
+        if self.rules is not None:
+            layout.judge = self.rules.judge(layout)
+        return layout
 
     def _positions(self, rng: np.random.Generator) -> list[np.ndarray]:
         """Each object's drawn position before the whole-layout shift: its listed choice (none
@@ -421,12 +449,6 @@ class FileTask(BlockTask):
             if item.jitter > 0:
                 offsets[index][:2] += rng.uniform(-item.jitter, item.jitter, 2)
         return [np.array(o.anchor) + self._offset(i, offsets) for i, o in enumerate(objects)]
-
-    def _attributes(self, rng: np.random.Generator) -> list[dict[str, str | float]]:
-        """Each object's attributes for this episode (drawn after the positions, so a file
-        without draws keeps its layouts)."""
-        spec = self.spec
-        return task_attributes.episode_attributes(rng, spec.objects, spec.shuffle, spec.required)
 
     def _offset(self, index: int, offsets: list[np.ndarray]) -> np.ndarray:
         base = self.spec.support_of(index)

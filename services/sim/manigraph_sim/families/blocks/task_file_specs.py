@@ -121,18 +121,33 @@ class GoalSpec(_Strict):
     optional: bool = False
     #: What fills it: every key must match (an attribute, ``id``, or ``size`` within 1 mm).
     accepts: dict[AttributeName, AcceptedValue] = Field(default_factory=dict, max_length=16)
+    #: What tells goals apart (a bin's colour): each a value, or a list to draw one from.
+    attributes: dict[AttributeName, ListedValue] = Field(default_factory=dict, max_length=16)
+
+    @field_validator("attributes")
+    @classmethod
+    def _not_reserved(cls, attributes: dict[str, object]) -> dict[str, object]:
+        for name in RESERVED:
+            if name in attributes:
+                raise ValueError(f"{name}: is the goal's own field, not an attribute")
+        return attributes
 
     @field_validator("accepts")
     @classmethod
     def _known_forms(cls, accepts: dict[str, object]) -> dict[str, object]:
-        for key, value in accepts.items():
-            if key == "size" and not isinstance(value, tuple):
-                raise ValueError("size: give the full extents [x, y, z], metres")
-            if key == "id" and not isinstance(value, str):
-                raise ValueError("id: give an object's id")
-            if key != "size" and isinstance(value, tuple):
-                raise ValueError(f"{key}: give one value (text or a number), not a list")
-        return accepts
+        return known_accept_forms(accepts)
+
+
+def known_accept_forms(accepts: dict[str, object]) -> dict[str, object]:
+    """``size`` takes extents, ``id`` an object's id, any other key one value."""
+    for key, value in accepts.items():
+        if key == "size" and not isinstance(value, tuple):
+            raise ValueError("size: give the full extents [x, y, z], metres")
+        if key == "id" and not isinstance(value, str):
+            raise ValueError("id: give an object's id")
+        if key != "size" and isinstance(value, tuple):
+            raise ValueError(f"{key}: give one value (text or a number), not a list")
+    return accepts
 
 
 class ContainerSpec(_Strict):
