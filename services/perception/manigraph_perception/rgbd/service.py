@@ -46,6 +46,8 @@ _NO_FRAME = "no usable frame"
 #: was a ~0.5-1 MB sample, freed into glibc's heap, which keeps it otherwise (10,000
 #: unpaired halves of 400 kB left +256 MB without a trim).
 TRIM_AFTER_HALVES = 200
+#: Halves refused from their header republish the last good Scene (stale) at most this often.
+REFUSED_REPORT_SECONDS = 1.0
 
 
 class RgbdPerceptionService(Service):
@@ -72,6 +74,8 @@ class RgbdPerceptionService(Service):
         #: The newest half refused from its header, waiting to be named in the status.
         self._refused: BadFrame | None = None
         self._halves_refused = 0
+        self._refused_counts: dict[str, int] = {}  # by kind, not yet in the counters
+        self._refused_reported_at = -REFUSED_REPORT_SECONDS
         self._halves_at_trim = 0
         self._halves_last_tick = 0
         self.last_good: Scene | None = None
@@ -159,6 +163,7 @@ class RgbdPerceptionService(Service):
         self.reject(half, problem.kind, f"#{half.sequence}: {problem.reason}")
         with self._lock:
             self._halves_refused += 1
+            self._refused_counts[problem.kind] = self._refused_counts.get(problem.kind, 0) + 1
             pending = self._refused is not None
             self._refused = BadFrame(problem.kind, f"frame {half.sequence}: {problem.reason}")
         if not pending:
@@ -167,9 +172,20 @@ class RgbdPerceptionService(Service):
     def _report_refused(self, _: object = None) -> None:
         with self._lock:
             problem, self._refused = self._refused, None
-        if problem is not None:
-            self.perception.count(problem)
+            counts, self._refused_counts = self._refused_counts, {}
+        for kind, count in counts.items():
+            setattr(self.perception.counters, kind, getattr(self.perception.counters, kind) + count)
+        if problem is None:
+            return
+        # The last good Scene again, stale, as for any bad frame, but at most once a
+        # REFUSED_REPORT_SECONDS: a forger sends refused halves as fast as it likes, and
+        # each is logged among the rejections already.
+        now = time.monotonic()
+        if now - self._refused_reported_at >= REFUSED_REPORT_SECONDS:
+            self._refused_reported_at = now
             self._bad(problem)
+        else:
+            self._bad(problem, republish=False)
 
     def _pair(self, image: CompressedImage, depth: DepthImage) -> None:
         """A whole frame: keep only the newest waiting; schedule one processing."""
@@ -213,14 +229,15 @@ class RgbdPerceptionService(Service):
             self.last_error = ""
         self.bus.publish(scene)
 
-    def _bad(self, problem: BadFrame) -> None:
+    def _bad(self, problem: BadFrame, republish: bool = True) -> None:
         """Name the problem in the status; serve the last good Scene again, stale, with its
-        own (old) stamp."""
+        own (old) stamp (``republish``: and log it, if it is new)."""
         age = ""
         if self.last_good is not None:
             age = f"; last good scene {time.time() - self.last_good.stamp:.1f} s old"
-            self.bus.publish(msgspec.structs.replace(self.last_good, stale=True))
-        if str(problem) != self._problem:
+            if republish:
+                self.bus.publish(msgspec.structs.replace(self.last_good, stale=True))
+        if republish and str(problem) != self._problem:
             self.log.warning("frame skipped: %s", problem)
         self._problem = str(problem)
         self.last_error = f"{problem}{age}"
