@@ -131,7 +131,7 @@ def test_spares_belong_to_no_goal_and_the_expert_fills_every_goal_anyway() -> No
                 "position = [0.60, -0.05, 0.02]",
                 "position = [0.60, -0.05, 0.02]\npositions = [[0.6, 0.0, 0.02]]",
             ),
-            "objects.2: position: give either position or positions",
+            "line 20: objects.2.position: give either position or positions",
         ),
         (
             lambda t: t.replace(

@@ -31,8 +31,14 @@ def describe_errors(
     problems = []
     for error in errors:
         loc = list(error["loc"])
+        message = plain(error["type"], error["msg"].removeprefix("Value error, "))
+        model = _model_at([*loc, ""], top, tables) if loc else None
+        own = re.match(r"^([a-z_]+): ", message)
+        if model is not None and own and own.group(1) in model.model_fields:
+            # A check of a whole table naming one of its keys: that key's own line.
+            loc.append(own.group(1))
+            message = message[own.end() :]
         field = ".".join(str(part) for part in loc)
-        message = error["msg"].removeprefix("Value error, ")
         if error["type"] == "extra_forbidden" and loc and isinstance(loc[-1], str):
             model = _model_at(loc, top, tables)
             if model is not None:
@@ -45,6 +51,29 @@ def describe_errors(
         line = line_of(lines, loc)
         problems.append((f"line {line}: " if line else "") + f"{field}: {message}")
     return problems
+
+
+#: Pydantic's words for a kind of error -> plain ones.
+PLAIN = {
+    "extra_forbidden": "is no key of this table",
+    "missing": "is missing; this table needs it",
+    "bool_type": "give true or false",
+    "string_type": "give text in quotes",
+}
+
+
+def plain(kind: str, message: str) -> str:
+    """``message`` in the words of a task file's reader, not of pydantic."""
+    if kind in PLAIN:
+        return PLAIN[kind]
+    for said, meant in (
+        ("Input should be a valid ", "give a "),
+        ("Input should be ", "must be "),
+        ("String should match pattern ", "must match "),
+    ):
+        if message.startswith(said):
+            return meant + message.removeprefix(said)
+    return message
 
 
 def line_of(lines: Sequence[str], loc: Location) -> int | None:
