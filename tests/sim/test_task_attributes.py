@@ -190,6 +190,28 @@ def test_shuffle_permutes_an_attribute_among_the_objects_that_carry_it() -> None
     assert [b.attributes for b in again.bodies] == [b.attributes for b in layouts[7].bodies]
 
 
+def test_shuffle_leaves_spares_alone_and_permutes_goals_apart_from_objects() -> None:
+    colours = ["red", "red", "blue", "blue"]
+    objects = "".join(
+        block(f"b{i}", f"[0.40, {-0.3 + 0.1 * i:.1f}, 0.02]", f'attributes = {{ colour = "{c}" }}')
+        for i, c in enumerate(colours)
+    ) + block("s", "[0.3, 0.3, 0.02]", 'attributes = { colour = "green" }\nspare = true')
+    goals = "".join(
+        goal(f"g{i}", f"[0.65, {-0.3 + 0.1 * i:.1f}, 0.02]", f'attributes = {{ colour = "{c}" }}')
+        for i, c in enumerate(colours)
+    )
+    task = FileTask(parse_task_file('shuffle = ["colour"]\nsame = ["colour"]\n' + objects + goals))
+    seen = set()
+    for seed in range(20):
+        layout = task.layout(np.random.default_rng(seed))
+        assert layout.bodies[-1].attributes == {"colour": "green"}  # the spare keeps its own
+        bins = [g.attributes["colour"] for g in layout.goals]
+        assert Counter(bins) == {"red": 2, "blue": 2}
+        assert all(g.accepts == {"colour": g.attributes["colour"]} for g in layout.goals)  # same
+        seen.add((tuple(bins), tuple(b.attributes["colour"] for b in layout.bodies[:4])))
+    assert len({bins for bins, _ in seen}) > 2 and len(seen) > len({b for b, _ in seen})
+
+
 @pytest.mark.parametrize(
     ("text", "named"),
     [

@@ -9,7 +9,14 @@ import pytest
 
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import EpisodeRequest
-from manigraph_tools.episode_plan import UNSET_BLOCKS, EpisodeOptions, read_task_file, summarize
+from manigraph_tools.episode_plan import (
+    SEED_REFUSED,
+    UNSET_BLOCKS,
+    EpisodeOptions,
+    EpisodeResult,
+    read_task_file,
+    summarize,
+)
 
 
 def test_a_dishwasher_run_is_named_and_summarised_by_its_dishes_not_blocks() -> None:
@@ -82,3 +89,21 @@ def test_control_characters_in_a_path_are_escaped_in_the_refusal(tmp_path: Path)
     with pytest.raises(ConfigError) as refused:
         read_task_file(path)
     assert "\x1b" not in str(refused.value) and "\\x1b[2J" in str(refused.value)
+
+
+def test_rules_ride_in_each_request_and_the_summary_counts_violations_and_refusals(
+    tmp_path: Path,
+) -> None:
+    task, rules = tmp_path / "t.toml", tmp_path / "r.toml"
+    task.write_text("# a layout\n")
+    rules.write_text('same = ["colour"]\n')
+    plan = EpisodeOptions(task_file=task, rules=rules).plan(2)
+    assert plan.request(1).rules == 'same = ["colour"]\n' and plan.request(1).task_file
+    done = EpisodeResult("e0", 0, True, 2, 2, 4, 0.1, "all goals filled", rule_violations=1)
+    refused = EpisodeResult("e1", 1, False, 0, 0, 0, 0.1, f"{SEED_REFUSED}: t, seed 1: why")
+    summary = summarize(plan, [done, refused])
+    assert summary["rule_violations"] == 1
+    assert summary["refused_seeds"] == [{"seed": 1, "reason": "t, seed 1: why"}]
+    assert "rule_violations" not in summarize(EpisodeOptions(task_file=task).plan(1), [done])
+    with pytest.raises(ConfigError, match=r"^rules: .*give --task-file too"):
+        EpisodeOptions(rules=rules).plan(1)
