@@ -120,6 +120,8 @@ class Service:
     name: ClassVar[str]
     #: How often ``tick`` runs; ``None``: never.
     tick_period: float | None = None
+    #: The last error reported (its status's ``detail`` until cleared).
+    last_error: str
 
     def __init__(self, bus: Bus) -> None:
         self.bus = bus

@@ -117,6 +117,8 @@ class McapRgbdSource:
             if isinstance(message, CameraInfo):
                 self.info = message
                 continue
+            if not isinstance(message, (DepthImage, CompressedImage)):
+                continue
             sequence = message.sequence
             if isinstance(message, DepthImage):
                 image = self._images.pop(sequence)
