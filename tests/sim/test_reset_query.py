@@ -43,3 +43,19 @@ def test_a_refused_reset_query_ends_with_its_error_reply(
             assert ended < WELL_UNDER, (
                 f"attempt {attempt}: the error reply came but the query ended after {ended:.1f} s"
             )
+
+
+def test_a_stack_started_with_a_task_file_refuses_another_task_naming_it(
+    running_stack: Stack,
+) -> None:
+    running_stack.start("router")
+    running_stack.start("sim", "sim", "--backend", "geometric", "--plays", "colour-place.toml")
+    with running_stack.client() as bus:
+        running_stack.wait_alive(bus, "sim")
+        request_ = EpisodeRequest(episode_id="e-3", task="stack")
+        replies = bus.session.get(
+            bus.scoped(EpisodeRequest.key), payload=request_.encode(), timeout=QUERY_TIMEOUT
+        )
+        errors = [r.err.payload.to_string() for r in replies if r.err is not None]
+        assert len(errors) == 1 and "this stack plays colour-place.toml" in errors[0], errors
+        assert "--task-file colour-place.toml" in errors[0]

@@ -26,6 +26,11 @@ class SimServiceOptions(Options):
         help="publish ground-truth scenes (--no-scenes with --camera: perception is the Scene "
         "source and the sim only referees)",
     )
+    plays: str | None = option(
+        None,
+        help="the task file this stack plays (up --task-file passes it): a reset without a task "
+        "file is refused, naming it, instead of playing a registered task",
+    )
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
@@ -54,7 +59,12 @@ def _run(args: argparse.Namespace) -> int:
     camera_hz = options.camera_hz if getattr(options, "camera", False) else 0.0
     return run_service(
         lambda bus: SimService(
-            bus, backend, service.publish_hz, scenes=service.scenes, camera_hz=camera_hz
+            bus,
+            backend,
+            service.publish_hz,
+            scenes=service.scenes,
+            camera_hz=camera_hz,
+            plays=service.plays,
         ),
         bus_config_from_args(args),
     )

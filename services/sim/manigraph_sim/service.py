@@ -6,7 +6,7 @@ import time
 from collections.abc import Callable
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.errors import BusError, ManigraphError
+from manigraph_shared.errors import BusError, ConfigError, ManigraphError
 from manigraph_shared.estop_latch import stop_reason
 from manigraph_shared.messages import (
     EpisodeEvent,
@@ -71,8 +71,12 @@ class SimService(Service):
         publish_hz: float = 10.0,
         scenes: bool = True,
         camera_hz: float = 0.0,
+        plays: str | None = None,
     ) -> None:
         super().__init__(bus)
+        #: The task file the stack was started with (``up --task-file``): a reset without a
+        #: task file is refused naming it, not played as a registered task unsaid.
+        self.plays = plays
         self.backend = backend
         self.tick_period = 1.0 / publish_hz
         rates: tuple[float, float] | None = getattr(backend, "stream_rates", None)
@@ -119,6 +123,12 @@ class SimService(Service):
 
         # A task file is checked here, on the Zenoh thread: a refusal never waits for, nor
         # holds, the sim's thread.
+        if self.plays is not None and request.task_file is None:
+            raise ConfigError(
+                "task-file",
+                f"this stack plays {self.plays} (up --task-file), not task {request.task}; "
+                f"run it with --task-file {self.plays}",
+            )
         check_request(request)
         answer: queue.SimpleQueue[EpisodeEvent | BaseException] = queue.SimpleQueue()
         given_up = time.monotonic() + RESET_ANSWER_SECONDS

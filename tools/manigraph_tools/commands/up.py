@@ -299,6 +299,8 @@ def _up_run(args: argparse.Namespace) -> int:
     sim_options = (
         backends.argv(args.sim, backends.given_options(args)) if backends is not None else []
     )
+    if args.task_file is not None:  # a reset for anything else is refused naming the file
+        sim_options += ["--plays", str(args.task_file)]
     if args.scene_source in ("camera", "rgbd"):
         source = args.scene_source
         if args.sim != "physics":
