@@ -63,6 +63,13 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         type=int,
         help="draw fresh copies every N epochs (default: 10; gcn: 0, never)",
     )
+    parser.add_argument(
+        "--grow",
+        type=int,
+        metavar="N",
+        help="task files: add up to N copies of the decided pair and of finished pairs to "
+        "each augmented copy, so scenes grow past the demonstrated size (docs/training.md)",
+    )
     add_threads_option(parser)
     parser.add_argument(
         "-o",
@@ -114,6 +121,13 @@ def _run(args: argparse.Namespace) -> int:
         config = replace(config, augmentation=augmentation_for(args.arch, copies=args.copies))
     demos = load_demonstrations(args.demos)
     config = config.for_task(demos.feature_spec)  # a task's columns, generic augmentation
+    if args.grow is not None and config.augmentation is not None:
+        config = replace(
+            config,
+            augmentation=replace(
+                config.augmentation, grow_pairs=args.grow, grow_finished=args.grow
+            ),
+        )
     net, metrics = train(demos, config, progress=sys.stderr)  # a bar on a terminal only
     output = args.output or RUNS / f"{args.arch}-seed{args.seed}.pt"
     output.parent.mkdir(parents=True, exist_ok=True)

@@ -79,6 +79,10 @@ feature spec, :mod:`~manigraph_planner.gnn.task_features`) get no structural ste
 are written for the block and box tasks' geometry. They get :meth:`Augmentation.for_task`:
 steps 5 and 6 on the position columns only, which hold for any task (which goal is lowest,
 which object is on top, what accepts what: unchanged), and no code of the task's own.
+With ``grow_pairs`` / ``grow_finished`` (``manigraph train --grow N``; 0, off, by default) a
+copy first grows past the demonstrated size: copies of the decided pair and of finished pairs
+(:mod:`~manigraph_planner.families.blocks.task_growth`), what held a rule nobody wrote at
+twice the objects (docs/training.md).
 
 Node order is not augmented: every architecture is permutation-equivariant (tested).
 Why each step keeps the label is argued in :mod:`~manigraph_planner.families.blocks.structure` and
@@ -107,6 +111,7 @@ from manigraph_planner.families.blocks.structure import (
     is_closing,
     open_box_contents,
 )
+from manigraph_planner.families.blocks.task_growth import grow_task_graph
 from manigraph_planner.training.dataset import Sample
 
 #: The probabilities of the structural steps 1-4 (see the module docstring).
@@ -147,6 +152,10 @@ class Augmentation:
     geometry: SceneGeometry = field(default_factory=SceneGeometry)
     #: Only the steps that hold for any task (:meth:`for_task`).
     generic: bool = False
+    #: Task files: up to this many copies of the decided pair, and of finished pairs, per
+    #: copy (:mod:`~manigraph_planner.families.blocks.task_growth`); 0: none.
+    grow_pairs: int = 0
+    grow_finished: int = 0
 
     def __post_init__(self) -> None:
         if self.copies < 0:
@@ -157,7 +166,13 @@ class Augmentation:
         for name in STRUCTURAL_PROBABILITIES:
             if not 0 <= getattr(self, name) <= 1:
                 raise ValueError(f"{name}: must be in [0, 1]")
-        for name in ("max_levels", "max_free_levels", "max_finished_levels"):
+        for name in (
+            "max_levels",
+            "max_free_levels",
+            "max_finished_levels",
+            "grow_pairs",
+            "grow_finished",
+        ):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name}: must be >= 0")
 
@@ -183,6 +198,8 @@ class Augmentation:
 
     def randomize(self, sample: Sample, generator: torch.Generator) -> Sample:
         if self.generic:
+            if self.grow_pairs or self.grow_finished:
+                sample = self._grow(sample, generator)
             return sample.with_x(self._jitter(sample.x, generator))
         graph = Graph(sample.x, sample.object_index, sample.goal_index)
         if self._chance(self.tower_probability, generator):
@@ -220,6 +237,22 @@ class Augmentation:
             graph = add_finished_tower(graph, levels, generator, self.geometry, free)
         x = self._jitter(graph.x, generator)
         return Sample(x, x[:, 0] <= BLOCK, graph.object_index, graph.goal_index)
+
+    def _grow(self, sample: Sample, generator: torch.Generator) -> Sample:
+        pairs = self._levels(generator, self.grow_pairs)
+        finished = self._levels(generator, self.grow_finished)
+        x, objects, goal_index, object_index = grow_task_graph(
+            sample.x,
+            int(sample.is_object.sum()),
+            sample.object_index,
+            sample.goal_index,
+            pairs,
+            finished,
+            generator,
+        )
+        is_object = torch.zeros(x.shape[0], dtype=torch.bool)
+        is_object[:objects] = True
+        return Sample(x, is_object, object_index, goal_index)
 
     @staticmethod
     def _levels(generator: torch.Generator, most: int) -> int:
