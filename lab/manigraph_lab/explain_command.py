@@ -24,7 +24,12 @@ from manigraph_shared.messages import (
 
 def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--decision", help="decision id to explain (default: the latest)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the mask optimisation")
+    parser.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="seed of the mask optimisation; with --summary, of the first episode (default 0)",
+    )
     parser.add_argument("--json", action="store_true", help="last line: one JSON object")
     parser.add_argument("--png", type=Path, help="also draw the explanation to this PNG file")
     parser.add_argument("--timeout", type=float, default=4.0, help="seconds to wait (default 4)")
@@ -33,12 +38,49 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     offline.add_argument(
         "--scene-from", type=Path, help="MCAP log: explain its decision --decision (or the last)"
     )
+    learned = parser.add_argument_group(
+        "what was learned (--summary; no running stack, docs/explainer.md)"
+    )
+    learned.add_argument(
+        "--summary",
+        action="store_true",
+        help="play --episodes scenes of --task-file in-process and print, per attribute value, "
+        "the goals --policy sends those objects to, and how often (with --rules: agreement)",
+    )
+    learned.add_argument("--policy", help="with --summary: policy name or checkpoint file")
+    learned.add_argument("--task-file", type=Path, help="with --summary: the task file to play")
+    learned.add_argument(
+        "--rules",
+        type=Path,
+        help="with --summary: rules file to judge the placements by (the policy never sees it; "
+        "the expert teacher is told it)",
+    )
+    learned.add_argument(
+        "--episodes", type=int, default=20, help="with --summary: scenes to play (default 20)"
+    )
+    learned.add_argument(
+        "--accepts-filter",
+        choices=["on", "off"],
+        default="on",
+        help="with --summary: a task policy's accepts filter (default on; docs/training.md)",
+    )
     add_bus_arguments(parser)
+
+
+_SUMMARY_ONLY = ("policy", "task_file", "rules")
 
 
 def _run(args: argparse.Namespace) -> int:
     if args.seed < 0:
         raise ConfigError("seed", "must be >= 0")
+    if args.summary:
+        from manigraph_lab.explain_summary import run_summary
+
+        return run_summary(args)
+    for name in _SUMMARY_ONLY:
+        if getattr(args, name) is not None:
+            flag = "--" + name.replace("_", "-")
+            raise ConfigError(name, f"{flag} goes with --summary (what a policy learned)")
     if (args.checkpoint is None) != (args.scene_from is None):
         raise ConfigError("checkpoint", "--checkpoint and --scene-from go together (offline)")
     if args.checkpoint is not None:
