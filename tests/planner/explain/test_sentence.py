@@ -29,9 +29,20 @@ def obj(name: str, x: float, **attributes: str | float) -> SceneObject:
     )
 
 
-def goal(name: str, x: float, **accepts: Any) -> SceneGoal:
+def goal(
+    name: str,
+    x: float,
+    filled: bool = False,
+    attributes: dict[str, str | float] | None = None,
+    **accepts: Any,
+) -> SceneGoal:
     return SceneGoal(
-        id=name, category="block", position=Vector3(x=x, y=0.2, z=0.02), accepts=accepts
+        id=name,
+        category="block",
+        position=Vector3(x=x, y=0.2, z=0.02),
+        accepts=accepts,
+        filled=filled,
+        attributes=attributes or {},
     )
 
 
@@ -51,13 +62,8 @@ def equal_comparisons(text: str) -> list[str]:
 
 
 def test_feature_columns_belong_to_their_attribute() -> None:
-    assert [attribute_of(c) for c in ("filled", "colour=red", "colour:any", "size_y", "id=p")] == [
-        None,
-        "colour",
-        "colour",
-        "size",
-        "id",
-    ]
+    columns = ("filled", "colour=red", "colour:any", "size_y", "id=p", "goal.colour=red")
+    assert [attribute_of(c) for c in columns] == [None, "colour", "colour", "size", "id", "colour"]
 
 
 def test_a_deciding_attribute_names_the_object_and_what_the_goal_accepts() -> None:
@@ -82,8 +88,9 @@ def test_an_attribute_both_rivals_share_is_no_reason() -> None:
         update={"objects": [obj("block_3", 0.4, colour="red"), obj("block_1", 0.5, colour="red")]}
     )
     text = sentence("block_3", "red_slot_1", [], ["colour=red"], ("block_1", None), scene=both_red)
-    assert (
-        text == "block_3 was chosen rather than block_1 (for goal red_slot_1), on its own features"
+    assert text == (
+        "block_3 was chosen rather than block_1 (for goal red_slot_1, which accepts colour red), "
+        "on its own features"
     )
 
 
@@ -138,3 +145,88 @@ def test_a_task_policy_s_explanation_is_in_the_task_s_terms() -> None:
     ), explanation.sentence
     assert "most important feature: colour" in explanation.sentence
     assert equal_comparisons(explanation.sentence) == []
+
+
+def test_every_key_a_goal_accepts_is_named() -> None:
+    sized = COLOURS.model_copy(
+        update={
+            "goals": [
+                goal("red_slot_1", 0.4, colour="red", size=[0.04, 0.04, 0.04]),
+                goal("blue_slot_0", 0.5, colour="blue"),
+            ]
+        }
+    )
+    text = sentence(
+        "block_3", "red_slot_1", [], ["colour=red"], ("block_1", "blue_slot_0"), scene=sized
+    )
+    assert text.startswith(
+        "block_3 (colour red) to red_slot_1 (accepts colour red and size 4 x 4 x 4 cm) was "
+        "chosen, rather than block_1 (colour blue) or blue_slot_0 (accepts colour blue)"
+    ), text
+    plain = sentence("block_3", "red_slot_1", [], ["filled"], ("block_1", None), scene=sized)
+    assert "(for goal red_slot_1, which accepts colour red and size 4 x 4 x 4 cm)" in plain
+
+
+def scene_with(*goals: SceneGoal) -> Scene:
+    return COLOURS.model_copy(update={"goals": list(goals)})
+
+
+def test_a_goal_the_policy_could_have_used_is_said_to_be_free() -> None:
+    one = scene_with(
+        goal("red_slot_1", 0.4, colour="red"),
+        goal("red_slot_2", 0.3, colour="red"),
+        goal("red_slot_3", 0.2, filled=True, colour="red"),  # filled: not free
+        goal("blue_slot_0", 0.5, colour="blue"),  # does not accept a red block
+    )
+
+    def said(scene: Scene) -> str:
+        return sentence(
+            "block_3", "red_slot_1", [], ["colour=red"], ("block_1", "blue_slot_0"), scene=scene
+        )
+
+    text = said(one)
+    assert text.endswith("; red_slot_2, which also accepts colour red, was free"), text
+    assert "red_slot_3" not in text and text.count("blue_slot_0") == 1
+    two = scene_with(*one.goals, goal("red_slot_4", 0.1, colour="red"))
+    assert said(two).endswith(
+        "; red_slot_2 and red_slot_4, which also accept colour red, were free"
+    )
+    alone = scene_with(goal("red_slot_1", 0.4, colour="red"), goal("blue_slot_0", 0.5))
+    assert said(alone).endswith("; blue_slot_0 was free too")
+
+
+def test_a_free_goal_is_told_by_what_it_shares_or_what_it_accepts() -> None:
+    bins = scene_with(
+        goal("bin_0", 0.4, attributes={"colour": "red"}),
+        goal("bin_1", 0.3, attributes={"colour": "red"}),
+        goal("bin_2", 0.5, attributes={"colour": "blue"}),
+        goal("any_slot", 0.2, colour="red"),
+    )
+    text = sentence("block_3", "bin_0", [], ["goal.colour=red"], ("block_1", "bin_2"), scene=bins)
+    assert text.startswith(
+        "block_3 (colour red) to bin_0 (colour red) was chosen, rather than block_1 (colour "
+        "blue) or bin_2 (colour blue)"
+    ), text
+    assert "; bin_1, which is also colour red, was free" in text
+    assert "; bin_2 was free too" in text  # it accepts any block: free, and nothing shared
+    assert "; any_slot, which accepts colour red, was free" in text
+
+
+def test_a_goal_with_an_object_over_it_is_not_free() -> None:
+    covered = Scene(
+        episode_id="t",
+        stamp=1.0,
+        sequence=0,
+        objects=[
+            obj("block_3", 0.4, colour="red"),
+            SceneObject(
+                id="block_1",
+                category="block",
+                position=Vector3(x=0.3, y=0.2, z=0.06),  # resting over red_slot_2
+                size=Vector3(x=0.04, y=0.04, z=0.04),
+                attributes={"colour": "blue"},
+            ),
+        ],
+        goals=[goal("red_slot_1", 0.4, colour="red"), goal("red_slot_2", 0.3, colour="red")],
+    )
+    assert "free" not in sentence("block_3", "red_slot_1", [], [], scene=covered)

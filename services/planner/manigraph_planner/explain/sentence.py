@@ -17,6 +17,16 @@ apart. Two rules keep it honest:
   goal from its rival, the nodes are described by it: "block_3 (colour red) to red_slot_1
   (accepts colour red) was chosen, rather than block_1 (colour blue) or blue_slot_0 (accepts
   colour blue)".
+
+Two more say what the goals were:
+
+* **Every key of a goal's ``accepts`` is named** wherever the goal is (``red_slot_1 (accepts
+  colour red and size 4 x 4 x 4 cm)``), not only the key that decided; a goal's own
+  attributes (a bin's colour) are named where that attribute decides.
+* **A goal the policy could have used, and that was free, is said**: one that is not filled,
+  has nothing over it, stands on goals already done, and accepts the chosen object
+  ("red_slot_2, which also accepts colour red, was free"; without ``accepts``, "goal_5 was
+  free too"). At most :data:`FREE_NAMED` are named, then how many more.
 """
 
 from __future__ import annotations
@@ -25,9 +35,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from manigraph_planner.gnn.features import FEATURE_SPEC
-from manigraph_shared.messages import ExplainedEdge, Scene
+from manigraph_planner.gnn.task_features import GOAL_PREFIX
+from manigraph_planner.policies.matching import GoalMatching, goal_admits
+from manigraph_planner.scene_geometry import SceneGeometry
+from manigraph_shared.messages import ExplainedEdge, Scene, SceneGoal
 
-__all__ = ["attribute_of", "sentence"]
+__all__ = ["FREE_NAMED", "attribute_of", "free_goals", "sentence"]
+
+#: Free goals named at most; more are counted ("and 3 more").
+FREE_NAMED = 3
 
 _SIZE_COLUMNS = frozenset({"size_x", "size_y", "size_z", "size:any"})
 _CATEGORIES = {code: name for name, code in FEATURE_SPEC.category_codes}
@@ -35,12 +51,13 @@ _CATEGORIES = {code: name for name, code in FEATURE_SPEC.category_codes}
 
 def attribute_of(column: str) -> str | None:
     """The task attribute a feature column belongs to (``colour=red`` -> ``colour``,
-    ``size_y`` -> ``size``), or None for the paper's five columns."""
+    ``size_y`` -> ``size``, a goal's own ``goal.colour=red`` -> ``colour``), or None for the
+    paper's five columns."""
     if column in FEATURE_SPEC.names:
         return None
     if column in _SIZE_COLUMNS:
         return "size"
-    return column.split("=", 1)[0].removesuffix(":any")
+    return column.removeprefix(GOAL_PREFIX).split("=", 1)[0].removesuffix(":any")
 
 
 @dataclass(frozen=True)
@@ -73,15 +90,39 @@ class _Nodes:
                     return f"id {obj.id}"
                 value = obj.attributes.get(attribute)
                 return f"no {attribute}" if value is None else f"{attribute} {_word(value)}"
-        for goal in self.scene.goals:
-            if goal.id == node:
-                accepted = goal.accepts.get(attribute)
-                if accepted is None:
-                    return f"accepts any {attribute}"
-                if attribute == "size" and isinstance(accepted, list):
-                    return f"accepts size {_size(tuple(float(v) for v in accepted))}"
-                return f"accepts {attribute} {_word(accepted)}"
-        return None
+        goal = self.goal(node)
+        if goal is None:
+            return None
+        if attribute in goal.attributes and attribute not in goal.accepts:
+            return f"{attribute} {_word(goal.attributes[attribute])}"
+        accepted = goal.accepts.get(attribute)
+        if accepted is None:
+            return f"accepts any {attribute}"
+        return f"accepts {_accepted(attribute, accepted)}"
+
+    def goal(self, node: str | None) -> SceneGoal | None:
+        if self.scene is None or node is None:
+            return None
+        return next((g for g in self.scene.goals if g.id == node), None)
+
+    def goal_words(self, node: str, deciding: Sequence[str]) -> list[str]:
+        """What to say of a goal: its own deciding attributes, then every key it accepts,
+        then ``accepts any colour`` for a deciding attribute it neither carries nor lists."""
+        goal = self.goal(node)
+        if goal is None:
+            return []
+        own = [
+            f"{a} {_word(goal.attributes[a])}"
+            for a in deciding
+            if a in goal.attributes and a not in goal.accepts
+        ]
+        listed = [_accepted(key, value) for key, value in goal.accepts.items()]
+        words = [*own, *(["accepts " + _join(listed)] if listed else [])]
+        return words + [
+            f"accepts any {a}"
+            for a in deciding
+            if a not in goal.attributes and a not in goal.accepts
+        ]
 
 
 def sentence(
@@ -123,7 +164,69 @@ def sentence(
                 reasons.append(reason)
     for rank, reason in enumerate(reasons):
         text += ("; most important feature: " if rank == 0 else "; then ") + reason
+    if scene is not None:
+        text += _free_clause(scene, chosen_object, chosen_goal)
     return text[:1024]
+
+
+def free_goals(scene: Scene, chosen_object: str, chosen_goal: str) -> list[SceneGoal]:
+    """Goals other than ``chosen_goal`` the policy could have sent ``chosen_object`` to: not
+    filled, nothing over them, every goal under them done, and accepting the object."""
+    obj = next((o for o in scene.objects if o.id == chosen_object), None)
+    if obj is None:
+        return []
+    matching = GoalMatching(scene, SceneGeometry(scene))
+    return [
+        goal
+        for goal in matching.goals
+        if goal.id != chosen_goal and goal_admits(goal, obj) and matching.fillable(goal)
+    ]
+
+
+def _free_clause(scene: Scene, chosen_object: str, chosen_goal: str) -> str:
+    """``; red_slot_2, which also accepts colour red, was free`` (one clause per way of
+    saying what the goals share with the chosen one), or nothing."""
+    chosen = next((g for g in scene.goals if g.id == chosen_goal), None)
+    if chosen is None:
+        return ""
+    said: dict[tuple[str, str], list[str]] = {}
+    for goal in free_goals(scene, chosen_object, chosen_goal):
+        said.setdefault(_alike(goal, chosen), []).append(goal.id)
+    text = ""
+    for (verb, what), ids in said.items():
+        named = ids if len(ids) <= FREE_NAMED else [*ids[:FREE_NAMED], f"{len(ids) - 3} more"]
+        many = len(ids) > 1
+        was = "were" if many else "was"
+        if not verb:
+            text += f"; {_join(named)} {was} free too"
+            continue
+        if many:  # accepts -> accept, is -> are
+            verb = verb.replace("accepts", "accept").replace("is", "are")
+        text += f"; {_join(named)}, which {verb} {what}, {was} free"
+    return text
+
+
+def _alike(goal: SceneGoal, chosen: SceneGoal) -> tuple[str, str]:
+    """What ``goal`` shares with ``chosen``, as a verb and its words: ``also accepts``,
+    ``colour red`` (or ``accepts`` where what it accepts differs); where it accepts anything,
+    ``is also`` and the own attributes it shares; ``("", "")`` when there is nothing to say."""
+    if goal.accepts:
+        listed = _join([_accepted(k, v) for k, v in goal.accepts.items()])
+        also = all(chosen.accepts.get(k) == v for k, v in goal.accepts.items())
+        return ("also accepts" if also else "accepts"), listed
+    shared = [
+        f"{name} {_word(value)}"
+        for name, value in goal.attributes.items()
+        if chosen.attributes.get(name) == value
+    ]
+    return ("is also", _join(shared)) if shared else ("", "")
+
+
+def _accepted(key: str, value: object) -> str:
+    """One key of an ``accepts``, in words: ``colour red``, ``size 4 x 4 x 4 cm``."""
+    if key == "size" and isinstance(value, list | tuple):
+        return f"size {_size(tuple(float(v) for v in value))}"
+    return f"{key} {_word(value)}"
 
 
 def _opening(
@@ -135,18 +238,25 @@ def _opening(
     rival_goal: str | None,
 ) -> str:
     if not deciding:  # the paper's columns only: the contrastive form of before
+
+        def which(goal: str) -> str:
+            said = nodes.goal_words(goal, ())
+            return f"{goal}, which {', '.join(said)}," if said else goal
+
         text = f"{chosen_object} was chosen"
         if rival_object:
             text += f" rather than {rival_object}"
-        return (
-            text
-            + f" (for goal {chosen_goal}"
-            + (f" rather than {rival_goal})" if rival_goal else ")")
-        )
+        text += f" (for goal {which(chosen_goal)}"
+        if rival_goal:
+            text += f" rather than {which(rival_goal)}"
+        return text.removesuffix(",") + ")"
 
     def named(node: str) -> str:
-        said = [nodes.described(node, attribute) for attribute in deciding]
-        shown = [s for s in said if s]
+        if nodes.goal(node) is not None:
+            shown = nodes.goal_words(node, deciding)
+        else:
+            said = [nodes.described(node, attribute) for attribute in deciding]
+            shown = [s for s in said if s]
         return f"{node} ({', '.join(shown)})" if shown else node
 
     text = f"{named(chosen_object)} to {named(chosen_goal)} was chosen"
