@@ -302,6 +302,63 @@ def test_a_late_answer_to_a_goal_click_keeps_the_object_selected_since(
     ]
 
 
+@needs_chromium
+@pytest.mark.timeout(600)
+def test_a_policy_proposes_a_click_corrects_it_and_the_correction_is_recorded(
+    world: Stack, open_page: Any
+) -> None:
+    """``--propose expert`` on a task file whose rule (red to the left bins) only the person
+    knows: the expert proposes any block for any bin and the robot waits; a click corrects
+    the first proposal to the rule, Accept takes the others; the MCAP holds the correction
+    as the label of the scene it was shown on."""
+    task_file = Path(__file__).parents[2] / "examples/tasks/unwritten/colour-place.toml"
+    person, output = open_page("--task-file", str(task_file), "--seed", "5", "--propose", "expert")
+    person.start_episode()
+    person.page.wait_for_selector('#proposal:not([data-object=""])', timeout=WAIT_MS)
+    state = person.state()
+    proposal = state["proposer"]["proposal"]
+    scene = state["scene"]
+    assert all(goal["accepts"] == "" for goal in scene["goals"])  # no rule reaches the page
+    person.page.wait_for_timeout(1000)  # held: nothing moves until the person clicks
+    held = person.state()
+    assert held["episode"]["goals_filled"] == 0 and held["busy"] is None
+    assert held["proposer"]["proposal"] == proposal
+
+    # The correction: a red block to a left bin, not the pair proposed.
+    red = [o["id"] for o in scene["objects"] if o["tag"] == "red"]
+    pair = next(
+        (block, goal)
+        for block in red
+        for goal in ("left_0", "left_1")
+        if (block, goal) != (proposal["object_id"], proposal["goal_id"])
+    )
+    person.click_thing(pair[0])
+    if os.environ.get("MANIGRAPH_DEMO_UI_CORRECT_SCREENSHOT"):
+        person.page.screenshot(path=os.environ["MANIGRAPH_DEMO_UI_CORRECT_SCREENSHOT"])
+    person.click_thing(pair[1])
+    person.wait_message(f"{pair[0]} -> {pair[1]}: corrected, sent")
+    for step in range(3):  # the rest as proposed: Accept
+        person.wait_ready()
+        person.page.wait_for_function(
+            "n => document.getElementById('progress').textContent.includes(`${n} accepted`)"
+            " && !document.getElementById('accept').disabled",
+            arg=step,
+            timeout=WAIT_MS,
+        )
+        person.click("#accept")
+    person.wait_message("demonstration 1 recorded")
+    assert person.clicks == 1 + 2 + 3
+
+    _, pairs = recorded(output)
+    assert len(pairs) == 4
+    corrected, *accepted = pairs
+    shown, action = corrected
+    assert (action.object_id, action.goal_id, action.policy) == (*pair, "human:corrected")
+    assert shown.sequence == action.scene_sequence and not any(g.filled for g in shown.goals)
+    assert (proposal["object_id"], proposal["goal_id"]) != pair  # the label is the person's
+    assert [a.policy for _, a in accepted] == ["human:accepted"] * 3
+
+
 def _dish_plan(scene: dict[str, Any], rng: random.Random) -> tuple[list, list]:
     """Bowls into free top bowl slots, plates into free bottom plate slots (top-bottom)."""
     dishes = {
@@ -460,3 +517,15 @@ def test_up_with_policy_human_refuses_episodes_a_person_must_start() -> None:
     )
     assert result.returncode == CONFIG_EXIT_CODE
     assert "episodes: --policy human: a person starts each episode on the page" in result.stderr
+
+
+def test_up_refuses_a_proposing_policy_without_the_page_to_show_it() -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "manigraph_shared.cli", "up", "--propose", "expert"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert result.returncode == CONFIG_EXIT_CODE
+    assert "propose: only with --policy human" in result.stderr

@@ -421,3 +421,105 @@ def test_the_server_refuses_other_sites_and_anything_but_small_json(
     status, reply = request(port, "POST", "/api/action", b'{"goal_id": "g"}', **json_type)
     assert status == 400 and "click an object first" in str(reply["error"])  # type: ignore[index]
     assert app.episodes == [{"task": "stack"}]
+
+
+# --- a policy proposes, the person accepts or corrects (demo-ui --propose) ----------------------
+def proposing_session(world: World) -> tuple[DemoSession, Sink]:
+    sink = Sink()
+    session = DemoSession(lambda: sink, "demos.mcap", clock=world.tick, proposer="expert")
+    session.expect(world.request)
+    session.on_episode(world.start)
+    session.on_scene(world.scene())
+    return session, sink
+
+
+def test_a_proposal_is_shown_and_held_and_never_sent_by_itself() -> None:
+    world = stack_world()
+    session, _ = proposing_session(world)
+    scene = session.wants_proposal()
+    assert scene is not None and session.snapshot()["proposer"] == {
+        "policy": "expert",
+        "thinking": True,
+        "proposal": None,
+    }
+    session.propose(scene, Click("block_2", "goal_0"))
+    assert session.wants_proposal() is None  # asked once per world
+    proposer = session.snapshot()["proposer"]
+    assert proposer["proposal"]["text"] == "block_2 -> goal_0"  # type: ignore[index]
+    assert not proposer["thinking"]  # type: ignore[index]
+    session.on_scene(world.scene())  # time passes, newer scenes of the same world come ...
+    assert session.pending is None and session.step == 0  # ... and nothing moved
+    assert session.snapshot()["proposer"]["proposal"] is not None  # type: ignore[index]
+
+
+def test_accepting_and_correcting_are_the_person_s_steps_and_say_which_they_were() -> None:
+    world = stack_world()
+    session, sink = proposing_session(world)
+    scene = session.wants_proposal()
+    assert scene is not None
+    session.propose(scene, Click("block_2", "goal_0"))
+    corrected = session.act(Click("block_1", "goal_0"))  # another pair: a correction
+    assert (corrected.object_id, corrected.policy) == ("block_1", "human:corrected")
+    assert corrected.scene_sequence == scene.sequence
+    assert session.snapshot()["proposer"]["proposal"] is None  # type: ignore[index]
+    session.on_status(world.status(corrected, SkillState.SUCCEEDED))
+    assert session.wants_proposal() is None  # the robot's result, not yet a fresh view
+    session.on_scene(world.scene())
+    scene = session.wants_proposal()
+    assert scene is not None  # a new world: the policy is asked again
+    session.propose(scene, Click("block_2", "goal_1"))
+    accepted = session.act(Click("block_2", "goal_1"))  # Accept sends the proposed pair
+    assert accepted.policy == "human:accepted"
+    session.on_status(world.status(accepted, SkillState.SUCCEEDED))
+    session.on_scene(world.scene())
+    session.on_episode(world.end(success=True))
+    ((_, steps, _),) = sink.written
+    assert [(a.object_id, a.goal_id, a.policy) for _, a in steps] == [
+        ("block_1", "goal_0", "human:corrected"),
+        ("block_2", "goal_1", "human:accepted"),
+    ]
+    episode = session.snapshot()["episode"]
+    assert (episode["accepted"], episode["corrected"]) == (1, 1)  # type: ignore[index]
+
+
+def test_a_proposal_for_a_world_that_is_gone_or_one_the_page_would_refuse_is_not_shown() -> None:
+    world = stack_world()
+    session, _ = proposing_session(world)
+    old = session.wants_proposal()
+    assert old is not None
+    moved = session.act(Click("block_2", "goal_0"))  # the person did not wait
+    assert moved.policy == "human"  # nothing was proposed on that world
+    session.on_status(world.status(moved, SkillState.SUCCEEDED))
+    after = world.scene()  # the test's world does not move blocks: it is filled by hand
+    goals = [g.model_copy(update={"filled": g.id == "goal_0"}) for g in after.goals]
+    session.on_scene(after.model_copy(update={"goals": goals}))
+    session.propose(old, Click("block_2", "goal_0"))  # the late answer about the old world
+    assert session.snapshot()["proposer"]["proposal"] is None  # type: ignore[index]
+    scene = session.wants_proposal()
+    assert scene is not None
+    session.propose(scene, Click("ghost", "goal_1"))
+    assert session.snapshot()["proposer"]["proposal"] is None  # type: ignore[index]
+    assert "the page refuses" in session.snapshot()["messages"][-1]["text"]  # type: ignore[index]
+    assert session.wants_proposal() is None  # asked about this world: the person clicks
+
+
+def test_the_proposer_asks_the_policy_in_its_own_thread_and_a_bad_policy_is_refused() -> None:
+    from manigraph_shared.errors import ConfigError
+    from manigraph_tools.demo_ui.proposer import Proposer, load_proposer
+
+    world = stack_world()
+    session, _ = proposing_session(world)
+    stopping = threading.Event()
+    proposer = Proposer(session, load_proposer("expert"), stopping)
+    proposer.start()
+    try:
+        deadline = time.monotonic() + 10
+        while session.snapshot()["proposer"]["proposal"] is None:  # type: ignore[index]
+            assert time.monotonic() < deadline, session.snapshot()["messages"]
+            time.sleep(0.05)
+    finally:
+        stopping.set()
+        proposer.thread.join(5)
+    assert session.pending is None and session.step == 0
+    with pytest.raises(ConfigError, match="propose: policy: 'nobody'"):
+        load_proposer("nobody")

@@ -66,6 +66,7 @@ def _demo_ui_argv(args: argparse.Namespace) -> list[str]:
     values = {
         "http_port": args.demo_port,
         "output": args.demo_output,
+        "propose": args.propose,
         **{
             name: getattr(args, name)
             for name in ("task", "task_file", "blocks", "stacks", "objects", "preference", "seed")
@@ -125,6 +126,13 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         type=Path,
         help=f"with --policy {HUMAN}: MCAP file of the demonstrations "
         "(default demos/demo-ui-<time>.mcap)",
+    )
+    parser.add_argument(
+        "--propose",
+        metavar="POLICY",
+        help=f"with --policy {HUMAN}: this policy (name or checkpoint) proposes each decision on "
+        "the page and the robot waits: one click accepts it, another pair corrects it, and "
+        "both are recorded as demonstrations (docs/demo-ui.md)",
     )
     parser.add_argument(
         "--sim",
@@ -320,6 +328,8 @@ def _up_run(args: argparse.Namespace) -> int:
         raise ConfigError(
             "episodes", f"--policy {HUMAN}: a person starts each episode on the page; leave it out"
         )
+    if args.propose is not None and not human:
+        raise ConfigError("propose", f"only with --policy {HUMAN}: the page shows the proposals")
     if args.policy == NOBODY and plan is not None:
         raise ConfigError(
             "episodes", f"--policy {NOBODY}: your own client starts each episode; leave it out"

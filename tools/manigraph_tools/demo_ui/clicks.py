@@ -15,6 +15,11 @@ from manigraph_shared.orientations import NUM_ORIENTATIONS, ORIENTATION_NAMES, n
 
 #: ``Action.policy`` of every decision a person makes through the page.
 POLICY = "human"
+#: ``Action.policy`` of a decision a policy proposed and the person accepted
+#: (``demo-ui --propose``; docs/demo-ui.md).
+ACCEPTED = "human:accepted"
+#: ``Action.policy`` of a decision the person clicked instead of the one proposed.
+CORRECTED = "human:corrected"
 
 
 class ClickRefused(ManigraphError):
@@ -32,11 +37,17 @@ class Click:
 
 
 def action_for(
-    click: Click, scene: Scene, episode_id: str, step: int, clock: Callable[[], float]
+    click: Click,
+    scene: Scene,
+    episode_id: str,
+    step: int,
+    clock: Callable[[], float],
+    policy: str = POLICY,
 ) -> Action:
     """The ``Action`` for ``click`` on ``scene`` as step ``step`` of ``episode_id``, stamped by
-    ``clock``; :class:`ClickRefused` saying why not where the scene does not allow it (an id
-    it does not have or hides, a goal of another category, a rack it has not)."""
+    ``clock`` and named ``policy``; :class:`ClickRefused` saying why not where the scene does
+    not allow it (an id it does not have or hides, a goal of another category, a rack it has
+    not)."""
     orientation = click.orientation_index
     if click.tray_action is not TrayAction.NONE:
         rack_id = click.tray_action.rack_id
@@ -73,8 +84,18 @@ def action_for(
         goal_id=goal_id,
         orientation_index=orientation,
         tray_action=click.tray_action,
-        policy=POLICY,
+        policy=policy,
         stamp=clock(),
+    )
+
+
+def same_decision(a: Action, b: Action) -> bool:
+    """Whether ``a`` and ``b`` ask the robot for the same thing (ids, stamps and names apart)."""
+    return (a.object_id, a.goal_id, a.orientation_index, a.tray_action) == (
+        b.object_id,
+        b.goal_id,
+        b.orientation_index,
+        b.tray_action,
     )
 
 

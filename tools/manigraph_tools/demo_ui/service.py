@@ -6,6 +6,9 @@ each click becomes, and asks the sim for new episodes (``EpisodeRequest``), as `
 run`` does. It announces itself as ``demo-ui`` (liveliness and heartbeat, so ``manigraph
 doctor`` and ``manigraph up`` see it); on a secure stack it presents the identity ``demo-ui``,
 which the router lets publish actions and reset the world (``manigraph_tools.access``).
+
+With ``--propose P`` a policy, loaded in this process, proposes each decision; the page shows
+it and holds it until the person accepts or corrects it (``proposals.py``, ``proposer.py``).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from manigraph_shared.options import Interval, Options, option
 from manigraph_shared.scene_gate import SceneGate
 from manigraph_shared.service import Service
 from manigraph_tools.demo_ui.http import READY_WAIT, BadRequest, DemoHttpServer, ServiceUnavailable
+from manigraph_tools.demo_ui.proposer import Proposer, load_proposer
 from manigraph_tools.demo_ui.session import Click, DemoSession
 from manigraph_tools.episodes import read_task_file
 
@@ -51,6 +55,11 @@ class DemoUiOptions(Options):
     objects: int | None = option(None, help="dishes (dishwasher; default 10)", within=AT_LEAST_ONE)
     preference: str | None = option(None, help="dishwasher: top-bottom (default) or left-right")
     seed: int = option(0, help="seed of the first episode", within=Interval(0, None))
+    propose: str | None = option(
+        None,
+        help="a policy (name or checkpoint) that proposes each decision on the page: one click "
+        "accepts it, another pair corrects it (docs/demo-ui.md)",
+    )
 
     def output_path(self) -> Path:
         """The file to write: ``output`` (default ``demos/demo-ui-<time>.mcap``), or, if that
@@ -74,9 +83,14 @@ class DemoUiService(Service):
         self.options = options
         self.output = options.output_path()
         self.task_file = read_task_file(options.task_file)
-        self.session = DemoSession(self._open_log, str(self.output))
+        self.session = DemoSession(self._open_log, str(self.output), proposer=options.propose)
         self.gate = SceneGate()
         self.stopping = threading.Event()
+        self.proposer = (
+            None
+            if options.propose is None
+            else Proposer(self.session, load_proposer(options.propose), self.stopping)
+        )
         self._log: DemonstrationLog | None = None
         self._episodes = 0
         try:
@@ -104,6 +118,9 @@ class DemoUiService(Service):
         self.on(SkillStatus, self.session.on_status)
         self.bus.watch_alive(self.session.on_alive)
         self._server_thread.start()
+        if self.proposer is not None:
+            self.proposer.start()
+            self.log.info("%s proposes each decision on the page", self.options.propose)
         self.log.info("demonstration page: %s (demonstrations go to %s)", self.url, self.output)
 
     def _on_episode(self, event: EpisodeEvent) -> None:

@@ -13,6 +13,9 @@ wires it to both). It follows the world as the planner does (:mod:`manigraph_pla
 * what the skills (or the world behind them) refuse, e.g. ``rack_closed``, ``top_rack_open``,
   ``slot_taken``, ``object_covered``, comes back as a failed ``SkillStatus``: the page shows its
   reason and the step is **not** part of the demonstration;
+* with a proposing policy (``demo-ui --propose``, :mod:`.proposals`) its decision for the
+  world is shown and held, never sent: the person's click sends it (accepted) or another pair
+  (corrected), and the step records which;
 * a demonstration is the episode's succeeded steps, each with the scene it was decided on; it is
   written only when the world ends the episode with success. An episode that fails, or that is
   left for a new one, is discarded with a message: a demonstration is never broken.
@@ -42,7 +45,15 @@ from manigraph_shared.messages import (
     TrayAction,
 )
 from manigraph_shared.orientations import ORIENTATION_NAMES
-from manigraph_tools.demo_ui.clicks import Click, ClickRefused, action_for, describe
+from manigraph_tools.demo_ui.clicks import (
+    ACCEPTED,
+    CORRECTED,
+    Click,
+    ClickRefused,
+    action_for,
+    describe,
+)
+from manigraph_tools.demo_ui.proposals import Proposals
 from manigraph_tools.demo_ui.scene_view import same_world, scene_view
 
 #: A decision whose skill never reports is given up after this long (seconds).
@@ -90,6 +101,7 @@ class DemoSession:
         output: str,
         clock: Callable[[], float] = time.time,
         decision_timeout: float = DECISION_TIMEOUT,
+        proposer: str | None = None,
     ) -> None:
         self._open_sink = sink
         self._sink: DemonstrationSink | None = None
@@ -114,6 +126,7 @@ class DemoSession:
         self.planner_alive = False
         self.skills_alive = True
         self.messages: deque[dict[str, object]] = deque(maxlen=MESSAGES_KEPT)
+        self.proposals = Proposals(proposer)
 
     # --- what the page sees ------------------------------------------------------------------
     def say(self, level: str, text: str) -> None:
@@ -184,8 +197,11 @@ class DemoSession:
                     "objects_placed": sum(o.filled for o in objects),
                     "objects_total": len(objects),
                     "steps_recorded": len(self.steps),
+                    "accepted": sum(a.policy == ACCEPTED for _, a in self.steps),
+                    "corrected": sum(a.policy == CORRECTED for _, a in self.steps),
                     "refused": self.refused,
                 },
+                "proposer": self.proposals.view(scene, self._wants_proposal() is not None),
                 "pending": None if pending is None else describe(pending),
                 "scene": scene_view(scene) if scene is not None else None,
                 "orientations": list(ORIENTATION_NAMES),
@@ -284,6 +300,30 @@ class DemoSession:
                 self._give_up(f"no result within {self.decision_timeout:g} s")
                 self._changed()
 
+    # --- proposals (demo-ui --propose) ------------------------------------------------------
+    def wants_proposal(self) -> Scene | None:
+        """The scene to ask the proposing policy about: the robot is free and the policy has
+        not been asked about this world yet (None: nothing to ask)."""
+        with self._lock:
+            return self._wants_proposal()
+
+    def _wants_proposal(self) -> Scene | None:
+        scene = self.scene
+        if scene is None or self._busy_reason() is not None:
+            return None
+        return scene if self.proposals.wanted(scene) else None
+
+    def propose(self, scene: Scene, click: Click | None) -> None:
+        """The policy's decision on ``scene`` (None: it has none), shown and held until the
+        person clicks; dropped if the world has changed since it was asked."""
+        with self._lock:
+            if self._wants_proposal() is None or scene.episode_id != self.episode_id:
+                return
+            if not same_world(self.scene, scene):
+                return  # decided on a world that is gone: it is asked again
+            level, text = self.proposals.offer(scene, click, self.step, self.clock)
+            self.say(level, text)
+
     # --- clicks ------------------------------------------------------------------------------
     def act(self, click: Click, wait: float = 0.0) -> Action:
         """The ``Action`` for ``click`` on the current scene (the caller publishes it), or
@@ -303,9 +343,13 @@ class DemoSession:
                 self.say("error", str(refusal))
                 raise
             assert self.scene is not None
+            label = self.proposals.label(action, self.scene)
+            action = action.model_copy(update={"policy": label})
+            self.proposals.forget()
             self.pending = _Pending(action, self.scene, time.monotonic())
             self.step += 1
-            self.say("info", f"{describe(action)}: sent")
+            said = {ACCEPTED: ": accepted, sent", CORRECTED: ": corrected, sent"}
+            self.say("info", f"{describe(action)}{said.get(label, ': sent')}")
             return action
 
     def _action_for(self, click: Click) -> Action:
@@ -326,6 +370,7 @@ class DemoSession:
         self.steps = []
         self.refused = 0
         self.finished = False
+        self.proposals.forget()
 
     def _leave_episode(self, why: str) -> None:
         if self.episode_id is not None and not self.finished and self.steps:

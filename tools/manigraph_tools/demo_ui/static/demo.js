@@ -8,6 +8,10 @@
 // refused and nothing else was selected meanwhile. Nor does the page say "ready" while a
 // click is on its way or on a state older than a click's answer: it waits for the server's
 // state after that click.
+//
+// With a proposing policy (demo-ui --propose) the server sends its proposal for the world; the
+// page highlights it (object, goal, an arrow between them) and holds it. Only a click sends
+// anything: Accept sends the proposed pair, an object and a goal clicked send that pair.
 "use strict";
 
 const SVG = "http://www.w3.org/2000/svg";
@@ -106,6 +110,29 @@ async function clickTray(tray) {
   await sendAction({ tray_action: tray });
 }
 
+function currentProposal() {
+  const proposer = page.state && page.state.proposer;
+  return proposer ? proposer.proposal : null;
+}
+
+async function acceptProposal() {
+  const proposal = currentProposal();
+  if (!proposal || page.sending > 0) return;
+  page.selected = null;
+  page.orientation = null;
+  renderSelection();
+  renderOrientations();
+  const click =
+    proposal.tray_action !== "none"
+      ? { tray_action: proposal.tray_action }
+      : {
+          object_id: proposal.object_id,
+          goal_id: proposal.goal_id,
+          orientation_index: proposal.orientation_index,
+        };
+  await sendAction(click);
+}
+
 // The robot is not "ready" from the click until the page has seen the state after it.
 async function sendAction(body) {
   page.sending += 1;
@@ -116,6 +143,7 @@ async function sendAction(body) {
     page.clickVersion = Math.max(page.clickVersion, reply.version);
   }
   renderRobot();
+  renderProposal();
   return reply;
 }
 
@@ -156,9 +184,11 @@ function render() {
   $("progress").textContent = episode
     ? `${done} · ${episode.steps_recorded} ` +
       `steps demonstrated · ${episode.refused} refused` +
+      (state.proposer ? ` · ${episode.accepted} accepted · ${episode.corrected} corrected` : "") +
       (episode.ended ? (episode.success ? " · success" : " · failed") : "")
     : "–";
   renderRobot();
+  renderProposal();
   const recorded = state.recorded;
   $("recorded").textContent =
     `${recorded.demonstrations} demonstration${recorded.demonstrations === 1 ? "" : "s"} ` +
@@ -191,6 +221,25 @@ function renderRobot() {
   if (busy === undefined) return; // no state yet: the page's "–"
   robot.dataset.ready = String(busy === null);
   robot.textContent = busy === null ? "ready: your move" : busy;
+}
+
+function renderProposal() {
+  const proposer = page.state && page.state.proposer;
+  const box = $("proposal");
+  box.hidden = !proposer;
+  if (!proposer) return;
+  const proposal = proposer.proposal;
+  box.dataset.object = proposal ? proposal.object_id : "";
+  box.dataset.goal = proposal ? proposal.goal_id : "";
+  $("proposal-text").textContent = proposal
+    ? `${proposer.policy} proposes ${proposal.text}`
+    : proposer.thinking
+      ? `${proposer.policy} is deciding…`
+      : `${proposer.policy}: no proposal now`;
+  $("accept").disabled = !proposal || page.sending > 0;
+  for (const button of document.querySelectorAll("#racks button")) {
+    button.classList.toggle("proposed", !!proposal && proposal.tray_action === button.dataset.tray);
+  }
 }
 
 function fillForm(defaults) {
@@ -290,7 +339,30 @@ function drawViews() {
     if (name === "top") drawRacks(svg, view, scene);
     else drawRackLevels(svg, view, scene, box);
     for (const item of drawOrder(scene, name)) drawItem(svg, view, item);
+    drawProposal(svg, view, scene);
   }
+}
+
+// The proposed move as an arrow from the object to its goal, in the top view (clicks go
+// through it; in the side view, where things line up behind each other, the halos say it).
+function drawProposal(svg, view, scene) {
+  const proposal = currentProposal();
+  if (!proposal || proposal.tray_action !== "none" || !view.origin) return;
+  const item = scene.objects.find((o) => o.id === proposal.object_id);
+  const goal = scene.goals.find((g) => g.id === proposal.goal_id);
+  if (!item || !goal) return;
+  const defs = element("defs", {}, svg);
+  const marker = element(
+    "marker",
+    { id: `${view.svg}-head`, viewBox: "0 0 10 10", refX: 9, refY: 5, markerWidth: 6, markerHeight: 6, orient: "auto-start-reverse" },
+    defs,
+  );
+  element("path", { d: "M 0 0 L 10 5 L 0 10 z", class: "proposal-head" }, marker);
+  element(
+    "line",
+    { class: "proposal-arrow", x1: view.u(item), y1: view.v(item), x2: view.u(goal), y2: view.v(goal), "marker-end": `url(#${view.svg}-head)` },
+    svg,
+  );
 }
 
 // Extents along the view's two axes, mm (the extent array is along world x, y, z, metres).
@@ -401,6 +473,11 @@ function drawItem(svg, view, item) {
   if (item.filled) classes.push("filled");
   if (!item.visible) classes.push("hidden");
   if (item.kind === "object" && item.id === page.selected) classes.push("selected");
+  const proposal = currentProposal();
+  const proposed =
+    proposal && proposal.tray_action === "none" &&
+    item.id === (item.kind === "object" ? proposal.object_id : proposal.goal_id);
+  if (proposed) classes.push("proposed");
   const group = element("g", { class: classes.join(" "), "data-id": item.id }, svg);
   const rect = element(
     "rect",
@@ -409,6 +486,14 @@ function drawItem(svg, view, item) {
   );
   // The task's own colour: an object is filled with it, a goal outlined in what it accepts.
   if (item.fill) rect.style[item.kind === "object" ? "fill" : "stroke"] = item.fill;
+  if (proposed) {
+    const halo = 7;
+    element(
+      "rect",
+      { class: "halo", x: view.u(item) - eu / 2 - halo, y: view.v(item) - ev / 2 - halo, width: eu + 2 * halo, height: ev + 2 * halo, rx: 4 },
+      group,
+    );
+  }
   const orientation = page.state.orientations[item.orientation];
   const words = item.kind === "object" ? item.label : item.accepts && `accepts ${item.accepts}`;
   element("title", {}, group).textContent =
@@ -434,6 +519,7 @@ function drawItem(svg, view, item) {
 $("episode-form").addEventListener("submit", startEpisode);
 $("task").addEventListener("change", showTaskFields);
 $("clear-selection").addEventListener("click", () => clickObject(page.selected));
+$("accept").addEventListener("click", acceptProposal);
 for (const button of document.querySelectorAll("#racks button")) {
   button.addEventListener("click", () => clickTray(button.dataset.tray));
 }
