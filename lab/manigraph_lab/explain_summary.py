@@ -361,10 +361,18 @@ def run_summary(args: Namespace) -> int:
         f"success {head['success_rate']:.2f}",
         *([f"rule violations {head['rule_violations']}"] if rules is not None else []),
         f"{table.placements} placements",
-        *([f"{table.refused_decisions} refused decisions"] if table.refused_decisions else []),
-        *([f"{len(refused)} seeds refused"] if refused else []),
+        *(
+            [_counted(table.refused_decisions, "refused decision")]
+            if table.refused_decisions
+            else []
+        ),
+        *([_counted(len(refused), "refused seed")] if refused else []),
     ]
     print(", ".join(said))
     print()
     print(table.markdown())
     return 0
+
+
+def _counted(count: int, noun: str) -> str:
+    return f"{count} {noun}" + ("" if count == 1 else "s")
