@@ -57,6 +57,16 @@ def test_scenes_without_attributes_or_accepts_keep_the_papers_five_columns() -> 
     assert scene_to_graph(plain).x.shape == (2, 5)
 
 
+def test_blocks_of_several_sizes_bring_the_size_columns_without_any_attribute() -> None:
+    sizes = scene([obj("small", 0.4, size=0.03), obj("big", 0.5, size=0.07)], [goal("g", 0.4)])
+    task = TaskFeatures.learn([sizes])
+    assert task is not None and task.attributes == ()
+    spec = FeatureSpec.for_task(task)
+    assert spec.names[5:] == ("size_x", "size_y", "size_z", "size:any")
+    x = scene_to_graph(sizes, spec).x
+    assert x[1, column(spec, "size_z")] == pytest.approx(0.7)  # what "big" is, in decimetres
+
+
 def test_vocabulary_one_hot_numeric_scale_and_ids_are_learned() -> None:
     task = TaskFeatures.learn([COLOURS])
     assert task is not None

@@ -291,8 +291,9 @@ class TaskFeatures:
 
     @classmethod
     def learn(cls, scenes: Iterable[Scene]) -> TaskFeatures | None:
-        """The columns the scenes' attributes and accepts need; None when no object carries an
-        attribute and no goal lists what it accepts (the paper's five columns then).
+        """The columns the scenes' attributes and accepts need; None when no object or goal
+        carries an attribute, no goal lists what it accepts and the objects of each category
+        are all of one size (the paper's five columns then).
 
         Raises:
             ValueError: an attribute is text on one object and a number on another.
@@ -300,10 +301,14 @@ class TaskFeatures:
         values: dict[str, list[str | float]] = {}
         ids: set[str] = set()
         owned: set[str] = set()
+        sizes: dict[str, set[tuple[float, ...]]] = {}
         seen = False
         for scene in scenes:
             for obj in scene.objects:
                 seen = seen or bool(obj.attributes)
+                sizes.setdefault(str(obj.category), set()).add(
+                    tuple(round(extent, 4) for extent in obj.size.as_tuple())
+                )
                 for name, value in obj.attributes.items():
                     values.setdefault(name, []).append(value)
             for goal in scene.goals:
@@ -317,6 +322,9 @@ class TaskFeatures:
                         ids.add(accepted)
                     elif name != "size" and not isinstance(accepted, list):
                         values.setdefault(name, []).append(accepted)
+        # Objects of one category in several sizes: the size columns let a rule nobody
+        # wrote be read off sizes (big flat ones to the back row, largest at the bottom).
+        seen = seen or any(len(found) > 1 for found in sizes.values())
         if not seen:
             return None
         columns = [_columns(name, found) for name, found in sorted(values.items())]
