@@ -21,6 +21,11 @@ demonstrations, made the figure.
 
     uv run python bench/bench_task_files.py                      # every family
     uv run python bench/bench_task_files.py --family size-sort   # one
+    uv run python bench/bench_task_files.py --family unwritten/colour-place \
+        --trajectories 10 --seeds 0 1 2 --arch gat               # a rule nobody wrote
+
+The ``unwritten/`` families (issue #49) are demonstrated and judged by their rules file
+(``--rules``), which the policy never sees; their success counts only if the rule held.
 """
 
 from __future__ import annotations
@@ -42,6 +47,25 @@ FAMILIES = {
     "kitting": ("kitting.toml", ("kitting-6.toml",)),
     "red-tower": ("red-tower.toml", ("red-tower-8.toml",)),
 }
+#: Rules nobody wrote (issue #49): the task file has no rule, ``<file>.rules.toml`` beside it
+#: is what the teacher (demos) and the judge (eval) follow, never the policy.
+UNWRITTEN = {
+    f"unwritten/{name}": (f"unwritten/{name}.toml", tuple(f"unwritten/{name}-{n}.toml" for n in ns))
+    for name, ns in (
+        ("colour-place", (8, 12)),
+        ("same-colour", (8, 12)),
+        ("red-only-tower", (8, 12)),
+        ("flat-back", (8, 12)),
+        ("size-tower", (6, 9)),
+    )
+}
+FAMILIES.update(UNWRITTEN)
+
+
+def rules_of(task_file: str) -> list[str]:
+    """``--rules R`` for an unwritten family's file, else nothing."""
+    rules = TASKS / task_file.replace(".toml", ".rules.toml")
+    return ["--rules", str(rules)] if task_file.startswith("unwritten/") else []
 
 
 def manigraph(*args: str) -> tuple[float, str]:
@@ -67,8 +91,8 @@ def verdict(learned: float, baseline: float, margin: float) -> str:
 def score(model: Path, evaluated: str, episodes: int, accepts_filter: str) -> tuple[float, dict]:
     seconds, stdout = manigraph(
         "eval", "--policy", str(model), "--task-file", str(TASKS / evaluated),
-        "--episodes", str(episodes), "--seed", "2000", "--json",
-        "--accepts-filter", accepts_filter,
+        *rules_of(evaluated), "--episodes", str(episodes), "--seed", "2000", "--json",
+        *(["--accepts-filter", "off"] if accepts_filter == "off" else []),
     )  # fmt: skip
     return seconds, json.loads(stdout.strip().splitlines()[-1])
 
@@ -84,33 +108,40 @@ def main() -> int:
         default=0.10,
         help="a baseline within this much of the learned success: no learning (default 0.10)",
     )
+    parser.add_argument("--trajectories", type=int, default=20, help="demonstrations (20)")
+    parser.add_argument(
+        "--seeds", type=int, nargs="+", default=[0], help="training seeds, a row each (0)"
+    )
+    parser.add_argument("--train-args", default="", help="more train flags, e.g. '--grow 8'")
     args = parser.parse_args()
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench-task-files-") as scratch:
         out = Path(scratch)
-        for family in args.family or list(FAMILIES):
+        for family, seed in ((f, s) for f in args.family or list(FAMILIES) for s in args.seeds):
             small, large = FAMILIES[family]
-            demos, model = out / f"{family}.mcap", out / f"{family}.pt"
-            baseline = out / f"{family}-1-epoch.pt"
-            t_demos, _ = manigraph(
-                "demos", "--task-file", str(TASKS / small), "--trajectories", "20",
-                "--seed", "0", "-o", str(demos),
-            )  # fmt: skip
-            t_train, _ = manigraph(
-                "train", str(demos), "--arch", args.arch, "--seed", "0", "-o", str(model)
-            )
-            manigraph(
-                "train", str(demos), "--arch", args.arch, "--seed", "0", "--epochs", "1",
-                "-o", str(baseline),
-            )  # fmt: skip
+            name = family.replace("/", "-")
+            demos, model = out / f"{name}.mcap", out / f"{name}-{seed}.pt"
+            baseline = out / f"{name}-{seed}-1-epoch.pt"
+            t_demos = 0.0
+            if not demos.exists():
+                t_demos, _ = manigraph(
+                    "demos", "--task-file", str(TASKS / small), *rules_of(small),
+                    "--trajectories", str(args.trajectories), "--seed", "0", "-o", str(demos),
+                )  # fmt: skip
+            train = ["train", str(demos), "--arch", args.arch, "--seed", str(seed)]
+            t_train, _ = manigraph(*train, *args.train_args.split(), "-o", str(model))
+            manigraph(*train, "--epochs", "1", "-o", str(baseline))
+            # A file without accepts has no filter to turn off: scored once.
+            filters = ("on",) if family in UNWRITTEN else ("on", "off")
             for index, evaluated in enumerate(large):
-                for accepts_filter in ("on", "off"):
+                for accepts_filter in filters:
                     t_eval, summary = score(model, evaluated, args.episodes, accepts_filter)
                     _, base = score(baseline, evaluated, args.episodes, accepts_filter)
                     teach = t_demos + t_train + t_eval
                     first = index == 0 and accepts_filter == "on"
                     row = {
                         "family": family,
+                        "seed": seed,
                         "demonstrated": small,
                         "evaluated": evaluated,
                         "accepts_filter": accepts_filter,
@@ -121,6 +152,7 @@ def main() -> int:
                         ),
                         "wrong_object": summary.get("wrong_object", 0),
                         "rule_violations": summary.get("rule_violations"),
+                        "baseline_rule_violations": base.get("rule_violations"),
                         "demos_s": round(t_demos, 1),
                         "train_s": round(t_train, 1),
                         "eval_s": round(t_eval, 1),
@@ -130,17 +162,18 @@ def main() -> int:
                     rows.append(row)
                     print(json.dumps(row), file=sys.stderr, flush=True)
     print(
-        f"| family | demonstrated | evaluated | filter | success | 1-epoch baseline "
-        f"| (margin {args.margin:.2f}) | wrong object | demos s | train s | eval s "
-        "| teach to run s | load |"
+        f"| family | seed | evaluated | filter | success | 1-epoch baseline "
+        f"| (margin {args.margin:.2f}) | wrong object | rule violations | demos s | train s "
+        "| eval s | teach to run s | load |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         teach = "-" if r["teach_to_run_s"] is None else f"{r['teach_to_run_s']:.1f}"
         print(
-            f"| {r['family']} | {r['demonstrated']} | {r['evaluated']} | {r['accepts_filter']} "
+            f"| {r['family']} | {r['seed']} | {r['evaluated']} | {r['accepts_filter']} "
             f"| {r['success']:.2f} | {r['baseline_1_epoch']:.2f} | {r['verdict']} "
-            f"| {r['wrong_object']} | {r['demos_s']:.1f} | {r['train_s']:.1f} "
+            f"| {r['wrong_object']} | {r['rule_violations']} | {r['demos_s']:.1f} "
+            f"| {r['train_s']:.1f} "
             f"| {r['eval_s']:.1f} | {teach} | {r['load']:.2f} |"
         )
     print(json.dumps({"rows": rows}))
