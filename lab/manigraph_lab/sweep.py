@@ -26,11 +26,15 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
+from manigraph_lab.ray_local import local_ray
 from manigraph_shared.errors import ConfigError, ManigraphError
 from manigraph_shared.progress import Progress
 
 #: How long the address check waits for a cluster's head to answer.
 PROBE_SECONDS = 3.0
+
+#: An argument of at least this size, shared by several jobs, is put in Ray's object store once.
+SHIP_ONCE_BYTES = 64 * 1024
 
 
 @dataclass(frozen=True)
@@ -184,7 +188,10 @@ def _probe(address: str) -> None:
 @contextmanager
 def ray_session(options: SweepOptions) -> Iterator[Any]:
     """The ``ray`` module, connected: a session this process already holds (kept open), the
-    cluster at ``options.ray_address``, or a local one of ``options.workers`` CPUs."""
+    cluster at ``options.ray_address``, or a local one of ``options.workers`` CPUs.
+
+    A local session leaves nothing behind (:func:`manigraph_lab.ray_local.local_ray`).
+    """
     if options.ray_address is not None:
         _probe(options.ray_address)
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # no network calls from a sweep
@@ -195,17 +202,20 @@ def ray_session(options: SweepOptions) -> Iterator[Any]:
         return
     # The cells print nothing; what goes wrong comes back as their exceptions.
     common: dict[str, Any] = {"log_to_driver": False, "logging_level": logging.WARNING}
-    try:
-        if options.ray_address is None:
-            ray.init(num_cpus=options.worker_count, include_dashboard=False, **common)
-        else:
+    if options.ray_address is not None:
+        try:
             ray.init(address=options.ray_address, **common)
-    except (ConnectionError, TimeoutError) as exc:
-        raise ConfigError("ray_address", f"could not join {options.ray_address}: {exc}") from exc
-    try:
+        except (ConnectionError, TimeoutError) as exc:
+            raise ConfigError(
+                "ray_address", f"could not join {options.ray_address}: {exc}"
+            ) from exc
+        try:
+            yield ray
+        finally:
+            ray.shutdown()
+        return
+    with local_ray(ray, options.worker_count, include_dashboard=False, **common):
         yield ray
-    finally:
-        ray.shutdown()
 
 
 def _describe(exc: BaseException) -> str:
@@ -285,8 +295,19 @@ def _run_on_ray(
         # One CPU per task; no retry of a cell that raised (the default retries only crashes).
         task = ray.remote(num_cpus=1)(_call_in_task)
         refs: dict[str, Any] = {}
+        shipped: dict[int, Any] = {}  # id of a large argument -> its copy in the object store
+
+        def ship(arg: Any) -> Any:
+            """A large argument several jobs share (a checkpoint, the demonstrations) goes
+            to the object store once, not once per job."""
+            if not isinstance(arg, bytes) or len(arg) < SHIP_ONCE_BYTES:
+                return arg
+            if id(arg) not in shipped:
+                shipped[id(arg)] = ray.put(arg)
+            return shipped[id(arg)]
+
         for job in jobs:
-            args = [refs[a.name] if isinstance(a, Needs) else a for a in job.args]
+            args = [refs[a.name] if isinstance(a, Needs) else ship(a) for a in job.args]
             refs[job.name] = task.remote(job.fn, options.task_threads, *args)
         by_ref = {ref: job for job, ref in zip(jobs, refs.values(), strict=True)}
         outcomes: dict[str, Outcome] = {}

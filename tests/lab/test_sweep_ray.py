@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_lab import ray_local
 from manigraph_lab.demos import DemoProtocol, record_demos
 from manigraph_lab.suite import run_suite
 from manigraph_lab.sweep import Job, SweepError, SweepOptions, run_jobs
@@ -31,9 +32,8 @@ def local_ray() -> Iterator[None]:
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
     import ray
 
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
-    yield
-    ray.shutdown()
+    with ray_local.local_ray(ray, 2, include_dashboard=False, log_to_driver=False):  # no /tmp/ray
+        yield
 
 
 @pytest.fixture(scope="module")
