@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from manigraph_lab.in_process import InProcessGripperTransport, InProcessJointTransport
-from manigraph_planner.decisions import DecisionMaker
+from manigraph_planner.decisions import DecisionMaker, OutOfOptions
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.messages import (
     Action,
@@ -142,7 +142,10 @@ def run_episode(
         truth = backend.scene(clock())
         assert truth is not None
         observed = add_noise(truth, noise, rng)
-        action = planner.on_scene(observed)
+        try:
+            action = planner.on_scene(observed)
+        except OutOfOptions as exc:  # every option refused: the episode ends, naming them
+            return EpisodeRecord(request, start, _stuck(backend, clock(), exc.why), steps)
         if action is None:
             return EpisodeRecord(request, start, _stuck(backend, clock()), steps)
         status = skill.execute(action, truth, report=backend.skill_finished)
@@ -150,10 +153,13 @@ def run_episode(
         steps.append(Step(observed, action, status.state is SkillState.SUCCEEDED, status.reason))
 
 
-def _stuck(backend: SimBackend, stamp: float) -> EpisodeEvent:
-    """The policy had nothing to do before the goals were filled: a failed episode."""
+def _stuck(
+    backend: SimBackend, stamp: float, why: str = "policy had nothing to do"
+) -> EpisodeEvent:
+    """The policy had nothing to do (or nothing the skills would not refuse) before the goals
+    were filled: a failed episode, ending for ``why``."""
     assert isinstance(backend, EpisodeBackend)
     backend.ended = True
     end = backend.end_event(stamp)
     assert end is not None
-    return end.model_copy(update={"reason": "policy had nothing to do"})
+    return end.model_copy(update={"reason": why[:256]})

@@ -9,6 +9,7 @@ from typing import TextIO
 
 from manigraph_lab.episode_loop import EpisodeRecord, run_episode
 from manigraph_planner.policies.base import Policy
+from manigraph_shared.decision_failure import OUT_OF_OPTIONS
 from manigraph_shared.errors import DrawRefused
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.progress import Progress
@@ -126,6 +127,10 @@ def summarize(
             else {}
         ),
         "infeasible_actions": failures,
+        # The skills' refusals by reason (the same count as infeasible_actions, by the name
+        # `run` and `up --episodes` give it), and the episodes that ran out of options.
+        "refusals": dict(sorted(failures.items(), key=lambda item: -item[1])),
+        "out_of_options": sum(r.end.reason.startswith(OUT_OF_OPTIONS) for r in records),
         "decisions_per_second": decisions / seconds if seconds > 0 else 0.0,
         "seconds": round(seconds, 3),
     }

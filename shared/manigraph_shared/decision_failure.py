@@ -10,6 +10,11 @@ episode. The run client reads that status, ends the episode at once with reason
 ``cannot_decide: <why>`` and ends the run: the checkpoint cannot serve this task, so ``run``
 and ``up --episodes`` exit with the configuration status (78), naming it.
 
+A planner whose every option in an episode was refused by the skills (on a world that has not
+changed where it matters: ``manigraph_planner.refusals``) says so the same way, with a why that
+starts ``out_of_options``: that episode alone is over, so the run client ends it with reason
+``out_of_options: ...`` and goes on with the next one.
+
 The status's ``detail`` is ``cannot_decide: episode <id>: <why>``; an episode id has no
 spaces (``Identifier``), so the first ``": "`` after it ends it.
 """
@@ -22,6 +27,8 @@ from manigraph_shared.messages import ServiceState, ServiceStatus
 #: The reason of an episode its planner could not decide on, and the head of that status.
 CANNOT_DECIDE = "cannot_decide"
 _HEAD = f"{CANNOT_DECIDE}: episode "
+#: The head of the why of an episode whose every option was refused (not the run's fault).
+OUT_OF_OPTIONS = "out_of_options"
 
 
 class CannotDecide(PolicyError):

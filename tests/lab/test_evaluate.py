@@ -34,7 +34,11 @@ def test_infeasible_actions_fail_honestly_and_are_counted() -> None:
         AlwaysTheBottomBlock(), EvalSpec("stack", blocks=3, episodes=2), progress=None
     )
     assert summary["success_rate"] == 0.0
-    assert summary["infeasible_actions"] == {"object_covered": 2 * (2 * 3 + 4)}
+    # Refused once per episode: its only option, refused on a world that did not change, is
+    # not asked again, and the episode ends out of options (it ran to its step budget,
+    # 2 * 3 + 4 refusals, before issue 51).
+    assert summary["infeasible_actions"] == summary["refusals"] == {"object_covered": 2}
+    assert summary["out_of_options"] == 2
 
 
 def test_noise_is_seeded_and_reaches_only_the_observation() -> None:

@@ -66,7 +66,7 @@ def test_registered_policy_by_name() -> None:
 
 
 def status(decision_id: str, state: str, stamp: float) -> SkillStatus:
-    reason = "object_covered" if state == "failed" else None
+    reason = "grasp_slipped" if state == "failed" else None  # retried: not a refusal
     return SkillStatus(decision_id=decision_id, skill="p", state=state, reason=reason, stamp=stamp)
 
 

@@ -82,7 +82,7 @@ UNCHANGED = ([obj("a", 0.5, 0), obj("b", 0.5, 1)], [slot("g0", 0.3, 0), slot("g1
 
 def test_a_decision_that_changed_nothing_gives_way_to_the_next_pair_then_escalates() -> None:
     policy = Preferences(("a", "g0"), ("a", "g1"), ("b", "g0"), ("b", "g1"))
-    actions = play(DecisionMaker(policy), [UNCHANGED] * 4, ["object_covered"] * 4)
+    actions = play(DecisionMaker(policy), [UNCHANGED] * 4, [None] * 4)
     chosen = [(a.object_id, a.goal_id, a.rank, a.recovery) for a in actions]
     assert chosen == [
         ("a", "g0", 0, None),  # the policy's own choice
@@ -100,7 +100,7 @@ def test_a_policy_may_have_an_object_passed_over_after_one_pair() -> None:
         object_escalation = 1
 
     policy = OneFailure(("a", "g0"), ("a", "g1"), ("b", "g0"), ("b", "g1"))
-    actions = play(DecisionMaker(policy), [UNCHANGED] * 3, ["object_covered"] * 3)
+    actions = play(DecisionMaker(policy), [UNCHANGED] * 3, [None] * 3)
     assert [(a.object_id, a.goal_id, a.recovery) for a in actions] == [
         ("a", "g0", None),
         ("b", "g0", "no_progress"),  # not a's other slot (with two, as above, it is)
@@ -112,7 +112,7 @@ def test_a_policy_may_have_an_object_passed_over_after_one_pair() -> None:
 
 def test_every_alternative_failed_the_first_choice_again_marked_exhausted() -> None:
     policy = Preferences(("a", "g0"), ("b", "g0"))
-    actions = play(DecisionMaker(policy), [UNCHANGED] * 3, ["object_covered"] * 3)
+    actions = play(DecisionMaker(policy), [UNCHANGED] * 3, [None] * 3)
     assert [(a.object_id, a.recovery) for a in actions] == [
         ("a", None),
         ("b", "no_progress"),

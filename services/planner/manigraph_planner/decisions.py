@@ -7,9 +7,11 @@ import time
 from collections import OrderedDict
 from collections.abc import Callable
 
+import msgspec
+
 from manigraph_planner.policies.base import Decision, Policy
-from manigraph_planner.recovery import ProgressMonitor
-from manigraph_shared.decision_failure import CannotDecide
+from manigraph_planner.recovery import ProgressMonitor, Verdict
+from manigraph_shared.decision_failure import OUT_OF_OPTIONS, CannotDecide
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene, SkillStatus
 
@@ -21,6 +23,11 @@ _HELD = 256
 STOPPED_BACKOFF = 1.0
 #: Decisions whose scenes are kept so they can be explained afterwards.
 KEPT_DECISIONS = 64
+
+
+class OutOfOptions(CannotDecide):
+    """Every pair the policy ranks was refused by the skills on the world as it still is:
+    asking again would be refused again, so the episode ends, naming its refusals."""
 
 
 class DecisionHistory:
@@ -71,7 +78,10 @@ class DecisionMaker:
     Recovery: a decision that made no progress (see :mod:`manigraph_planner.recovery`) is not
     taken again on the same world; the policy's next most likely compatible pair is, and the
     ``Action`` says so (``rank``, ``recovery``). Wherever progress is made the decision is the
-    policy's own.
+    policy's own. A decision the skills refused is not asked again until something near it
+    moved (``recovery = "refused"``, ``passed_over`` naming it); when every ranked pair was
+    refused so, the episode ends: :class:`OutOfOptions` (the service reports it like
+    :class:`CannotDecide`; the run client ends that episode with reason ``out_of_options: ...``).
     """
 
     def __init__(
@@ -167,20 +177,33 @@ class DecisionMaker:
             return None
         return self._decide(min(fresh, key=lambda s: (s.stamp, s.sequence)))
 
-    def _choose(self, scene: Scene) -> tuple[Decision | None, int, str | None]:
-        """The policy's decision, or its best alternative that is not passed over."""
+    def _choose(self, scene: Scene) -> tuple[Decision | None, int, str | None, str | None]:
+        """The policy's decision, or its best alternative that is not passed over; with its
+        rank, why the decision was passed over and the refusal passed over (if one was)."""
         decision = self.policy.decide(scene)
         verdict = self.progress.verdict(scene)
         if decision is None or verdict.allows(decision.pair):
-            return decision, 0, None
-        for rank, alternative in enumerate(self.policy.ranked(scene)):
+            return decision, 0, None, None
+        refusal = verdict.refusal(decision.pair)
+        passed_over = refusal.describe() if refusal is not None else None
+        ranked = self.policy.ranked(scene)
+        for rank, alternative in enumerate(ranked):
             if verdict.allows(alternative.pair):
-                return alternative, rank, verdict.why(decision.pair)
-        return decision, 0, "exhausted"
+                return alternative, rank, verdict.why(decision.pair), passed_over
+        if refusal is None:  # nothing says it would be refused: the first choice again
+            return decision, 0, "exhausted", None
+        for lessons in (True, False):  # the best one not refused, nor (first) predicted to be
+            for rank, alternative in enumerate(ranked):
+                if verdict.refusal(alternative.pair, lessons) is None:
+                    return alternative, rank, "exhausted", passed_over
+        raise OutOfOptions(scene.episode_id, _out_of_options(verdict, self.progress))
 
     def _decide(self, scene: Scene) -> Action | None:
         try:
-            decision, rank, recovery = self._choose(scene)
+            decision, rank, recovery, passed_over = self._choose(scene)
+        except OutOfOptions:
+            _remember(self._ended, scene.episode_id, None)
+            raise
         except PolicyError as exc:
             # The policy cannot read this episode's world (a value its vocabulary never saw):
             # every later scene of it would be refused the same way, 10 a second. Refuse the
@@ -192,6 +215,8 @@ class DecisionMaker:
         action = decision.to_action(
             scene, self.step, self.policy.name, self.clock(), rank=rank, recovery=recovery
         )
+        if passed_over is not None:
+            action = msgspec.structs.replace(action, passed_over=passed_over[:256])
         self.progress.on_decision(scene, decision.pair)
         self.step += 1
         self.history.add(scene, action)
@@ -210,6 +235,14 @@ class DecisionMaker:
         self.ready_after = 0.0
         self._held.clear()
         self.progress.reset()
+
+
+def _out_of_options(verdict: Verdict, progress: ProgressMonitor) -> str:
+    """``out_of_options: <n> pairs refused (<reason> x<count>, ...)``: the episode's refusals
+    by reason, most first."""
+    counts = progress.refusals.counts.most_common()
+    named = ", ".join(f"{reason} x{count}" for reason, count in counts)
+    return f"{OUT_OF_OPTIONS}: {len(verdict.refused)} refusals stand ({named})"[:512]
 
 
 def _remember(store: OrderedDict, key: str, value: object) -> None:

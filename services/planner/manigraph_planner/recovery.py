@@ -21,6 +21,11 @@ progress, every pair with that object (goal) is passed over (for objects, after
 ``object_escalation`` pairs: a policy may say one, where a failure belongs to the object
 whichever goal it was for). Wherever progress is made, nothing
 is passed over, so the policy's decisions are exactly its own.
+
+A decision the skills **refused** is remembered apart (:mod:`manigraph_planner.refusals`): it
+is passed over until the object, the goal or their neighbourhood changes, however much the
+rest of the world moves or how many goals are filled, and a transient refusal (the skills
+busy, the stop) is neither remembered nor counted as no progress.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
+from manigraph_planner.refusals import Refusal, RefusalMemory, scope_of
 from manigraph_shared.messages import Scene, SkillState, SkillStatus
 
 Pair = tuple[str, str]
@@ -44,14 +50,32 @@ class Verdict:
     objects: frozenset[str] = frozenset()
     goals: frozenset[str] = frozenset()
     stalled: frozenset[Pair] = frozenset()
+    refused: tuple[Refusal, ...] = ()
+    lessons: tuple[Refusal, ...] = ()
 
     def allows(self, pair: Pair) -> bool:
-        return pair not in self.pairs and pair[0] not in self.objects and pair[1] not in self.goals
+        return (
+            pair not in self.pairs
+            and pair[0] not in self.objects
+            and pair[1] not in self.goals
+            and self.refusal(pair) is None
+        )
+
+    def refusal(self, pair: Pair, lessons: bool = True) -> Refusal | None:
+        """The standing refusal that ``pair`` would be asked again against, if any (with
+        ``lessons``: or the lesson that predicts one)."""
+        found = next((r for r in self.refused if r.covers(pair)), None)
+        if found is None and lessons:
+            found = next((r for r in self.lessons if r.covers(pair)), None)
+        return found
 
     def why(self, pair: Pair) -> str:
         """Why ``pair`` is passed over: the world did not change after it (``no_progress``),
         it was chosen before and no goal filled since (``repeated_pair``), or two pairs with
-        its object or goal made no progress (``escalated``)."""
+        its object or goal made no progress (``escalated``); before these, the skills refused
+        it and nothing near it moved since (``refused``)."""
+        if self.refusal(pair) is not None:
+            return "refused"
         if pair in self.stalled:
             return "no_progress"
         if pair in self.pairs:
@@ -64,6 +88,7 @@ class _Attempt:
     pair: Pair
     scene: Scene
     filled: frozenset[str]
+    step: int = 0
     status: SkillStatus | None = None
 
 
@@ -87,7 +112,11 @@ class ProgressMonitor:
     """
 
     def __init__(
-        self, tolerance: float = 0.005, retries: int = 2, object_escalation: int = 2
+        self,
+        tolerance: float = 0.005,
+        retries: int = 2,
+        object_escalation: int = 2,
+        refusals: RefusalMemory | None = None,
     ) -> None:
         if tolerance < 0:
             raise ValueError(f"tolerance: must be >= 0, got {tolerance}")
@@ -98,6 +127,7 @@ class ProgressMonitor:
         self.tolerance = tolerance
         self.retries = retries
         self.object_escalation = object_escalation
+        self.refusals = refusals if refusals is not None else RefusalMemory(tolerance=tolerance)
         self.reset()
 
     def reset(self) -> None:
@@ -105,6 +135,8 @@ class ProgressMonitor:
         self._chosen: dict[Pair, frozenset[str]] = {}  # pair -> goals filled when last chosen
         self._stalls = _Stalls()
         self._retried = 0
+        self._steps = 0
+        self.refusals.reset()
 
     def on_decision(self, scene: Scene, pair: Pair) -> None:
         filled = _filled_goals(scene)
@@ -112,12 +144,21 @@ class ProgressMonitor:
             self._retried += 1
         else:
             self._retried = 0
-        self._last = _Attempt(pair, scene, filled)
+        self._last = _Attempt(pair, scene, filled, self._steps)
+        self._steps += 1
         self._chosen[pair] = filled
 
     def on_status(self, status: SkillStatus) -> None:
-        if self._last is not None and status.state.terminal:
-            self._last.status = status
+        last = self._last
+        if last is None or not status.state.terminal or last.status is not None:
+            return
+        last.status = status
+        if status.state is SkillState.FAILED:
+            reason = status.reason or "unknown"
+            if reason in RETRYABLE:  # retried as before, counted only
+                self.refusals.counts[reason] += 1
+            else:
+                self.refusals.on_refusal(last.scene, last.pair, reason, last.step)
 
     def verdict(self, scene: Scene) -> Verdict:
         """Which pairs to pass over when deciding on ``scene`` (the scene after the last
@@ -125,7 +166,7 @@ class ProgressMonitor:
         last = self._last
         if last is None:
             return Verdict()
-        retry = self._retryable(last) and self._retried < self.retries
+        retry = (self._retryable(last) and self._retried < self.retries) or self._transient(last)
         if self._stalls.world is not None and not self.same_world(self._stalls.world, scene):
             self._stalls = _Stalls()
         if not retry and self.same_world(last.scene, scene):
@@ -142,6 +183,8 @@ class ProgressMonitor:
             objects=_escalated(passed, 0, self.object_escalation),
             goals=_escalated(passed, 1),
             stalled=stalled,
+            refused=tuple(self.refusals.standing(scene)),
+            lessons=tuple(self.refusals.lessons(scene)),
         )
 
     def same_world(self, before: Scene, after: Scene) -> bool:
@@ -158,6 +201,16 @@ class ProgressMonitor:
                 return False
         goals = {g.id: (g.filled, g.visible) for g in before.goals}
         return goals == {g.id: (g.filled, g.visible) for g in after.goals}
+
+    @staticmethod
+    def _transient(attempt: _Attempt) -> bool:
+        """Refused for a reason that says nothing about the decision: ask it again."""
+        status = attempt.status
+        return (
+            status is not None
+            and status.state is SkillState.FAILED
+            and scope_of(status.reason or "unknown") == "transient"
+        )
 
     @staticmethod
     def _retryable(attempt: _Attempt) -> bool:

@@ -31,7 +31,7 @@ TRAY_RACKS: dict[TrayAction, str] = {
 
 
 #: Why a policy's first choice was passed over (``Action.recovery``).
-RecoveryReason = Literal["no_progress", "repeated_pair", "escalated", "exhausted"]
+RecoveryReason = Literal["no_progress", "repeated_pair", "escalated", "exhausted", "refused"]
 
 
 class Action(Message, frozen=True, kw_only=True):
@@ -67,7 +67,15 @@ class Action(Message, frozen=True, kw_only=True):
         Meta(
             description="why the first choice was passed over: the world did not change after it, "
             "it repeated a pair with no goal filled since, its object or goal failed twice; "
-            "exhausted: every alternative failed, the first choice again"
+            "exhausted: every alternative failed, the first choice again (or the best one "
+            "not refused); refused: the skills refused it and nothing near it moved since"
+        ),
+    ] = None
+    passed_over: Annotated[
+        Annotated[str, Meta(max_length=256)] | None,
+        Meta(
+            description="the refusal this decision passes over, `object->goal: reason` "
+            "(docs/recovery.md)"
         ),
     ] = None
 
