@@ -10,7 +10,9 @@ import re
 import stat
 import statistics
 import tomllib
-from dataclasses import asdict, dataclass
+from collections import Counter
+from collections.abc import Iterable, Mapping
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from manigraph_shared.errors import ConfigError
@@ -122,6 +124,8 @@ class EpisodeResult:
     goals_wrong_object: int = 0
     #: Placements into a goal the rules do not accept (with rules), even if later undone.
     rule_violations: int = 0
+    #: The skills' refusals of the episode's decisions, by reason.
+    refusals: dict[str, int] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -261,10 +265,19 @@ def summarize(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, obje
         # Goals left holding an object they do not accept, over all episodes' ends.
         "wrong_object": sum(r.goals_wrong_object for r in results),
         **_judged(plan, results),
+        "refusals": summed_refusals(r.refusals for r in results),
         "mean_seconds": statistics.fmean(r.seconds for r in results) if count else 0.0,
         **_simulated(results),
         "results": [asdict(r) for r in results],
     }
+
+
+def summed_refusals(counts: Iterable[Mapping[str, int]]) -> dict[str, int]:
+    """Refusals by reason over episodes, most first (``{reason: count}``)."""
+    total: Counter[str] = Counter()
+    for count in counts:
+        total.update(count)
+    return dict(total.most_common())
 
 
 def _judged(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, object]:

@@ -16,7 +16,10 @@ the run needs, and an episode is failed, with a named reason, and the run goes o
 A planner that cannot read the episode's scenes (a value its checkpoint never saw) says so once
 in its error status; the episode ends at once with reason ``cannot_decide: <why>``
 (:mod:`manigraph_shared.decision_failure`), and, as the checkpoint cannot serve this task, the
-run ends too: ``aborted`` names it, and ``run`` and ``up --episodes`` exit 78.
+run ends too: ``aborted`` names it, and ``run`` and ``up --episodes`` exit 78. A planner whose
+every option was refused by the skills says so the same way (``out_of_options: ...``): that
+episode ends with that reason, and the run goes on. Each episode's result counts the skills'
+refusals of its decisions by reason (``refusals``), and the summary sums them.
 
 An engaged emergency stop ends the run instead: the sim refuses the reset at once, or cuts the
 episode under way, with reason ``estop_engaged: <why> (by <who>)``; that episode is the run's
@@ -32,10 +35,11 @@ import queue
 import sys
 import threading
 import time
+from collections import Counter
 from typing import TextIO
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.decision_failure import CANNOT_DECIDE, cannot_decide
+from manigraph_shared.decision_failure import CANNOT_DECIDE, OUT_OF_OPTIONS, cannot_decide
 from manigraph_shared.errors import (
     BusError,
     DrawRefused,
@@ -49,6 +53,7 @@ from manigraph_shared.messages import (
     EpisodeEvent,
     EpisodePhase,
     ServiceStatus,
+    SkillState,
     SkillStatus,
 )
 from manigraph_tools.episode_plan import (
@@ -125,6 +130,7 @@ class EpisodeProgress:
         self.episode_id = ""
         self._decisions: set[str] = set()
         self._cannot_decide: str | None = None
+        self._refusals: Counter[str] = Counter()
         self.last = time.monotonic()
         self._lock = threading.Lock()
         bus.subscribe(EpisodeEvent, self._on_event)
@@ -138,6 +144,7 @@ class EpisodeProgress:
             self.episode_id = episode_id
             self._decisions.clear()
             self._cannot_decide = None
+            self._refusals = Counter()
             self.last = time.monotonic()
 
     def _on_planner_status(self, status: ServiceStatus) -> None:
@@ -165,6 +172,13 @@ class EpisodeProgress:
         with self._lock:
             if status.decision_id in self._decisions:
                 self.last = time.monotonic()
+                if status.state is SkillState.FAILED:
+                    self._refusals[status.reason or "unknown"] += 1
+
+    def refusals(self) -> dict[str, int]:
+        """The running episode's refused decisions by the skills' reason, most first."""
+        with self._lock:
+            return dict(self._refusals.most_common())
 
     def idle_for(self) -> float:
         with self._lock:
@@ -244,6 +258,7 @@ def _run_one(
             steps=last.steps if last else 0,
             seconds=round(time.monotonic() - started, 3),
             reason=reason,
+            refusals=events.refusals(),
         )
 
     missing = watch.wait_all_alive(plan.recover_timeout)
@@ -269,6 +284,8 @@ def _run_one(
         if lost:
             return failed(f"service_lost: {', '.join(lost)}", start)
         why = events.cannot_decide()
+        if why is not None and why.startswith(OUT_OF_OPTIONS):  # this episode's options only
+            return failed(why[:256], start)
         if why is not None:  # said once by the planner: no point waiting for progress
             return failed(f"{CANNOT_DECIDE}: {why}"[:256], start)
         if events.idle_for() > plan.stall_timeout:
@@ -292,4 +309,5 @@ def _run_one(
                 sim_seconds=end.sim_seconds,
                 goals_wrong_object=end.goals_wrong_object,
                 rule_violations=end.rule_violations,
+                refusals=events.refusals(),
             )
