@@ -9,6 +9,7 @@ from __future__ import annotations
 import time
 import tomllib
 from pathlib import Path
+from typing import Any
 
 from manigraph_shared.errors import ConfigError, MessageError
 from manigraph_shared.messages import TaskLayout
@@ -19,7 +20,21 @@ def _xyz(values: list[float], default_z: float = 0.0) -> dict[str, float]:
     return {"x": x, "y": y, "z": rest[0] if rest else default_z}
 
 
-def load_layout(path: str | Path, episode_id: str = "live") -> TaskLayout:
+def _start(o: dict[str, Any], positions: bool) -> dict[str, float]:
+    """An object's starting position: ``position``, else the first of a task file's
+    ``positions``; with ``positions`` False (the RGB-D pipeline's appearance identity, which
+    strips them) neither is needed and a missing one reads as the origin."""
+    if "position" in o:
+        return _xyz(o["position"])
+    if o.get("positions"):
+        return _xyz(o["positions"][0])
+    if positions:
+        raise KeyError("position")
+    return _xyz([0.0, 0.0, 0.0])
+
+
+def load_layout(path: str | Path, episode_id: str = "live", positions: bool = True) -> TaskLayout:
+    """The layout of ``path``; ``positions`` False: objects may leave their position out."""
     try:
         data = tomllib.loads(Path(path).read_text())
     except OSError as exc:
@@ -31,7 +46,7 @@ def load_layout(path: str | Path, episode_id: str = "live") -> TaskLayout:
             {
                 "id": o["id"],
                 "category": o["category"],
-                "position": _xyz(o["position"]),
+                "position": _start(o, positions),
                 "size": _xyz(o.get("size", [0.04, 0.04, 0.04])),
                 "attributes": o.get("attributes", {}),
             }

@@ -35,6 +35,14 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--layout", default=None, help="layout TOML (default: the TaskLayout the sim publishes)"
     )
+    parser.add_argument(
+        "--identity",
+        choices=["appearance", "prior"],
+        default="appearance",
+        help="--pipeline rgbd: how an object is first told apart. appearance (default): the "
+        "layout's starting positions are not used; each object is found by its colour and "
+        "size. prior: matched by distance from its starting position (the old behaviour)",
+    )
     parser.add_argument("--camera-name", default="front", help="camera name on the bus")
     parser.add_argument(
         "--stale-after", type=float, default=2.0, help="seconds without a frame (default 2)"

@@ -8,6 +8,7 @@ import pytest
 from synthetic import draw
 
 from manigraph_perception.calibration_file import Calibration
+from manigraph_perception.rgbd.identity import IdentityMode
 from manigraph_perception.rgbd.pipeline import BadFrame, RgbdPerception
 from manigraph_perception.rgbd.plane import PlaneConfig, fit_table
 from manigraph_perception.rgbd.segment import SegmentConfig, hue_peaks
@@ -74,7 +75,7 @@ def test_a_stack_and_a_block_are_found_posed_and_named(calibration: Calibration)
     bgr, depth = draw(
         calibration, [(RED, SIDE, "red"), (BLUE, SIDE, "blue"), (GREEN, SIDE, "green")]
     )
-    perception = RgbdPerception(calibration)
+    perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)
     perception.set_layout(_layout(STARTS))
     scene, result, positions = _scene_positions(perception, bgr, depth, 1.0)
     assert not scene.stale
@@ -92,7 +93,7 @@ def test_a_stack_and_a_block_are_found_posed_and_named(calibration: Calibration)
 def test_identity_follows_a_moved_block_and_hidden_blocks_stay_put(
     calibration: Calibration,
 ) -> None:
-    perception = RgbdPerception(calibration)
+    perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)
     perception.set_layout(_layout(STARTS))
     bgr, depth = draw(
         calibration, [(RED, SIDE, "red"), (BLUE, SIDE, "blue"), (GREEN, SIDE, "green")]
@@ -110,7 +111,7 @@ def test_identity_follows_a_moved_block_and_hidden_blocks_stay_put(
 
 def test_two_blocks_of_one_colour_keep_their_ids_by_place(calibration: Calibration) -> None:
     a, b = (0.45, -0.1, 0.02), (0.45, 0.1, 0.02)
-    perception = RgbdPerception(calibration)
+    perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)
     perception.set_layout(_layout({"block_0": a, "block_1": b}))
     bgr, depth = draw(calibration, [(a, SIDE, "red"), (b, SIDE, "red")])
     _scene_positions(perception, bgr, depth, 1.0)
@@ -123,7 +124,7 @@ def test_two_blocks_of_one_colour_keep_their_ids_by_place(calibration: Calibrati
 
 
 def test_a_task_colour_rules_out_a_block_of_another_colour(calibration: Calibration) -> None:
-    perception = RgbdPerception(calibration)
+    perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)
     perception.set_layout(_layout({"block_0": RED}, colours={"block_0": "red"}))
     bgr, depth = draw(calibration, [(RED, SIDE, "green")])  # a green block where red should be
     scene, result, _ = _scene_positions(perception, bgr, depth, 1.0)
@@ -133,7 +134,7 @@ def test_a_task_colour_rules_out_a_block_of_another_colour(calibration: Calibrat
 
 def test_filled_comes_from_the_tracked_block_with_hysteresis(calibration: Calibration) -> None:
     goal = (0.5, 0.1, 0.02)
-    perception = RgbdPerception(calibration)
+    perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)
     perception.set_layout(_layout({"block_0": RED}, goals={"goal_0": goal}))
     bgr, depth = draw(calibration, [(RED, SIDE, "red")])
     scene, _, _ = _scene_positions(perception, bgr, depth, 1.0)
@@ -150,7 +151,7 @@ def test_filled_comes_from_the_tracked_block_with_hysteresis(calibration: Calibr
 
 def test_a_carried_block_is_put_where_the_robot_let_go_of_it(calibration: Calibration) -> None:
     goal = (0.3, -0.2, 0.02)
-    perception = RgbdPerception(calibration)
+    perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)
     perception.set_layout(_layout({"block_0": RED}, goals={"goal_0": goal}))
     bgr, depth = draw(calibration, [(RED, SIDE, "red")])
     _scene_positions(perception, bgr, depth, 1.0)
@@ -164,7 +165,7 @@ def test_a_carried_block_is_put_where_the_robot_let_go_of_it(calibration: Calibr
 
 
 def test_depth_of_the_wrong_size_is_refused_by_name(calibration: Calibration) -> None:
-    perception = RgbdPerception(calibration)
+    perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)
     bgr, depth = draw(calibration, [])
     with pytest.raises(BadFrame, match=r"depth 320 x 240 .* calibrated for 640 x 480") as caught:
         perception.process(bgr, depth[::2, ::2], 1.0, 1.0)
@@ -178,7 +179,7 @@ def test_depth_of_the_wrong_size_is_refused_by_name(calibration: Calibration) ->
 def test_a_frame_without_the_table_is_refused_by_name(
     calibration: Calibration, depth_value: float | None, reason: str
 ) -> None:
-    perception = RgbdPerception(calibration)
+    perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)
     bgr, depth = draw(calibration, [])
     if depth_value is None:
         # Mostly clutter: the table shows in a tenth of the image only.
@@ -216,7 +217,7 @@ def test_the_segmentation_picture_shows_each_segment_beside_the_depth(
     from manigraph_perception.rgbd.drawing import draw_segmentation
 
     bgr, depth = draw(calibration, [(RED, SIDE, "red"), (GREEN, SIDE, "green")])
-    perception = RgbdPerception(calibration)
+    perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)
     perception.set_layout(_layout({"block_0": RED, "block_2": GREEN}))
     result = perception.measure(bgr, depth)
     picture = draw_segmentation(bgr, depth, result)
@@ -231,7 +232,7 @@ def test_a_block_first_seen_far_from_its_start_learns_its_colour_and_keeps_it(
     calibration: Calibration,
 ) -> None:
     red, green, yellow = (0.5, -0.1, 0.02), (0.6, 0.2, 0.02), (0.45, 0.1, 0.02)
-    perception = RgbdPerception(calibration)
+    perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)
     perception.set_layout(_layout({"block_0": red, "block_1": green, "block_2": yellow}))
     bgr, depth = draw(calibration, [(red, SIDE, "red"), (yellow, SIDE, "yellow")])
     _scene_positions(perception, bgr, depth, 1.0)  # green unseen: its hue is not known

@@ -8,6 +8,7 @@ import argparse
 def run_rgbd(args: argparse.Namespace) -> int:
     from manigraph_perception.calibration_file import load_calibration
     from manigraph_perception.layout_file import load_layout
+    from manigraph_perception.rgbd.identity import IdentityMode
     from manigraph_perception.rgbd.pipeline import RgbdPerception
     from manigraph_perception.rgbd.service import RgbdPerceptionService
     from manigraph_perception.rgbd.sources import open_rgbd_source
@@ -17,10 +18,17 @@ def run_rgbd(args: argparse.Namespace) -> int:
     from manigraph_shared.service import run_service
 
     calibration = load_calibration(args.calibration)
+    identity = IdentityMode(args.identity)
     perception = RgbdPerception(
-        calibration, args.camera_name, WorldConfig(stale_after=args.stale_after)
+        calibration,
+        args.camera_name,
+        WorldConfig(stale_after=args.stale_after),
+        identity=identity,
     )
-    layout = load_layout(args.layout) if args.layout is not None else None
+    layout = None
+    if args.layout is not None:
+        # A task file serves: with appearance identity its objects need no position.
+        layout = load_layout(args.layout, positions=identity is IdentityMode.PRIOR)
     size = (calibration.width, calibration.height)
     source = None
     if args.camera != "bus":

@@ -4,9 +4,14 @@ the ``Scene`` out, no bus (``RgbdPerception``; the service wires it).
 Per frame: back-project the depth into the robot base frame (``base_T_camera``), fit the
 table plane (``plane.py``) and level the points on it, cut what stands on the table into
 objects (``segment.py``), describe each (``objects.py``), match them to the layout's objects
-(``tracker.py``) and hand their poses to the same ``WorldModel`` as the ArUco pipeline
-(object permanence, ``filled`` with hysteresis, the carried-object rule, ``stale``), without
-its marker-specific resting (depth measures height directly).
+(``tracker.py``; at first sight by appearance, ``identity.py``) and hand their poses to the
+same ``WorldModel`` as the ArUco pipeline (object permanence, ``filled`` with hysteresis,
+the carried-object rule, ``stale``), without its marker-specific resting (depth measures
+height directly).
+
+With ``IdentityMode.APPEARANCE`` (the default) the layout's starting positions are stripped
+on the way in: no Scene is given until every object of the layout has been found (``missing``
+names those not yet found; the service puts them in its status).
 
 A frame that cannot be used (no table plane, depth of the wrong size, an OpenCV error)
 raises ``BadFrame`` naming why; the caller keeps the last good Scene.
@@ -23,6 +28,7 @@ import numpy as np
 from manigraph_perception.calibration_file import Calibration
 from manigraph_perception.detection import ObjectPose
 from manigraph_perception.image_guard import opencv_reason
+from manigraph_perception.rgbd.identity import IdentityMode, strip_positions
 from manigraph_perception.rgbd.objects import (
     CHROMATIC,
     DetectedObject,
@@ -89,10 +95,12 @@ class RgbdPerception:
         camera: str = "front",
         world: WorldConfig | None = None,
         seed: int = 0,
+        identity: IdentityMode = IdentityMode.APPEARANCE,
     ) -> None:
         if calibration.base_T_camera is None:
             raise ConfigError("calibration.base_T_camera", "missing: run calibrate extrinsics")
         self.calibration = calibration
+        self.identity = IdentityMode(identity)
         self.camera = camera
         self.base_T_camera = calibration.base_T_camera
         # Depth measures height directly: no resting along the viewing ray (markers' rule).
@@ -118,6 +126,8 @@ class RgbdPerception:
     def set_layout(self, layout: TaskLayout) -> None:
         if self.world.layout is not None and layout.episode_id == self.world.layout.episode_id:
             return
+        if self.identity is IdentityMode.APPEARANCE:
+            layout = strip_positions(layout)
         self.world.set_layout(layout)
         self.tracker = Tracker(layout)
         named = {
@@ -132,6 +142,13 @@ class RgbdPerception:
     @property
     def layout(self) -> TaskLayout | None:
         return self.world.layout
+
+    @property
+    def missing(self) -> list[str]:
+        """Objects not found yet (``appearance``: no Scene until there are none)."""
+        if self.identity is IdentityMode.PRIOR:
+            return []
+        return [object_id for object_id, belief in self.world.beliefs.items() if not belief.seen]
 
     # --- frames -----------------------------------------------------------------------------
     def measure(self, bgr: np.ndarray, depth: np.ndarray) -> RgbdFrameResult:
@@ -180,10 +197,20 @@ class RgbdPerception:
         _mark_covered(detections)
         matches: dict[str, DetectedObject] = {}
         if self.tracker is not None:
+            # In appearance mode an object has a belief only once found; until then the
+            # detections no believed object took are assigned to it by what it looks like.
+            prior = self.identity is IdentityMode.PRIOR
             believed = {
-                object_id: belief.position for object_id, belief in self.world.beliefs.items()
+                object_id: belief.position
+                for object_id, belief in self.world.beliefs.items()
+                if prior or belief.seen
             }
             matches = dict(self.tracker.match(detections, believed))
+            unfound = [object_id for object_id in self.world.beliefs if object_id not in believed]
+            if unfound:
+                taken = {id(d) for d in matches.values()}
+                left = [d for d in detections if id(d) not in taken]
+                matches.update(self.tracker.acquire(left, unfound))
             self.counters.unmatched += len(detections) - len(matches)
         return RgbdFrameResult(plane, detections, matches, labels)
 
@@ -211,6 +238,8 @@ class RgbdPerception:
         for object_id, detection in result.matches.items():
             if object_id in self.tracker.colours:
                 self.world.attributes[object_id]["colour"] = detection.colour
+        if self.missing:
+            return None, result  # no Scene with an object nowhere
         scene = self.world.scene(stamp, now)
         if scene is not None and scene.stale:
             self.counters.stale += 1
@@ -224,12 +253,14 @@ class RgbdPerception:
         assert self.tracker is not None
         size = self.tracker.sizes[object_id]
         centre = detection.centre - np.array([0.0, 0.0, size[2] / 2])
-        if detection.covered:
+        belief = self.world.beliefs[object_id]
+        if detection.covered and (belief.seen or self.identity is IdentityMode.PRIOR):
             # Something stands on it: only a part of its side shows, which says it is there,
             # not exactly where (the top of what shows may be well below its own). It is
-            # kept where it was believed when its top was last seen.
-            centre = self.world.beliefs[object_id].position.copy()
-        else:
+            # kept where it was believed when its top was last seen (found under another,
+            # never seen whole: where its side says, half its depth behind it).
+            centre = belief.position.copy()
+        elif not detection.covered:
             centre[:2] += detection.away * _far_edge_loss(detection, size) / 2
         pose = np.eye(4)
         c, s = np.cos(detection.yaw), np.sin(detection.yaw)

@@ -222,6 +222,11 @@ class RgbdPerceptionService(Service):
             self._bad(exc)
             return
         if scene is None:
+            missing = self.perception.missing
+            if missing:  # appearance identity: no Scene until every object is found
+                self.last_error = f"not found yet: {', '.join(missing[:8])}" + (
+                    f" and {len(missing) - 8} more" if len(missing) > 8 else ""
+                )
             return
         if not scene.stale:
             self.last_good = scene

@@ -15,6 +15,10 @@ the carried-object rule) and a pair is ruled out when
 
 An object with no detection keeps its belief (hidden under the blocks stacked on it, behind
 the gripper, carried). A detection with no object is ignored (counted).
+
+An object with no belief yet (``--identity appearance``: the layout gave no position) is
+found by ``acquire``: a minimum-cost assignment of the detections no believed object took,
+on how unlike the layout's object each looks (colour, size: ``identity.py``).
 """
 
 from __future__ import annotations
@@ -23,7 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from manigraph_perception.rgbd.objects import DetectedObject
+from manigraph_perception.rgbd.identity import FORBIDDEN, min_cost_assignment
+from manigraph_perception.rgbd.objects import DetectedObject, palette_hues
 from manigraph_perception.rgbd.segment import hue_distance
 from manigraph_shared.colours import COLOUR_KEYS
 from manigraph_shared.messages import TaskLayout
@@ -50,6 +55,44 @@ class Tracker:
                 if isinstance(value, str):
                     self.colours[o.id] = value.strip().lower()
         self.hues: dict[str, float] = {}
+        self._named_hues = palette_hues(set(self.colours.values()))
+
+    def acquire(
+        self, detections: list[DetectedObject], unfound: list[str]
+    ) -> list[tuple[str, DetectedObject]]:
+        """(object id, detection) pairs for objects with no belief yet, by appearance alone:
+        a minimum-cost assignment; each object found learns the hue it showed."""
+        cost = np.array(
+            [[self.appearance_cost(object_id, d) for d in detections] for object_id in unfound]
+        ).reshape(len(unfound), len(detections))
+        out = []
+        for row, column in min_cost_assignment(cost):
+            object_id, detection = unfound[row], detections[column]
+            if object_id not in self.colours:
+                self.hues[object_id] = detection.hue
+            out.append((object_id, detection))
+        return out
+
+    def appearance_cost(self, object_id: str, detection: DetectedObject) -> float:
+        """How unlike ``object_id`` (the layout's colour and size) the detection looks, in
+        tolerances; ``FORBIDDEN`` where the colour differs or the footprint is another size.
+        A covered detection shows no reliable footprint: its colour decides alone."""
+        config = self.config
+        cost = 0.0
+        if object_id in self.colours:
+            name = self.colours[object_id]
+            if name != detection.colour:
+                return FORBIDDEN
+            if name in self._named_hues:
+                cost += hue_distance(self._named_hues[name], detection.hue) / config.hue_tolerance
+        if detection.covered:
+            return cost + 1.0  # less sure than a top seen whole
+        size = self.sizes[object_id]
+        footprint = np.abs(np.sort(detection.size[:2]) - np.sort(size[:2]))
+        if np.any(footprint > config.size_tolerance):
+            return FORBIDDEN
+        height = abs(float(detection.size[2]) - float(size[2]))
+        return cost + float(footprint.sum() + height) / config.size_tolerance
 
     def match(
         self, detections: list[DetectedObject], believed: dict[str, np.ndarray]
