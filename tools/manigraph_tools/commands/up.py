@@ -149,6 +149,14 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         "markers (camera) or its colour and depth, no markers (rgbd)",
     )
     parser.add_argument(
+        "--rgbd-identity",
+        choices=["appearance", "prior"],
+        default="appearance",
+        help="with --scene-source rgbd: appearance (default) finds each object by its colour "
+        "and size, the layout's starting positions unused; prior matches by distance from "
+        "them (the old behaviour, for comparison; docs/perception.md)",
+    )
+    parser.add_argument(
         "--markers",
         default="sim",
         help="with --scene-source camera: perception's marker map, a TOML file (ids of the "
@@ -228,7 +236,8 @@ def _cell_specs(
         perception[perception.index("--markers") + 1] = markers
         specs.append(spec(f"perception{suffix}", perception, where))
     elif args.scene_source == "rgbd":
-        specs.append(spec(f"perception{suffix}", SIM_RGBD_PERCEPTION, where))
+        identity = ["--identity", args.rgbd_identity]
+        specs.append(spec(f"perception{suffix}", [*SIM_RGBD_PERCEPTION, *identity], where))
     return specs
 
 
@@ -318,6 +327,8 @@ def _up_run(args: argparse.Namespace) -> int:
             raise ConfigError("scene-source", problem)
         sim_options += ["--camera", "--no-scenes"]
         sim_options += ["--camera-depth"] if source == "rgbd" else []
+    if args.rgbd_identity != "appearance" and args.scene_source != "rgbd":
+        raise ConfigError("rgbd-identity", "only with --scene-source rgbd (perception uses it)")
     if args.markers != "sim":
         if args.scene_source != "camera":
             raise ConfigError("markers", "only with --scene-source camera (perception reads it)")
