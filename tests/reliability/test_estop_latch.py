@@ -59,7 +59,9 @@ def test_a_stop_outlives_kill_9_of_every_service_and_the_router(running_stack: S
                 reset(bus, f"after-{len(victims)}")
             decision = f"forged:{len(victims)}"
             bus.publish(forged_action(decision))  # type: ignore[arg-type]
-            refused = skill.wait(lambda s: s.decision_id == decision and s.state.terminal)
+            refused = skill.wait(
+                lambda s, decision=decision: s.decision_id == decision and s.state.terminal
+            )
             assert (refused.state, refused.reason) == (SkillState.FAILED, "stopped")
             time.sleep(0.5)
             assert moved[0].seen == [] and moved[1].seen == []

@@ -101,11 +101,11 @@ def test_an_unreadable_latch_file_answers_engaged_until_resume(
 
 
 def test_no_latch_no_answer_and_the_service_stays_stopped(endpoint: str) -> None:
-    with Bus.open(BusConfig(mode="router", listen=(endpoint,), connect=())):
-        with client(endpoint) as bus:
-            latch = EstopLatch()
-            assert not latch.ask(bus, timeout=0.3)
-            assert latch.engaged and not latch.known
+    router = Bus.open(BusConfig(mode="router", listen=(endpoint,), connect=()))
+    with router, client(endpoint) as bus:
+        latch = EstopLatch()
+        assert not latch.ask(bus, timeout=0.3)
+        assert latch.engaged and not latch.known
 
 
 def test_the_state_directory_is_one_per_endpoint(monkeypatch: pytest.MonkeyPatch) -> None:
