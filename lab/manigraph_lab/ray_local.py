@@ -33,14 +33,23 @@ def local_ray(ray: Any, num_cpus: int, **init: Any) -> Iterator[None]:
     try:
         with _stop_signals_interrupt():
             try:
-                with _workers_run_this_interpreter():
-                    ray.init(num_cpus=num_cpus, _temp_dir=temp_dir, **init)
-                _interrupt_on_stop_signals()  # ray.init set its own SIGTERM handler: exit(15)
+                _start(ray, num_cpus=num_cpus, _temp_dir=temp_dir, **init)
                 yield
             finally:
                 ray.shutdown()
     finally:
         shutil.rmtree(temp_dir, ignore_errors=True)
+
+
+def _start(ray: Any, **init: Any) -> None:
+    with _workers_run_this_interpreter():
+        try:
+            ray.init(**init)
+        except SystemExit as exc:  # a SIGTERM meanwhile: ray.init's own handler exits 15
+            if exc.code != signal.SIGTERM:
+                raise
+            raise KeyboardInterrupt(signal.SIGTERM.name) from exc
+    _interrupt_on_stop_signals()  # again: ray.init replaced ours
 
 
 #: A local session's temporary folder: ``<tmp>/manigraph-ray-<pid of the sweep>-<random>``.
