@@ -272,7 +272,9 @@ class RgbdPerceptionService(Service):
             age = ""
             if self.last_good is not None:
                 age = f"; last good scene {now - self.last_good.stamp:.1f} s old"
-            self.last_error = f"{_NO_FRAME} {waited}{age}"
+            # A frame refused meanwhile (a forged 18000 x 18000 depth) stays named beside it.
+            refused = f"; last refused: {self._problem}" if self._problem else ""
+            self.last_error = f"{_NO_FRAME} {waited}{age}{refused}"
 
     def _trim_after_flood(self) -> None:
         """Give the heap back while and after many halves are let go or refused (the base
