@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import threading
+import time
 
 from test_loud_failures import stand_in_stack, started
 
@@ -25,7 +27,14 @@ def test_an_episode_out_of_options_ends_alone_and_its_refusals_are_counted(
     holder: dict[str, Bus] = {}
 
     def reset(request: EpisodeRequest) -> EpisodeEvent:
-        bus, episode = holder["bus"], request.episode_id
+        # What a real stack does after the reset's answer (the planner decides on the first
+        # scene, skills refuses, the planner runs out of options): published once the answer
+        # is out, so the run client has started the episode before it hears of it.
+        threading.Timer(0.3, refuse, (request.episode_id,)).start()
+        return started(request)
+
+    def refuse(episode: str) -> None:
+        bus = holder["bus"]
         decision = f"{episode}:0"
         bus.publish(
             Action(
@@ -38,6 +47,7 @@ def test_an_episode_out_of_options_ends_alone_and_its_refusals_are_counted(
                 stamp=1.0,
             )
         )
+        time.sleep(0.1)  # skills answers after the Action reached everyone
         bus.publish(
             SkillStatus(
                 decision_id=decision,
@@ -47,9 +57,9 @@ def test_an_episode_out_of_options_ends_alone_and_its_refusals_are_counted(
                 stamp=1.0,
             )
         )
+        time.sleep(0.2)  # the planner says it is out of options after it heard the refusal
         refusal = OutOfOptions(episode, why)
         bus.publish(ServiceStatus(service="planner", state="error", detail=str(refusal), stamp=1.0))
-        return started(request)
 
     with stand_in_stack(running_stack, reset) as services:
         holder["bus"] = services
