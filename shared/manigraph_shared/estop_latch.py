@@ -24,6 +24,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from typing import Any
 
 import zenoh
 
@@ -146,21 +147,8 @@ class EstopLatch:
         with self._lock:
             heard_before = self._heard
         key = bus.scoped(EmergencyStop.key)
-        answers: list[EmergencyStop] = []
         try:
-            replies = bus.session.get(
-                key,
-                target=zenoh.QueryTarget.ALL,
-                consolidation=zenoh.ConsolidationMode.NONE,
-                timeout=timeout,
-            )
-            for reply in replies:
-                if reply.ok is None:
-                    continue
-                try:
-                    answers.append(EmergencyStop.decode(reply.ok.payload.to_bytes(), key))
-                except MessageError as exc:  # a forged answer counts for nothing
-                    log.warning("the latch's answer was refused: %s", exc)
+            answers = read_answers(query_latch(bus.session, key, timeout), key)
         except zenoh.ZError as exc:  # the session is closing
             log.debug("latch query failed: %s", exc)
             return False
@@ -171,3 +159,28 @@ class EstopLatch:
         """Whether it is time to ask the latch again."""
         period = REFRESH_SECONDS if self.known else UNKNOWN_RETRY_SECONDS
         return now - self._asked_at >= period
+
+
+def query_latch(session: zenoh.Session, key: str, timeout: float) -> Any:
+    """Ask every latch (router) that holds ``key`` at once; the replies come as they come
+    (:func:`read_answers`). Several queries may be under way together."""
+    return session.get(
+        key,
+        target=zenoh.QueryTarget.ALL,
+        consolidation=zenoh.ConsolidationMode.NONE,
+        timeout=timeout,
+    )
+
+
+def read_answers(replies: Any, key: str) -> list[EmergencyStop]:
+    """The stops the latches answered with, waiting for the query to end; a forged answer
+    counts for nothing."""
+    answers: list[EmergencyStop] = []
+    for reply in replies:
+        if reply.ok is None:
+            continue
+        try:
+            answers.append(EmergencyStop.decode(reply.ok.payload.to_bytes(), key))
+        except MessageError as exc:
+            log.warning("the latch's answer was refused: %s", exc)
+    return answers

@@ -32,7 +32,7 @@ from manigraph_shared.bus import ALIVE_PREFIX, Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.cells import PREFIX, RESERVED, cell_key
 from manigraph_shared.errors import MessageError
-from manigraph_shared.estop_latch import EstopLatch
+from manigraph_shared.estop_latch import EstopLatch, query_latch, read_answers
 from manigraph_shared.messages import EmergencyStop, EstopState, ServiceStatus
 
 #: The services that send ``Action``s: more than one alive in a cell is a mistake.
@@ -313,25 +313,11 @@ def gather(
 def _ask_latches(bus: Bus, cells: list[Cell], timeout: float) -> dict[Cell, EstopState]:
     """Each cell's stop as the stack's latch holds it (the cells whose latch answered); the
     cells are asked at once."""
-    pending = {
-        cell: bus.session.get(
-            cell_key(EmergencyStop.key, cell),
-            target=zenoh.QueryTarget.ALL,
-            consolidation=zenoh.ConsolidationMode.NONE,
-            timeout=timeout,
-        )
-        for cell in cells
-    }
+    keys = {cell: cell_key(EmergencyStop.key, cell) for cell in cells}
+    pending = {cell: query_latch(bus.session, key, timeout) for cell, key in keys.items()}
     found: dict[Cell, EstopState] = {}
     for cell, replies in pending.items():
-        answers = []
-        for reply in replies:
-            if reply.ok is None:
-                continue
-            try:
-                answers.append(EmergencyStop.decode(reply.ok.payload.to_bytes()))
-            except MessageError:
-                continue
+        answers = read_answers(replies, keys[cell])
         if answers:
             latch = EstopLatch()
             latch.answered(answers)
