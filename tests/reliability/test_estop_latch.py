@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -113,7 +114,13 @@ def test_a_whole_up_started_again_on_the_same_stack_comes_back_stopped(
     finally:
         first.send_signal(signal.SIGKILL)  # the whole stack dies (its children follow it)
         first.communicate(timeout=60)
-    time.sleep(2.0)
+    # Its children follow it (parent-death signal); the router may take its 5 s stop grace.
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        with socket.socket() as probe:
+            if probe.connect_ex(("127.0.0.1", port)) != 0:
+                break
+        time.sleep(0.2)
 
     again = up("--episodes", "1")
     _, err = again.communicate(timeout=STARTUP + 60)
