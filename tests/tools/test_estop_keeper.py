@@ -129,3 +129,33 @@ def test_a_forged_answer_counts_for_nothing(endpoint: str) -> None:
                 assert latch.engaged and not latch.known
         finally:
             queryable.undeclare()
+
+
+def test_a_flood_of_repeated_stops_costs_a_write_a_second_and_a_change_is_written_at_once(
+    router: Bus, endpoint: str, tmp_path: Path
+) -> None:
+    keeper = EstopKeeper(router.session, tmp_path)
+    keeper.start()
+    path = tmp_path / LATCH_FILE
+
+    def on_disk() -> dict[str, object]:
+        stops: dict[str, dict[str, object]] = json.loads(path.read_text())["stops"]
+        return stops["manigraph/robot/estop"]
+
+    try:
+        with client(endpoint) as bus:
+            time.sleep(0.2)
+            bus.publish(EmergencyStop(engaged=True, reason="first", stamp=1.0))
+            wait_for(lambda: keeper.kept("manigraph/robot/estop").engaged)
+            assert on_disk()["reason"] == "first"  # a change of state: on disk before it is kept
+            for n in range(300):
+                bus.publish(EmergencyStop(engaged=True, reason=f"again {n}", stamp=2.0 + n))
+            wait_for(lambda: keeper.kept("manigraph/robot/estop").reason == "again 299")
+            assert keeper.writes <= 3  # not 301 fsyncs
+            wait_for(lambda: on_disk()["reason"] == "again 299", timeout=3.0)  # within ~1 s
+
+            bus.publish(EmergencyStop(engaged=False, reason="clear", stamp=400.0))
+            wait_for(lambda: not keeper.kept("manigraph/robot/estop").engaged)
+            assert on_disk()["engaged"] is False  # the release was written at once
+    finally:
+        keeper.close()

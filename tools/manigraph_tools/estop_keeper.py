@@ -2,7 +2,10 @@
 
 Every ``EmergencyStop`` the router sees (every cell's: ``manigraph/**/robot/estop``) is kept,
 the newest per key, in memory and in ``estop.json`` in the stack's **state directory**
-(:func:`state_dir`), written atomically before the next one is taken. A query on the stop's
+(:func:`state_dir`). A stop that changes a cell's state (engaged or released) is written
+atomically before the next one is taken; one that repeats the state (a flood of stops, forged
+or not) only updates the reason and stamp kept, written at most once per
+:data:`REPEAT_WRITE_S`, so no sender can make the router fsync without bound. A query on the stop's
 key is answered with what is kept (a stop never sent is answered released, ``stamp`` 0), so a
 service that starts, or restarts, learns the stop before it moves anything
 (:mod:`manigraph_shared.estop_latch`), and a router that restarts, or a whole ``manigraph up``
@@ -46,6 +49,9 @@ EVERY_CELL = f"{PREFIX}/**/robot/estop"
 MAX_KEYS = 256
 #: Largest latch file read (a stop is ~300 bytes; 256 of them fit many times over).
 MAX_FILE_BYTES = 1 << 20
+#: A stop that repeats a cell's state is written at most this often (seconds); a change of
+#: state is written at once.
+REPEAT_WRITE_S = 1.0
 
 
 def state_dir(explicit: Path | None, listen: tuple[str, ...]) -> Path:
@@ -72,6 +78,11 @@ class EstopKeeper:
         #: otherwise.
         self.unreadable: str | None = None
         self._declared: list[Any] = []
+        #: Repeated stops not yet on disk, and the timer that writes them.
+        self._dirty = False
+        self._timer: threading.Timer | None = None
+        #: Files written (for the bench and the tests: the cost of a flood).
+        self.writes = 0
 
     # --- life cycle -------------------------------------------------------------------------
     def start(self) -> None:
@@ -102,6 +113,11 @@ class EstopKeeper:
             with contextlib.suppress(zenoh.ZError):
                 entity.undeclare()
         self._declared.clear()
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+        self._write_repeats()
 
     # --- what it keeps ----------------------------------------------------------------------
     def kept(self, key: str) -> EmergencyStop:
@@ -131,9 +147,20 @@ class EstopKeeper:
             if key not in self._kept and len(self._kept) >= MAX_KEYS:
                 log.error("refused a stop on %s: %d cells kept already", key, MAX_KEYS)
                 return
+            before = self._kept.get(key)
             self._kept[key] = stop
-            self._save(dict(self._kept), self.unreadable)
-        log.warning(
+            changed = before is None or before.engaged != stop.engaged
+            if changed:
+                self._dirty = False
+                self._save(dict(self._kept), self.unreadable)
+            else:
+                self._dirty = True
+                if self._timer is None:
+                    self._timer = threading.Timer(REPEAT_WRITE_S, self._write_repeats)
+                    self._timer.daemon = True
+                    self._timer.start()
+        log.log(
+            logging.WARNING if changed else logging.DEBUG,
             "emergency stop %s on %s: %s%s",
             "ENGAGED" if stop.engaged else "released",
             key,
@@ -153,6 +180,14 @@ class EstopKeeper:
                 query.reply(key, self.kept(key).encode())
             except zenoh.ZError as exc:  # the querier went away meanwhile
                 log.debug("latch query not answered: %s", exc)
+
+    def _write_repeats(self) -> None:
+        """Write the repeated stops kept since the last write, if any."""
+        with self._lock:
+            self._timer = None
+            if self._dirty:
+                self._dirty = False
+                self._save(dict(self._kept), self.unreadable)
 
     # --- the file ---------------------------------------------------------------------------
     def _load(self) -> None:
@@ -194,6 +229,7 @@ class EstopKeeper:
                 handle.flush()
                 os.fsync(handle.fileno())
             os.replace(partial, self.path)
+            self.writes += 1
             directory = os.open(self.path.parent, os.O_RDONLY)
             try:
                 os.fsync(directory)
