@@ -144,6 +144,7 @@ def cell_row(summary: dict[str, object]) -> dict[str, object]:
             "seed": r["seed"],
             "reason": r["reason"],
             "goals": f"{r['goals_filled']}/{r['goals_total']}",
+            "refusals": r.get("refusals", {}),
         }
         for r in results
         if not r["success"]
@@ -154,6 +155,7 @@ def cell_row(summary: dict[str, object]) -> dict[str, object]:
         "goals_filled_rate": summary["goals_filled_rate"],
         "mean_steps": summary["mean_steps"],
         "seconds_per_episode": summary["mean_seconds"],
+        "refusals": summary.get("refusals", {}),
         "failed": failed,
     }
 
@@ -178,28 +180,37 @@ def record(
     print(f"{policy} {cell.label}: {shown}", file=sys.stderr, flush=True)
 
 
+def refusals_text(refusals: dict[str, int]) -> str:
+    """``3 (no_ik_solution 2, collision 1)``, or ``0``."""
+    if not refusals:
+        return "0"
+    named = ", ".join(f"{reason} {count}" for reason, count in refusals.items())
+    return f"{sum(refusals.values())} ({named})"
+
+
 def markdown(report: dict[str, object]) -> str:
     policies = list(report["policies"])  # type: ignore[call-overload]
     rows = report["cells"]
     assert isinstance(rows, dict)
     head = "| cell | " + " | ".join(
-        f"{p} success | {p} goals filled | {p} s/episode" for p in policies
+        f"{p} success | {p} goals filled | {p} s/episode | {p} refusals" for p in policies
     )
-    lines = [head + " |", "|---" * (1 + 3 * len(policies)) + "|"]
+    lines = [head + " |", "|---" * (1 + 4 * len(policies)) + "|"]
     for name, label in report["labels"].items():  # type: ignore[attr-defined]
         cells = []
         for policy in policies:
             row = rows.get(name, {}).get(policy)
             if row is None:
-                cells += ["-", "-", "-"]
+                cells += ["-", "-", "-", "-"]
             elif "error" in row:
-                cells += ["error", "-", "-"]
+                cells += ["error", "-", "-", "-"]
             else:
                 ok = round(row["success_rate"] * row["episodes"])
                 cells += [
                     f"{ok}/{row['episodes']} ({row['success_rate']:.2f})",
                     f"{row['goals_filled_rate']:.3f}",
                     f"{row['seconds_per_episode']:.2f}",
+                    refusals_text(row.get("refusals", {})),
                 ]
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

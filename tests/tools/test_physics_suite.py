@@ -39,7 +39,7 @@ def test_every_cell_parses_into_the_episodes_it_names() -> None:
     assert suite.run_order(suite.suite_cells())[0].name.startswith("box-rearrangement")
 
 
-def test_the_table_shows_success_goals_and_time_and_lists_failures() -> None:
+def test_the_table_shows_success_goals_time_and_refusals_and_lists_failures() -> None:
     suite = _suite()
     summary = {
         "episodes": 2,
@@ -47,6 +47,7 @@ def test_the_table_shows_success_goals_and_time_and_lists_failures() -> None:
         "goals_filled_rate": 0.75,
         "mean_steps": 5.0,
         "mean_seconds": 1.25,
+        "refusals": {"no_ik_solution": 2, "collision": 1},
         "results": [
             {
                 "seed": 0,
@@ -61,15 +62,21 @@ def test_the_table_shows_success_goals_and_time_and_lists_failures() -> None:
                 "reason": "step budget spent",
                 "goals_filled": 1,
                 "goals_total": 2,
+                "refusals": {"no_ik_solution": 2, "collision": 1},
             },
         ],
     }
     row = suite.cell_row(summary)
-    assert row["failed"] == [{"seed": 1, "reason": "step budget spent", "goals": "1/2"}]
+    refused = {"no_ik_solution": 2, "collision": 1}
+    assert row["failed"] == [
+        {"seed": 1, "reason": "step budget spent", "goals": "1/2", "refusals": refused}
+    ]
+    assert row["refusals"] == refused
     report = {
         "policies": {"sage": "x.pt", "gat": "y.pt"},
         "labels": {"stack-3": "stacking K=3"},
         "cells": {"stack-3": {"sage": row, "gat": {"error": "no summary"}}},
     }
     table = suite.markdown(report)
-    assert "| stacking K=3 | 1/2 (0.50) | 0.750 | 1.25 | error | - | - |" in table
+    shown = "| stacking K=3 | 1/2 (0.50) | 0.750 | 1.25 | 3 (no_ik_solution 2, collision 1) |"
+    assert shown + " error | - | - | - |" in table
