@@ -84,7 +84,8 @@ def _demos_run(args: argparse.Namespace) -> int:
         raise ConfigError("rules", "rules judge a task file's goals; give --task-file too")
     if args.task_file is not None:
         protocol = _task_file_protocol(args.task_file, protocol, args.rules)
-    # Each task's own expert (planner's TASK_EXPERTS), ``expert`` for the paper's tasks.
+    # Each task's family's expert (demos.family_expert): ``expert`` for the block tasks and
+    # task files, the dishwasher's for ``dishwasher``.
     summary = record_demos(None, protocol, args.output, sys.stderr)
     print(json.dumps(summary))
     return 0

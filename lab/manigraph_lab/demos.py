@@ -6,9 +6,12 @@ written by :class:`~manigraph_shared.demonstrations.DemonstrationLog`, the write
 demonstration page (``manigraph demo-ui``) uses too. A log recorded from a running stack
 (``manigraph up --record``) has the same channels, so a user's own runs are training data too.
 
+Each episode is demonstrated by its task family's expert (:func:`family_expert`): the sim's
+family registry says which family the task is, the planner's registration of that family
+which of its experts demonstrates the request (the dishwasher's: the one of its preference).
 With a task file (``--task-file``) every episode is a seeded draw of that layout, demonstrated
-by the ``expert`` policy, which solves any task file (objects matched to the goals that
-accept them; ``manigraph_planner.policies.matching``).
+by the block family's ``expert`` policy, which solves any task file (objects matched to the
+goals that accept them; ``manigraph_planner.policies.matching``).
 """
 
 from __future__ import annotations
@@ -18,12 +21,14 @@ from pathlib import Path
 from typing import TextIO
 
 from manigraph_lab.episode_loop import run_episode
-from manigraph_planner.policies.base import Policy, expert_for
+from manigraph_planner.families import FAMILIES as PLANNER_FAMILIES
+from manigraph_planner.policies.base import Policy
 from manigraph_planner.policies.teacher_rules import with_rules
 from manigraph_shared.demonstrations import DemonstrationLog
 from manigraph_shared.errors import DrawRefused
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.progress import Progress
+from manigraph_sim.families import family_of
 
 
 @dataclass(frozen=True)
@@ -72,25 +77,27 @@ class DemoProtocol:
         ]
 
 
+def family_expert(request: EpisodeRequest) -> Policy:
+    """A fresh expert for ``request``: its task's family (the sim's registry, by task name or
+    task file) as the planner registers it says which of its experts demonstrates it."""
+    return PLANNER_FAMILIES[family_of(request).name].expert(request)
+
+
 def record_demos(
     expert: Policy | None, protocol: DemoProtocol, path: Path, progress: TextIO | None = None
 ) -> dict[str, object]:
     """Record ``protocol``'s episodes to ``path``; ``expert``: who decides, None: each task's
-    registered expert (``manigraph_planner.policies.expert_for``); ``progress``: stream for a
-    bar (drawn on a terminal only) and for a note on each episode the expert failed."""
+    family's expert (:func:`family_expert`); ``progress``: stream for a bar (drawn on a
+    terminal only) and for a note on each episode the expert failed."""
     log = DemonstrationLog(path)
     steps = successes = 0
     requests = protocol.requests()
     bar = Progress(len(requests), "demos", unit="episode", stream=progress)
-    tasks = {request.task for request in requests}
-    experts = {
-        task: with_rules(expert if expert is not None else expert_for(task), protocol.rules)
-        for task in tasks
-    }
     try:
         for request in requests:
+            teacher = expert if expert is not None else family_expert(request)
             try:
-                record = run_episode(experts[request.task], request)
+                record = run_episode(with_rules(teacher, protocol.rules), request)
             except DrawRefused as exc:  # this seed's draw only: the others still run
                 bar.update()
                 bar.note(f"  refused {protocol.task_file_name}, seed {request.seed}: {exc}")

@@ -48,7 +48,6 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
     # Imported here: every ``manigraph`` command loads this module to build its parser, and
     # torch with PyG takes seconds (minutes on a loaded machine) to import.
     from manigraph_lab.demos import DemoProtocol, record_demos
-    from manigraph_planner.families.dishwasher.expert import dishwasher_expert
     from manigraph_planner.families.dishwasher.training import DishTrainConfig
 
     config.out.mkdir(parents=True, exist_ok=True)
@@ -57,7 +56,7 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
     for preference in PREFERENCES:
         demo_path = config.out / f"demos-{preference}.mcap"
         protocol = DemoProtocol(("dishwasher",), (4,), config.demos, 0, TRAIN_OBJECTS, preference)
-        record_demos(dishwasher_expert(preference), protocol, demo_path)
+        record_demos(None, protocol, demo_path)  # the family's expert of ``preference``
         runs += [(config, preference, demo_path, seed) for seed in config.seeds]
     table: dict[str, dict[int, list[float]]] = {
         p: {n: [] for n in TEST_OBJECTS} for p in PREFERENCES

@@ -22,7 +22,6 @@ REGISTRIES: tuple[tuple[str, str, str], ...] = (
     ("DRIVERS", "manigraph_skills.drivers.registry", "manigraph_skills.drivers"),
     ("FAMILIES", "manigraph_skills.families.family", "manigraph_skills.families"),
     ("POLICIES", "manigraph_planner.policies.base", "manigraph_planner.policies"),
-    ("TASK_EXPERTS", "manigraph_planner.policies.base", "manigraph_planner.policies"),
     ("POLICY_FILE_LOADERS", "manigraph_planner.policies.base", "manigraph_planner.policies"),
     ("HEADS", "manigraph_planner.gnn.models.config", "manigraph_planner.gnn.models"),
     ("ARCHITECTURES", "manigraph_planner.gnn.models.backbone", "manigraph_planner.gnn.models"),

@@ -1,27 +1,45 @@
-"""A task's demonstrations come from its registered expert; the others from ``expert``."""
+"""Each task family's planner registration says which of its experts demonstrates a request."""
 
 from __future__ import annotations
 
 import pytest
 
-from manigraph_planner.policies import POLICIES, Policy, load_policy
-from manigraph_planner.policies.base import TASK_EXPERTS, expert_for
-from manigraph_shared.errors import PolicyError
+from manigraph_planner.families import FAMILIES
+from manigraph_planner.families.blocks.expert import ExpertPolicy
+from manigraph_planner.families.dishwasher.expert import LeftRightExpert, TopBottomExpert
+from manigraph_planner.policies import POLICIES
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.messages import EpisodeRequest
 
 
-def test_a_task_without_its_own_expert_is_demonstrated_by_expert() -> None:
-    assert "stack" not in TASK_EXPERTS
-    assert type(expert_for("stack")) is POLICIES["expert"]
+def request(task: str, **fields: object) -> EpisodeRequest:
+    return EpisodeRequest(episode_id="e", task=task, **fields)
 
 
-def test_every_task_expert_is_also_a_policy_under_its_own_name() -> None:
-    for task, expert in TASK_EXPERTS.items():
-        policy = expert_for(task)
-        assert isinstance(policy, Policy) and type(policy) is expert
-        assert POLICIES[policy.name] is expert  # ``--policy <its name>`` serves it
+def test_the_block_family_demonstrates_with_expert() -> None:
+    assert type(FAMILIES["blocks"].expert(request("stack", blocks=3))) is ExpertPolicy
 
 
-def test_the_retired_size_sort_expert_is_refused_naming_expert_and_the_task_file() -> None:
-    with pytest.raises(PolicyError, match=r"--policy expert --task-file examples/tasks/size-sort"):
-        load_policy("size-sort-expert")
-    assert "size-sort-expert" not in POLICIES and "size-sort" not in TASK_EXPERTS
+def test_the_dishwasher_demonstrates_with_the_expert_of_the_request_s_preference() -> None:
+    dishwasher = FAMILIES["dishwasher"]
+    assert type(dishwasher.expert(request("dishwasher"))) is TopBottomExpert  # the sim's default
+    assert type(dishwasher.expert(request("dishwasher", preference="top-bottom"))) is (
+        TopBottomExpert
+    )
+    assert type(dishwasher.expert(request("dishwasher", preference="left-right"))) is (
+        LeftRightExpert
+    )
+
+
+def test_every_family_expert_is_a_policy_under_its_own_name() -> None:
+    for _, family in FAMILIES.items():
+        for name in family.experts:
+            assert POLICIES[name].name == name  # ``--policy <its name>`` serves it
+
+
+def test_a_family_naming_an_expert_it_does_not_register_is_refused() -> None:
+    from dataclasses import replace
+
+    wrong = replace(FAMILIES["blocks"], expert_of=lambda _: "dishwasher-top-bottom")
+    with pytest.raises(ConfigError, match="not one of the blocks experts"):
+        wrong.expert(request("stack"))

@@ -3,10 +3,11 @@
 A family owns what the planner does differently for its scenes: which scenes are its
 (:attr:`PlannerFamily.matches`), the network heads its policies are trained with and the
 feature spec of their graph states, the network and policy a checkpoint with those heads
-loads as, its experts and its training recipe. Its folder (``families/<name>/``) holds that
-code and its ``__init__`` registers the unit in :data:`FAMILIES` in one statement;
-``families/__init__.py`` imports each family with one line. The generic layers (``gnn/``,
-``policies/``, ``training/``, ``explain/``) ask the registry, never which family a scene is:
+loads as, its experts (and which one demonstrates an episode) and its training recipe. Its
+folder (``families/<name>/``) holds that code and its ``__init__`` registers the unit in
+:data:`FAMILIES` in one statement; ``families/__init__.py`` imports each family with one
+line. The generic layers (``gnn/``, ``policies/``, ``training/``, ``explain/``) ask the
+registry, never which family a scene is:
 
     family_of(scene).heads                 # what a decision on this scene trains
     family_for_heads(config.heads).network # what a checkpoint with these heads builds
@@ -20,11 +21,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.messages import Scene
+from manigraph_shared.messages import EpisodeRequest, Scene
 from manigraph_shared.registry import Registry, import_target
+
+if TYPE_CHECKING:
+    from manigraph_planner.policies.base import Policy
 
 __all__ = ["FAMILIES", "PlannerFamily", "family_for_heads", "family_of"]
 
@@ -42,7 +46,10 @@ class PlannerFamily:
         heads: the network heads its learned policies have (``ModelConfig.heads``, a
             :data:`~manigraph_planner.gnn.models.config.HEADS` entry).
         experts: the policy names of its experts (registered in ``POLICIES`` by its expert
-            module, which its ``__init__`` imports).
+            module, which its ``__init__`` imports); :meth:`expert` picks the one that
+            demonstrates an episode (``manigraph demos``).
+        expert_of: which of ``experts`` demonstrates an episode request (the dishwasher's:
+            the request's preference); None: the first.
         matches: whether a scene is this family's (what the scene itself shows).
         fallback: the family of every scene no other family matches (one family: blocks, whose
             object-goal heads are the paper's and any task file's).
@@ -63,6 +70,7 @@ class PlannerFamily:
     name: str
     heads: str
     experts: tuple[str, ...]
+    expert_of: Callable[[EpisodeRequest], str] | None = None
     matches: Callable[[Scene], bool] = _any_scene
     fallback: bool = False
     feature_spec: str | None = None
@@ -78,6 +86,16 @@ class PlannerFamily:
         """The part ``name`` (``network``, ``policy``, ``recipe``, ...) imported, or None."""
         path = getattr(self, name)
         return None if path is None else import_target(path)
+
+    def expert(self, request: EpisodeRequest) -> Policy:
+        """A fresh expert that demonstrates ``request``: the one :attr:`expert_of` names, else
+        the first of :attr:`experts`."""
+        from manigraph_planner.policies.base import POLICIES  # it imports the families
+
+        name = self.experts[0] if self.expert_of is None else self.expert_of(request)
+        if name not in self.experts:
+            raise ConfigError("expert", f"'{name}' is not one of the {self.name} experts")
+        return POLICIES[name]()
 
 
 #: Every task family the planner knows, by name; each registers itself in its folder.

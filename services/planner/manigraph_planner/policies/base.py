@@ -79,19 +79,6 @@ class Policy(ABC):
 #: Policies by name; a policy takes no options (a learned one comes from its checkpoint).
 POLICIES: Registry[type[Policy]] = Registry("policy")
 register_policy = POLICIES.register
-#: The expert a task is demonstrated by, by task name (``manigraph demos --tasks``); a task
-#: without an entry is demonstrated by ``expert``. A task's expert registers itself as a
-#: policy too, so ``--policy`` can name it, and is added here with ``TASK_EXPERTS.add(task,
-#: cls)`` (not the decorator, which would rename the policy after the task).
-TASK_EXPERTS: Registry[type[Policy]] = Registry("task expert")
-
-
-def expert_for(task: str) -> Policy:
-    """The expert that demonstrates ``task``: its registered one, else ``expert``."""
-    expert = TASK_EXPERTS.get(task)
-    return expert() if expert is not None else POLICIES["expert"]()
-
-
 #: Loaders of policy files, by suffix; ``.pt`` checkpoints load a GNN policy (torch is
 #: imported only then).
 POLICY_FILE_LOADERS: Registry[Callable[[Path], Policy]] = Registry("policy file")

@@ -7,7 +7,15 @@ the policy that decodes them (:mod:`.gnn_policy`) and their training (:mod:`.tra
 
 from manigraph_planner.families.dishwasher import expert  # noqa: F401  (registers its experts)
 from manigraph_planner.families.family import PlannerFamily, register_family
-from manigraph_shared.messages import Scene
+from manigraph_shared.messages import EpisodeRequest, Scene
+
+
+def _expert_of(request: EpisodeRequest) -> str:
+    """The expert of the request's preference (unset: top-bottom, as the sim lays it out; an
+    unknown one is the sim's to refuse when the episode starts)."""
+    if request.preference == "left-right":
+        return "dishwasher-left-right"
+    return "dishwasher-top-bottom"
 
 
 def _has_racks(scene: Scene) -> bool:
@@ -20,6 +28,7 @@ FAMILY = register_family(
         name="dishwasher",
         heads="dishwasher",
         experts=("dishwasher-top-bottom", "dishwasher-left-right"),
+        expert_of=_expert_of,
         matches=_has_racks,
         feature_spec="manigraph_planner.families.dishwasher.features:DISH_FEATURE_SPEC",
         network="manigraph_planner.families.dishwasher.ensemble:dish_network",
