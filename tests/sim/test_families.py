@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import manigraph_sim
-from manigraph_shared.errors import ConfigError, TaskError
+from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_sim.families import FAMILIES, family_of
 from manigraph_sim.families.blocks.options import BlockOptions
@@ -123,15 +123,6 @@ def test_the_dishwasher_ignores_the_block_counts_every_request_carries() -> None
     with every task, the dishwasher's too."""
     event = GeometricBackend().reset(request("dishwasher", blocks=3, objects=2), 0.0)
     assert event.goals_total == 2 + 2
-
-
-def test_size_sort_is_a_task_file_now() -> None:
-    assert "size-sort" not in TASKS
-    with pytest.raises(TaskError) as err:
-        GeometricBackend().reset(request("size-sort", blocks=4), 0.0)
-    assert str(err.value) == (
-        "task: size-sort is a task file now: --task-file examples/tasks/size-sort.toml"
-    )
 
 
 def test_an_unknown_task_still_names_the_registered_ones() -> None:

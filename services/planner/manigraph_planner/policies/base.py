@@ -87,13 +87,6 @@ POLICY_FILE_LOADERS.add_lazy(
 )
 
 
-#: Policy names that are no longer registered -> what replaces them (said when one is named).
-RETIRED_POLICIES = {
-    "size-sort-expert": "size sort is a task file now: use --policy expert "
-    "--task-file examples/tasks/size-sort.toml",
-}
-
-
 #: ``--accepts-filter``'s values: on (the default) or off.
 ACCEPTS_FILTER_CHOICES = ("on", "off")
 
@@ -118,8 +111,6 @@ def load_policy(spec: str, *, accepts_filter: str = "on") -> Policy:
 def _load(spec: str) -> Policy:
     if spec in POLICIES:
         return POLICIES[spec]()
-    if spec in RETIRED_POLICIES:
-        raise PolicyError(f"policy: '{spec}' is retired; {RETIRED_POLICIES[spec]}")
     path = Path(spec)
     if path.suffix not in POLICY_FILE_LOADERS:
         known = ", ".join(POLICIES)

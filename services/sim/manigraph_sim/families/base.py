@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import EpisodeRequest, RobotCommand, Scene
 from manigraph_shared.registry import Registry
-from manigraph_sim.tasks.base import TASKS, Task, check_task_name
+from manigraph_sim.tasks.base import TASKS, Task
 from manigraph_sim.world_model import Body, Layout
 
 if TYPE_CHECKING:
@@ -208,5 +208,5 @@ def family_of(request: EpisodeRequest) -> SimFamily:
     for _, family in FAMILIES.items():
         if (wants_file and family.takes_task_files) or request.task in family.tasks:
             return family
-    check_task_name(request.task)  # names the registered tasks, or the file now to use
+    TASKS.check(request.task)  # an unknown task: ConfigError naming the registered ones
     raise ConfigError("task", f"'{request.task}' belongs to no task family")

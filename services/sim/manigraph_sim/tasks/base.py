@@ -7,7 +7,6 @@ from typing import Any, Generic, TypeVar
 
 import numpy as np
 
-from manigraph_shared.errors import TaskError
 from manigraph_shared.registry import Registry
 from manigraph_sim.world_model import Layout
 
@@ -40,19 +39,8 @@ class Task(ABC, Generic[P]):
 TASKS: Registry[type[Task[Any]]] = Registry("task")
 register_task = TASKS.register
 
-#: Tasks that became task files (no Python of their own): the file to use instead.
-TASK_FILES_NOW = {"size-sort": "examples/tasks/size-sort.toml"}
-
-
-def check_task_name(name: str) -> str:
-    """``name`` if it is a registered task; ``TaskError`` naming the task file that replaced
-    a retired one, else ``ConfigError`` naming the known tasks."""
-    if name in TASK_FILES_NOW and name not in TASKS:
-        raise TaskError(f"task: {name} is a task file now: --task-file {TASK_FILES_NOW[name]}")
-    return TASKS.check(name)
-
 
 def get_task(name: str, params: Any) -> Task[Any]:
     """Task ``name`` with ``params`` (its family's options); ``ConfigError`` naming the known
     tasks if unknown."""
-    return TASKS[check_task_name(name)](params)
+    return TASKS[name](params)
