@@ -16,7 +16,6 @@ Mutual TLS is chosen with ``--tls-dir`` (a directory written by ``manigraph cert
 from __future__ import annotations
 
 import argparse
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -323,7 +322,3 @@ def _seconds(value: object, name: str) -> float:
         return float(str(value))
     except ValueError:
         raise ConfigError(name, f"'{value}' is not a number of seconds") from None
-
-
-def json5_value(value: object) -> str:
-    return json.dumps(value)

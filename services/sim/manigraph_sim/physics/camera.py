@@ -22,7 +22,6 @@ gives them with its exact pose, the ground truth the calibration commands are ch
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -214,20 +213,6 @@ def ideal_calibration(config: CameraConfig) -> tuple[np.ndarray, np.ndarray]:
     base_T_camera[:3, :3] = np.stack([-left, -up, forward], axis=1)
     base_T_camera[:3, 3] = config.eye
     return k, base_T_camera
-
-
-def write_calibration(path: str | Path, config: CameraConfig) -> None:
-    """The rendered camera's exact calibration, in the file format perception reads (OpenCV
-    FileStorage YAML: ``camera_matrix``, ``distortion_coefficients``, ``image_width``,
-    ``image_height``, ``base_T_camera``)."""
-    k, base_T_camera = ideal_calibration(config)
-    storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
-    storage.write("image_width", config.width)
-    storage.write("image_height", config.height)
-    storage.write("camera_matrix", k)
-    storage.write("distortion_coefficients", np.zeros((1, 5)))
-    storage.write("base_T_camera", base_T_camera)
-    storage.release()
 
 
 def light(scene: sapien.Scene, scale: float = 1.0) -> None:
