@@ -5,7 +5,8 @@ A goal holds the object of its category resting nearest to it, within :data:`HOL
 it is *done* when it accepts that object (``manigraph_shared.acceptance``). The objects
 still to place are those in no done goal: loose ones, and ones in a goal that does not
 accept them. They are matched to the goals not yet done (a maximum bipartite matching of
-what each goal accepts), so no object is sent to a goal that another object is needed for:
+what each goal accepts, ``manigraph_shared.goal_matching``), so no object is sent to a goal
+that another object is needed for:
 
 1. **Fill**: the lowest goal that can be filled now (free, nothing over it, every goal it
    stands on done), with the highest movable object it accepts that still leaves a maximum
@@ -20,15 +21,16 @@ Objects that no goal accepts (spares, distractors) are never picked. Nothing to 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 from manigraph_planner.policies.base import Decision
 from manigraph_planner.scene_geometry import SceneGeometry
 from manigraph_shared.acceptance import admits
+from manigraph_shared.goal_matching import as_masks, matching_size
 from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneGoal, SceneObject
 
-__all__ = ["HOLD_DISTANCE", "GoalMatching", "maximum_matching_size"]
+__all__ = ["HOLD_DISTANCE", "GoalMatching"]
 
 #: An object whose centre is this close to a goal's (metres) rests in it.
 HOLD_DISTANCE = 0.02  # the physics world's goal tolerance
@@ -42,24 +44,6 @@ def goal_admits(goal: SceneGoal, obj: SceneObject) -> bool:
     return _CATEGORY.get(obj.category) is goal.category and admits(
         goal.accepts, obj.id, obj.size.as_tuple(), obj.attributes
     )
-
-
-def maximum_matching_size(admitted: Sequence[Sequence[int]], banned: int | None = None) -> int:
-    """How many goals (rows: the objects each admits) can take an object of their own at once,
-    object ``banned`` left out (augmenting paths)."""
-    owner: dict[int, int] = {}
-
-    def augment(goal: int, seen: set[int]) -> bool:
-        for item in admitted[goal]:
-            if item in seen or item == banned:
-                continue
-            seen.add(item)
-            if item not in owner or augment(owner[item], seen):
-                owner[item] = goal
-                return True
-        return False
-
-    return sum(augment(goal, set()) for goal in range(len(admitted)))
 
 
 def _height(item: SceneObject | SceneGoal) -> float:
@@ -158,17 +142,18 @@ class GoalMatching:
         goals, blocks = self.open_goals(), self.to_place()
         admitted = [[j for j, o in enumerate(blocks) if goal_admits(g, o)] for g in goals]
         fillable = [self.fillable(g) for g in goals]
-        best = maximum_matching_size(admitted)
+        rows = as_masks(admitted)
+        best = matching_size(rows)
         fills: set[Decision] = set()
         for row, goal in enumerate(goals):
             if not fillable[row]:
                 continue
-            rest = admitted[:row] + admitted[row + 1 :]
+            rest = rows[:row] + rows[row + 1 :]
             for j in admitted[row]:
                 block = blocks[j]
                 if self.geometry.is_covered(block):
                     continue
-                if maximum_matching_size(rest, banned=j) == best - 1:
+                if matching_size(rest, banned=j) == best - 1:
                     fills.add(Decision(block.id, goal.id))
                     yield Decision(block.id, goal.id)
         wrong = {self.holder[g.id].id for g in goals if g.id in self.holder}

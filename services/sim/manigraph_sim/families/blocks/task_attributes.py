@@ -20,9 +20,9 @@ from difflib import get_close_matches
 import numpy as np
 
 from manigraph_shared.errors import DrawRefused
+from manigraph_shared.goal_matching import Shortfall, match, shortfall_of
 from manigraph_shared.printable import quoted
 from manigraph_sim.families.blocks.fillable import fillable_rows
-from manigraph_sim.families.blocks.goal_matching import Shortfall, match, shortfall_of
 from manigraph_sim.families.blocks.task_file_specs import RESERVED, GoalSpec, ObjectSpec
 
 AttributeValue = str | float

@@ -5,7 +5,7 @@ from __future__ import annotations
 import itertools
 import random
 
-from manigraph_sim.families.blocks.goal_matching import as_masks, match, shortfall
+from manigraph_shared.goal_matching import as_masks, match, matching_size, shortfall
 
 
 def brute_force_fills_every_goal(admitted: list[list[int]]) -> bool:
@@ -28,6 +28,29 @@ def test_agrees_with_brute_force_and_names_a_hall_violation() -> None:
             assert len(missing.objects) < len(missing.goals)
             reachable = {i for g in missing.goals for i in admitted[g]}
             assert reachable == set(missing.objects)
+
+
+def brute_force_size(admitted: list[list[int]], banned: int | None) -> int:
+    """The most goals that take distinct objects they accept, ``banned`` left out."""
+    objects = sorted({i for row in admitted for i in row} - {banned})
+    best = 0
+    for goals in range(len(admitted) + 1):
+        for rows in itertools.combinations(range(len(admitted)), goals):
+            for chosen in itertools.permutations(objects, goals):
+                if all(i in admitted[g] for g, i in zip(rows, chosen, strict=True)):
+                    best = goals
+                    break
+    return best
+
+
+def test_the_matching_size_agrees_with_brute_force_with_and_without_a_banned_object() -> None:
+    rng = random.Random(1)
+    for _ in range(200):
+        goals, objects = rng.randint(1, 4), rng.randint(1, 5)
+        admitted = [[i for i in range(objects) if rng.random() < 0.5] for _ in range(goals)]
+        banned = rng.choice([None, rng.randrange(objects)])
+        size = matching_size(as_masks(admitted), banned)
+        assert size == brute_force_size(admitted, banned), admitted
 
 
 def test_a_complete_matching_gives_each_goal_an_object_it_accepts() -> None:

@@ -1,5 +1,7 @@
 """Can a task's objects fill all its required goals at once? A bipartite matching of goals to
-the objects each one accepts, and, when there is none, the goal to name and why.
+the objects each one accepts, and, when there is none, the goal to name and why. The one
+implementation: the sim checks task files with it (``task_attributes``), the planner's
+generic expert keeps a maximum matching of what is left to place (``policies.matching``).
 
 Each required goal needs an object of its own (an object fills one goal); which objects a goal
 may take is given per goal, as a list or as a bit mask (bit ``i``: object ``i``). A maximum
@@ -17,6 +19,7 @@ one, so a file whose goals each have one of their own costs one step a goal.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 
@@ -40,7 +43,7 @@ class Matching:
     failed: int | None = None
 
 
-def as_masks(admitted: list[list[int]]) -> list[int]:
+def as_masks(admitted: Sequence[Sequence[int]]) -> list[int]:
     """Each goal's objects (a list of indices) as a bit mask."""
     masks = []
     for row in admitted:
@@ -104,6 +107,16 @@ def maximum_matching(admitted: list[list[int]]) -> list[int | None]:
     """For each goal (a row of ``admitted``: the objects it accepts), the object it takes in
     a maximum matching, or None."""
     return match(as_masks(admitted)).taken
+
+
+def matching_size(rows: Sequence[int], banned: int | None = None) -> int:
+    """How many goals (``rows[g]``: the mask of the objects goal ``g`` accepts) can take an
+    object of their own at once, object ``banned`` left out. Masks, so a caller asking many
+    times (the planner's expert: once a candidate move) converts its rows once."""
+    if banned is not None:
+        keep = ~(1 << banned)
+        rows = [row & keep for row in rows]
+    return len(rows) - match(list(rows)).taken.count(None)
 
 
 def shortfall(admitted: list[list[int]]) -> Shortfall | None:
