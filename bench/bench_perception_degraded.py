@@ -70,7 +70,7 @@ def render(seeds: range, task: str, blocks: int, out: Path) -> None:
                     "occupied": backend.evaluation().filled_goals,
                 }
             )
-        episodes.append({"layout": layout.model_dump_json(), "frames": frames})
+        episodes.append({"layout": layout.to_json(), "frames": frames})
         print(f"seed {seed}: {len(frames)} frames", flush=True)
     assert backend.camera is not None
     record = {
@@ -92,7 +92,7 @@ def evaluate(path: Path, noise: float, blur: int, deblur: bool, rest: bool) -> N
     checks = correct = frames = 0
     seconds = 0.0
     for episode in data["episodes"]:
-        layout = TaskLayout.model_validate_json(episode["layout"])
+        layout = TaskLayout.decode(episode["layout"].encode())
         world = WorldConfig() if rest else WorldConfig(rest=None)
         perception = Perception(sim_marker_map(), calibration, world=world)
         if not deblur:

@@ -72,7 +72,7 @@ def main() -> None:
             sent = 0
             start = time.perf_counter()
             while time.perf_counter() - start < args.seconds:
-                bus.publish(template.model_copy(update={"scene_sequence": sent}))
+                bus.publish(template.replace(scene_sequence=sent))
                 sent += 1
             elapsed = time.perf_counter() - start
             time.sleep(0.5)

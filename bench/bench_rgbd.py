@@ -232,7 +232,7 @@ def main() -> None:
     rgbd_fps = len(frames) / (time.perf_counter() - t)
     aruco_frames = sorted(ARUCO_FRAMES.glob("stack4-*.png"))
     aruco = Perception(sim_marker_map(), calibration)
-    aruco_layout = TaskLayout.model_validate(
+    aruco_layout = TaskLayout.from_builtins(
         json.loads(aruco_frames[0].with_suffix(".json").read_text())["layout"]
     )
     aruco.set_layout(aruco_layout)

@@ -94,9 +94,7 @@ def measure(
     trip, floor = [], []
     for i in range(samples + 20):
         episode = f"bench-{tag}-{i}"
-        scene = template.model_copy(
-            update={"episode_id": episode, "stamp": time.time(), "sequence": i}
-        )
+        scene = template.replace(episode_id=episode, stamp=time.time(), sequence=i)
         sent = time.perf_counter()
         bus.publish(scene)
         got = arrivals.wait(episode)

@@ -47,9 +47,7 @@ class Timer:
 
     def sample(self, template: Scene, index: int, keep: bool) -> None:
         episode = f"bench-{self.name}-{index}"
-        scene = template.model_copy(
-            update={"episode_id": episode, "stamp": time.time(), "sequence": index}
-        )
+        scene = template.replace(episode_id=episode, stamp=time.time(), sequence=index)
         sent = time.perf_counter()
         self.bus.publish(scene)
         with self.ready:

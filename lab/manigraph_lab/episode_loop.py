@@ -102,13 +102,9 @@ def add_noise(scene: Scene, sigma: float, rng: np.random.Generator) -> Scene:
         dx, dy, dz = rng.normal(0.0, sigma, 3)
         return Vector3(x=position.x + dx, y=position.y + dy, z=position.z + dz)
 
-    return scene.model_copy(
-        update={
-            "objects": [
-                o.model_copy(update={"position": jitter(o.position)}) for o in scene.objects
-            ],
-            "goals": [g.model_copy(update={"position": jitter(g.position)}) for g in scene.goals],
-        }
+    return scene.replace(
+        objects=[o.replace(position=jitter(o.position)) for o in scene.objects],
+        goals=[g.replace(position=jitter(g.position)) for g in scene.goals],
     )
 
 
@@ -162,4 +158,4 @@ def _stuck(
     backend.ended = True
     end = backend.end_event(stamp)
     assert end is not None
-    return end.model_copy(update={"reason": why[:256]})
+    return end.replace(reason=why[:256])

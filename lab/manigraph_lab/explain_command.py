@@ -109,7 +109,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def summary(explanation: Explanation) -> dict[str, object]:
     """The CLI's JSON: decision_id, object, goal, edges, features, sentence (and a bit more)."""
-    data = explanation.model_dump(mode="json")
+    data = explanation.to_builtins()
     keys = ("decision_id", "object", "goal", "edges", "features", "sentence")
     extra = ("episode_id", "scene_sequence", "policy", "fidelity", "seed")
     return {key: data[key] for key in (*keys, *extra)}
@@ -183,9 +183,7 @@ def explain_offline(
     scene = scenes.get((action.episode_id, action.scene_sequence))
     if scene is None:
         raise LogError(f"decision: the scene of '{action.decision_id}' is not in {log}")
-    own = explainer.explain_scene(scene, seed).model_copy(
-        update={"decision_id": action.decision_id}
-    )
+    own = explainer.explain_scene(scene, seed).replace(decision_id=action.decision_id)
     note = ""
     if (own.object, own.goal) != (action.object_id, action.goal_id):
         note = (

@@ -53,7 +53,7 @@ def message_types() -> list[type[Message]]:
 # --- valid messages ---------------------------------------------------------------------------
 def valid_objects(cls: type[Message]) -> st.SearchStrategy[dict[str, Any]]:
     """JSON objects that validate as ``cls`` (most draws; see ``valid_messages``)."""
-    schema = cls.model_json_schema()
+    schema = cls.json_schema()
     return _from_schema(schema, schema.get("$defs", {})).map(lambda obj: _repair(cls, obj))
 
 

@@ -57,7 +57,7 @@ def test_perception_turns_bus_images_into_scenes(tmp_path: Path) -> None:
             bus.subscribe(Scene, scenes.put)
             bus.subscribe(MarkerDetections, detections.put)
             bus.subscribe(ServiceStatus, statuses.put, key="manigraph/status/perception")
-            layout = TaskLayout.model_validate({**record["layout"], "stamp": time.time() - 1.0})
+            layout = TaskLayout.from_builtins({**record["layout"], "stamp": time.time() - 1.0})
             bus.publish(layout)
             time.sleep(0.5)
             bus.publish(_image("stack4-start", 0))

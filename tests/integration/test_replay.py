@@ -48,7 +48,7 @@ def test_a_changed_decision_in_the_log_is_caught(
         data = item.data
         if item.topic == Action.key and not changed:
             action = Action.decode(data)
-            data = action.model_copy(update={"goal_id": "goal_4"}).encode()
+            data = action.replace(goal_id="goal_4").encode()
             changed = action.goal_id != "goal_4"
         writer.write(item.topic, data, item.log_time_ns)
     writer.close()

@@ -62,7 +62,7 @@ def test_offline_mistakes_name_what_is_wrong(
     with pytest.raises(ConfigError, match="views: 'top'"):
         render_explanation(explanation, tmp_path / "x.png", views=("top",))
     with pytest.raises(ConfigError, match="nodes"):
-        render_explanation(explanation.model_copy(update={"nodes": []}), tmp_path / "x.png")
+        render_explanation(explanation.replace(nodes=[]), tmp_path / "x.png")
 
 
 def test_the_study_writes_a_table_of_top_features(tmp_path: Path) -> None:

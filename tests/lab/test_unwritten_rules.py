@@ -61,13 +61,11 @@ def test_the_rule_free_expert_is_judged_by_the_rules() -> None:
 def test_what_the_teacher_is_shown_is_the_same_with_or_without_rules() -> None:
     task, rules = texts("same-colour")
     (plain,) = DemoProtocol(trajectories=1, seed=9300, task_file=task).requests()
-    ruled = plain.model_copy(update={"rules": rules})
+    ruled = plain.replace(rules=rules)
     teacher = with_rules(POLICIES["expert"](), rules)
     with_them, without = run_episode(teacher, ruled), run_episode(POLICIES["expert"](), plain)
     first = with_them.steps[0].scene
-    assert first.model_copy(update={"stamp": 0.0}) == without.steps[0].scene.model_copy(
-        update={"stamp": 0.0}
-    )
+    assert first.replace(stamp=0.0) == without.steps[0].scene.replace(stamp=0.0)
     assert all(g.accepts == {} for s in with_them.steps for g in s.scene.goals)
 
 

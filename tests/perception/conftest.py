@@ -23,7 +23,7 @@ class Frame:
         self.grey = cv2.imread(str(FRAMES / f"{name}.png"), cv2.IMREAD_GRAYSCALE)
         self.png = (FRAMES / f"{name}.png").read_bytes()
         record = json.loads((FRAMES / f"{name}.json").read_text())
-        self.layout = TaskLayout.model_validate(record["layout"])
+        self.layout = TaskLayout.from_builtins(record["layout"])
         self.truth = {body: np.array(pose[0]) for body, pose in record["truth"].items()}
 
 

@@ -32,7 +32,7 @@ def save(name: str, backend: PhysicsBackend) -> None:
     truth = {
         body: [p.tolist() for p in backend.world.pose(body)] for body in backend.world.entities
     }
-    record = {"layout": json.loads(layout.model_dump_json()), "truth": truth}
+    record = {"layout": json.loads(layout.to_json()), "truth": truth}
     (HERE / f"{name}.json").write_text(json.dumps(record, indent=1))
 
 

@@ -81,7 +81,7 @@ def test_a_closed_box_hides_what_it_holds_if_partially_observable(
     perception, frame, partially_observable: bool
 ) -> None:  # type: ignore[no-untyped-def]
     pack = frame("boxpack3-start")
-    layout = pack.layout.model_copy(update={"partially_observable": partially_observable})
+    layout = pack.layout.replace(partially_observable=partially_observable)
     perception.set_layout(layout)
     scene, _ = perception.process(pack.grey, NOW, NOW)
     assert scene is not None
@@ -133,7 +133,7 @@ def test_a_layout_object_without_a_marker_is_refused_by_name(perception, frame) 
         size=Vector3(x=0.04, y=0.04, z=0.04),
         position=Vector3(x=0.5, y=0.0, z=0.02),
     )
-    bad = layout.model_copy(update={"objects": [*layout.objects, extra]})
+    bad = layout.replace(objects=[*layout.objects, extra])
     with pytest.raises(ConfigError, match="mug_0"):
         perception.set_layout(bad)
 

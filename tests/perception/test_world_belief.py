@@ -54,7 +54,7 @@ def test_a_new_episode_forgets_the_old_world() -> None:
     world.update(_seen_at(0.0), 1.0)
     assert not world.set_layout(_layout())  # the same episode again: kept
     assert world.filled_by == {"goal_0": "block_0"}
-    assert world.set_layout(_layout().model_copy(update={"episode_id": "e2"}))
+    assert world.set_layout(_layout().replace(episode_id="e2"))
     assert world.filled_by == {} and world.stale(1.0)
 
 

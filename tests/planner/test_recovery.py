@@ -211,7 +211,7 @@ def test_episodes_that_succeed_without_recovery_take_the_same_decisions_with_it(
     for a, b in zip(without, with_recovery, strict=True):
         if a.success:
             assert b.success
-            assert [s.action.model_dump(exclude={"stamp"}) for s in a.steps] == [
-                s.action.model_dump(exclude={"stamp"}) for s in b.steps
+            assert [s.action.to_builtins(exclude={"stamp"}) for s in a.steps] == [
+                s.action.to_builtins(exclude={"stamp"}) for s in b.steps
             ]
     assert sum(r.success for r in with_recovery) >= sum(r.success for r in without)

@@ -114,8 +114,6 @@ def test_bad_memory_settings_are_refused() -> None:
 
 def test_an_action_names_the_refusal_it_passes_over_and_old_logs_decode() -> None:
     action = Episode(("a", "g0")).step(world(), None)
-    named = Action.decode(
-        action.model_copy(update={"passed_over": "a->g0: no_ik_solution"}).encode()
-    )
+    named = Action.decode(action.replace(passed_over="a->g0: no_ik_solution").encode())
     assert named.passed_over == "a->g0: no_ik_solution"
     assert Action.decode(action.encode()).passed_over is None

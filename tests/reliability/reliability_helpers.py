@@ -91,7 +91,7 @@ def action(
         "stamp": time.time(),
         **changes,
     }
-    return Action.model_validate(fields)
+    return Action.from_builtins(fields)
 
 
 def top_block_and_free_goal(scene: Scene) -> tuple[str, str]:

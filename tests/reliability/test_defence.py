@@ -55,12 +55,12 @@ def test_forged_scenes_are_refused_and_never_reach_the_skill(running_stack: Stac
         real = scene_of(scenes, "forged-scene")
         block, goal = top_block_and_free_goal(real)
         moved = [
-            g.model_copy(update={"position": Vector3(x=0.6, y=0.45, z=0.02)}) if g.id == goal else g
+            g.replace(position=Vector3(x=0.6, y=0.45, z=0.02)) if g.id == goal else g
             for g in real.goals
         ]
-        huge = real.model_copy(update={"sequence": 10**15, "goals": moved})
+        huge = real.replace(sequence=10**15, goals=moved)
         bus.publish(huge)
-        bus.publish(real.model_copy(update={"episode_id": "someone-else", "sequence": 1}))
+        bus.publish(real.replace(episode_id="someone-else", sequence=1))
         assert rejections(statuses, "skills", "Scene:sequence_jump") >= 1
         assert rejections(statuses, "skills", "Scene:not_running_episode") >= 1
 
@@ -132,7 +132,7 @@ def test_an_action_that_overtakes_its_episodes_start_is_executed(running_stack: 
         time.sleep(0.3)
         first = reset(bus, "first")
         earlier = scene_of(scenes, "first")
-        bus.publish(first.model_copy(update={"phase": EpisodePhase.END, "success": False}))
+        bus.publish(first.replace(phase=EpisodePhase.END, success=False))
         time.sleep(0.2)  # skills has seen the end of "first" and nothing of "next"
         block, goal = top_block_and_free_goal(earlier)  # seed 0 again: the same layout
         # A decision of the ended episode (made on a scene just before its end) moves nothing:
@@ -141,7 +141,7 @@ def test_an_action_that_overtakes_its_episodes_start_is_executed(running_stack: 
         late = skill.wait(lambda s: s.decision_id == "first:1" and s.state.terminal)
         assert (late.state, late.reason) == (SkillState.FAILED, "episode_ended")
         ahead = action(earlier, block, goal, "next:0", episode_id="next")
-        ahead = ahead.model_copy(update={"scene_sequence": earlier.sequence + 1})
+        ahead = ahead.replace(scene_sequence=earlier.sequence + 1)
         bus.publish(ahead)
         reset(bus, "next")
         done = skill.wait(lambda s: s.decision_id == "next:0" and s.state.terminal)
@@ -166,15 +166,13 @@ def test_a_scene_that_overtakes_its_episodes_start_is_decided_on(running_stack: 
         first = reset(bus, "first")
         actions.wait(lambda a: a.decision_id == "first:0", timeout=STARTUP)
         earlier = scene_of(scenes, "first")
-        ahead = earlier.model_copy(
-            update={"episode_id": "next", "sequence": 1, "stamp": time.time()}
-        )
+        ahead = earlier.replace(episode_id="next", sequence=1, stamp=time.time())
         bus.publish(ahead)
         time.sleep(0.5)  # the planner has refused it: "first" is still running
         now = time.time()
         ended = {"phase": EpisodePhase.END, "success": False, "stamp": now}
-        bus.publish(first.model_copy(update=ended))
-        bus.publish(first.model_copy(update={"episode_id": "next", "stamp": now}))
+        bus.publish(first.replace(**ended))
+        bus.publish(first.replace(episode_id="next", stamp=now))
         decided = actions.wait(lambda a: a.episode_id == "next", timeout=10.0)
         assert (decided.decision_id, decided.scene_sequence) == ("next:0", 1)
 

@@ -29,7 +29,7 @@ SERVICES = ("sim", "skills", "planner")
 
 
 def forged_action(decision_id: str) -> object:
-    scene = Scene.model_validate(
+    scene = Scene.from_builtins(
         {"episode_id": "forged", "sequence": 1, "objects": [], "goals": [], "stamp": time.time()}
     )
     return action(scene, "block_0", "goal_0", decision_id, policy="other-decider")

@@ -253,7 +253,7 @@ def test_schema_is_json_schema_titled_by_type() -> None:
 def test_a_camera_matrix_that_is_not_pinhole_is_rejected() -> None:
     bad = CameraInfo(
         camera="front", stamp=NOW, width=640, height=480, camera_matrix=[1, 0, 0, 0, 1, 0, 0, 0, 1]
-    ).model_dump()
+    ).to_builtins()
     bad["camera_matrix"] = [415.7, 3.0, 319.5, 0, 415.7, 239.5, 0, 0, 1]
     with pytest.raises(MessageError) as error:
         CameraInfo.decode(json.dumps(bad).encode())

@@ -135,7 +135,7 @@ def test_a_seed_the_rules_cannot_fill_is_refused_naming_the_goal() -> None:
     refused = []
     for seed in range(8):
         try:
-            episode_layout(request(rules, task).model_copy(update={"seed": seed}))
+            episode_layout(request(rules, task).replace(seed=seed))
         except DrawRefused as exc:
             refused.append(seed)
             assert "right cannot be filled" in str(exc) and DrawRefused.MARK in str(exc)

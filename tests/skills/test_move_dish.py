@@ -102,7 +102,7 @@ def test_the_spare_spots_on_a_side_are_offered_only_while_the_rack_whose_handle_
         SceneRack(id=rack, position=Vector3(x=0.6, y=0.0, z=z), open=rack == out)
         for rack, z in (("rack_top", 0.3), ("rack_bottom", 0.1))
     ]
-    scene = SCENE.model_copy(update={"objects": [dish], "racks": racks})
+    scene = SCENE.replace(objects=[dish], racks=racks)
     spots = set_down_spots(scene, dish, np.array([0.38, dish_y, 0.0175]))
     beside = [spot for spot in spots if abs(spot[1]) >= SPARE_Y]
     assert beside

@@ -82,9 +82,9 @@ def test_between_two_turned_neighbours_it_goes_in_the_middle_and_never_far() -> 
 def test_dishes_in_other_rows_or_racks_and_plates_are_left_alone() -> None:
     assert where(bowl("other_row", -PITCH / 2, 30.0, x=0.615)) == 0.0
     lower = bowl("lower_rack", -PITCH / 2, 30.0)
-    lower = lower.model_copy(update={"position": Vector3(x=0.685, y=-PITCH / 2, z=0.16)})
+    lower = lower.replace(position=Vector3(x=0.685, y=-PITCH / 2, z=0.16))
     assert where(lower) == 0.0
-    plate = bowl("plate", 0.0, x=0.4).model_copy(update={"category": ObjectCategory.PLATE})
+    plate = bowl("plate", 0.0, x=0.4).replace(category=ObjectCategory.PLATE)
     scene = Scene(
         episode_id="e", stamp=1.0, sequence=0, objects=[plate, bowl("l", -0.04, 30)], goals=[SLOT]
     )

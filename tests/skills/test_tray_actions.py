@@ -154,9 +154,9 @@ def test_a_dish_of_the_far_row_is_taken_under_a_pulled_out_top_racks_floor() -> 
     scene = _rack_pulled_out()
     bowl = scene.object("bowl_0")
     far = Vector3(x=0.46, y=0.08, z=bowl.position.z)  # the physical counter's far row
-    bowl = bowl.model_copy(update={"position": far})
+    bowl = bowl.replace(position=far)
     others = [o for o in scene.objects if o.id != "bowl_0"]
-    scene = scene.model_copy(update={"objects": [*others, bowl]})
+    scene = scene.replace(objects=[*others, bowl])
     slot = scene.goal("top_bowl_00").position
     pick, _ = choose_grasps(scene, bowl, slot)
     arm = PerfectArm()
@@ -185,25 +185,21 @@ def test_a_plate_on_its_rim_on_the_far_row_is_taken_under_a_pulled_out_bottom_ra
     # The bottom rack out as far as the physics world's rail lets it, its slots with it.
     rack = scene.rack("rack_bottom")
     back = RACK_TRAVEL - RAIL
-    rack = rack.model_copy(
-        update={"position": _moved(rack.position, back), "travel": RAIL, "rail": RAIL}
-    )
+    rack = rack.replace(position=_moved(rack.position, back), travel=RAIL, rail=RAIL)
     goals = [
-        g.model_copy(update={"position": _moved(g.position, back)}) if g.rack == rack.id else g
+        g.replace(position=_moved(g.position, back)) if g.rack == rack.id else g
         for g in scene.goals
     ]
     far_row = COUNTER_ROWS[-1][1] + 0.005  # the far row, at its farthest jitter
     width, _, thickness = PHYSICAL_DISH_SIZE["plate"]
-    plate = scene.object("plate_0").model_copy(
-        update={
-            "position": Vector3(x=far_row, y=0.0, z=width / 2),
-            "orientation": ORIENTATIONS[4],  # on its rim, its thin axis along x
-            "size": Vector3(x=width, y=width, z=thickness),
-        }
+    plate = scene.object("plate_0").replace(
+        position=Vector3(x=far_row, y=0.0, z=width / 2),
+        orientation=ORIENTATIONS[4],
+        size=Vector3(x=width, y=width, z=thickness),
     )
     others = [o for o in scene.objects if o.id != plate.id]
     racks = [rack if r.id == rack.id else r for r in scene.racks]
-    scene = scene.model_copy(update={"objects": [*others, plate], "racks": racks, "goals": goals})
+    scene = scene.replace(objects=[*others, plate], racks=racks, goals=goals)
     pick, _ = choose_grasps(scene, plate, scene.goal("bottom_plate_05").position)
     arm = PerfectArm()
     PandaMotionDriver(arm).pick(Motion("e:1", plate.id, plate.position, plate.orientation, pick))
@@ -214,4 +210,4 @@ def test_a_plate_on_its_rim_on_the_far_row_is_taken_under_a_pulled_out_bottom_ra
 
 
 def _moved(position: Vector3, dx: float) -> Vector3:
-    return position.model_copy(update={"x": position.x + dx})
+    return position.replace(x=position.x + dx)

@@ -77,9 +77,7 @@ class World:
         )
 
     def end(self, success: bool) -> EpisodeEvent:
-        return self.start.model_copy(
-            update={"phase": EpisodePhase.END, "success": success, "stamp": self.tick()}
-        )
+        return self.start.replace(phase=EpisodePhase.END, success=success, stamp=self.tick())
 
 
 def session_on(world: World) -> tuple[DemoSession, Sink]:
@@ -293,9 +291,7 @@ def test_a_dish_turned_about_the_vertical_keeps_its_orientation_on_the_page() ->
         z=cz * q.z + sz * q.w,
         w=cz * q.w - sz * q.z,
     )
-    moved = scene.model_copy(
-        update={"objects": [dish.model_copy(update={"orientation": turned}), *scene.objects[1:]]}
-    )
+    moved = scene.replace(objects=[dish.replace(orientation=turned), *scene.objects[1:]])
     (shown, *_) = scene_view(moved)["objects"]  # type: ignore[misc]
     assert shown["orientation"] == nearest_orientation(q)
     assert nearest_orientation(turned) != nearest_orientation(q)  # what the page showed before
@@ -491,8 +487,8 @@ def test_a_proposal_for_a_world_that_is_gone_or_one_the_page_would_refuse_is_not
     assert moved.policy == "human"  # nothing was proposed on that world
     session.on_status(world.status(moved, SkillState.SUCCEEDED))
     after = world.scene()  # the test's world does not move blocks: it is filled by hand
-    goals = [g.model_copy(update={"filled": g.id == "goal_0"}) for g in after.goals]
-    session.on_scene(after.model_copy(update={"goals": goals}))
+    goals = [g.replace(filled=g.id == "goal_0") for g in after.goals]
+    session.on_scene(after.replace(goals=goals))
     session.propose(old, Click("block_2", "goal_0"))  # the late answer about the old world
     assert session.snapshot()["proposer"]["proposal"] is None  # type: ignore[index]
     scene = session.wants_proposal()

@@ -80,5 +80,5 @@ def test_markers_are_outlined_and_labelled() -> None:
     (marker,) = detections.markers
     assert marker_outline(marker)[0] == (10.5, 10.5)  # Foxglove: pixel corner origin
     assert marker_label(marker) == "b0"
-    assert marker_label(marker.model_copy(update={"object_id": ""})) == "id 3"
+    assert marker_label(marker.replace(object_id="")) == "id 3"
     assert foxglove_annotations(detections).encode()  # a valid message

@@ -148,7 +148,7 @@ def test_the_decision_is_an_arrow_from_the_object_to_the_goal(
 
 
 def test_a_decision_of_another_episode_is_not_drawn(decode_protobuf: ProtobufDecoder) -> None:
-    other = action().model_copy(update={"episode_id": "ep-2"})
+    other = action().replace(episode_id="ep-2")
     assert "decision" not in decoded_update(decode_protobuf, scene_update(box_scene(), other))
 
 

@@ -73,7 +73,7 @@ def load_layout(path: str | Path, episode_id: str = "live", positions: bool = Tr
     except (KeyError, TypeError, ValueError) as exc:
         raise ConfigError("layout", f"'{path}': missing or malformed entry {exc}") from None
     try:
-        return TaskLayout.model_validate(
+        return TaskLayout.from_builtins(
             {
                 "episode_id": episode_id,
                 "stamp": time.time(),

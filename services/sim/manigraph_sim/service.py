@@ -223,7 +223,7 @@ class SimService(Service):
         result = self.backend.execute_trajectory(command, time.time())
         # Stamped when the motion ended (not when it began), so what was streamed during the
         # motion is older than the answer, and a scene stamped after it shows the end state.
-        result = result.model_copy(update={"stamp": time.time()})
+        result = result.replace(stamp=time.time())
         if not result.ok:
             self.log.info("trajectory %s failed: %s", command.command_id, result.reason)
             if result.reason in REFUSED:

@@ -79,10 +79,8 @@ class PickAndPlace:
             if action.orientation_index is not None:
                 turned = self.driver.turn_over(decision, item, turn, scene)
                 if turned is not item:
-                    scene = scene.model_copy(
-                        update={
-                            "objects": [turned if o.id == item.id else o for o in scene.objects]
-                        }
+                    scene = scene.replace(
+                        objects=[turned if o.id == item.id else o for o in scene.objects]
                     )
                     item = turned
             set_down = family.part("set_down_point")

@@ -21,7 +21,6 @@ import sys
 import threading
 import types
 import typing
-from collections.abc import Mapping
 from enum import Enum, StrEnum
 from typing import Annotated, Any, ClassVar, Self
 
@@ -156,27 +155,24 @@ class Struct(
     def _check(self) -> None:
         """Cross-field rules; raise ``ValueError("field: why")``."""
 
-    def model_copy(self, *, update: Mapping[str, Any] | None = None) -> Self:
-        """A copy with ``update``'s fields replaced (checked as on construction)."""
-        return msgspec.structs.replace(self, **(update or {}))
+    def replace(self, **changes: Any) -> Self:
+        """A copy with ``changes``' fields replaced (checked as on construction)."""
+        return msgspec.structs.replace(self, **changes)
 
-    def model_dump(
-        self, mode: str = "json", exclude: set[str] | frozenset[str] = frozenset()
-    ) -> dict[str, Any]:
+    def to_builtins(self, exclude: set[str] | frozenset[str] = frozenset()) -> dict[str, Any]:
         """The value as JSON-able builtins (enums as their values, bytes as base64), less the
         top-level fields in ``exclude``."""
-        del mode  # one form: what the wire carries
         data: dict[str, Any] = msgspec.to_builtins(self, enc_hook=_builtin)
         for name in exclude:
             data.pop(name, None)
         return data
 
-    def model_dump_json(self) -> str:
+    def to_json(self) -> str:
         """The value as JSON text, as the wire carries it."""
         return _ENCODER.encode(self).decode()
 
     @classmethod
-    def model_validate(cls, data: object) -> Self:
+    def from_builtins(cls, data: object) -> Self:
         """``data`` (JSON-like builtins) as this type, or :class:`MessageError`."""
         try:
             return msgspec.convert(data, cls, strict=False)
@@ -199,7 +195,7 @@ class Struct(
             kind = inner
 
     @classmethod
-    def model_json_schema(cls) -> dict[str, Any]:
+    def json_schema(cls) -> dict[str, Any]:
         """JSON Schema of this type, nested types under ``$defs``."""
         schema = msgspec.json.schema(cls)
         defs: dict[str, Any] = schema.get("$defs", {})
@@ -339,7 +335,7 @@ class Message(Struct, frozen=True, kw_only=True):
 
     @classmethod
     def mcap_schema(cls) -> bytes:
-        schema = cls.model_json_schema()
+        schema = cls.json_schema()
         schema["title"] = cls.type_name()
         return msgspec.json.encode(schema)
 

@@ -34,7 +34,7 @@ def test_latest_and_by_id_explain_the_decisions_the_planner_made(
     first = decisions.on_scene(make_stack_scene(4))
     assert first is not None
     decisions.pending = None  # as if its skill had ended
-    second = decisions.on_scene(make_stack_scene(4).model_copy(update={"stamp": 2.0}))
+    second = decisions.on_scene(make_stack_scene(4).replace(stamp=2.0))
     assert second is not None and second.decision_id != first.decision_id
     latest = handler(ExplainRequest(decision_id="latest"))
     assert latest.decision_id == second.decision_id == handler(ExplainRequest()).decision_id
@@ -79,7 +79,7 @@ def test_malformed_requests_are_refused_naming_the_field(
     with pytest.raises(MessageError, match="decision_id: give a decision id or a scene"):
         ExplainRequest.decode(
             ExplainRequest(scene=make_stack_scene(2))
-            .model_dump_json()
+            .to_json()
             .replace('"decision_id":null', '"decision_id":"e:1"')
             .encode()
         )
@@ -103,7 +103,7 @@ def test_the_history_keeps_only_the_last_decisions(
     ids = []
     for step in range(3):
         decisions.pending = None
-        action = decisions.on_scene(make_stack_scene(3).model_copy(update={"stamp": 1.0 + step}))
+        action = decisions.on_scene(make_stack_scene(3).replace(stamp=1.0 + step))
         assert action is not None
         ids.append(action.decision_id)
     assert history.ids() == ids[1:]

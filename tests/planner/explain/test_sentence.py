@@ -84,8 +84,8 @@ def test_a_deciding_attribute_names_the_object_and_what_the_goal_accepts() -> No
 
 
 def test_an_attribute_both_rivals_share_is_no_reason() -> None:
-    both_red = COLOURS.model_copy(
-        update={"objects": [obj("block_3", 0.4, colour="red"), obj("block_1", 0.5, colour="red")]}
+    both_red = COLOURS.replace(
+        objects=[obj("block_3", 0.4, colour="red"), obj("block_1", 0.5, colour="red")]
     )
     text = sentence("block_3", "red_slot_1", [], ["colour=red"], ("block_1", None), scene=both_red)
     assert text == (
@@ -148,13 +148,11 @@ def test_a_task_policy_s_explanation_is_in_the_task_s_terms() -> None:
 
 
 def test_every_key_a_goal_accepts_is_named() -> None:
-    sized = COLOURS.model_copy(
-        update={
-            "goals": [
-                goal("red_slot_1", 0.4, colour="red", size=[0.04, 0.04, 0.04]),
-                goal("blue_slot_0", 0.5, colour="blue"),
-            ]
-        }
+    sized = COLOURS.replace(
+        goals=[
+            goal("red_slot_1", 0.4, colour="red", size=[0.04, 0.04, 0.04]),
+            goal("blue_slot_0", 0.5, colour="blue"),
+        ]
     )
     text = sentence(
         "block_3", "red_slot_1", [], ["colour=red"], ("block_1", "blue_slot_0"), scene=sized
@@ -168,7 +166,7 @@ def test_every_key_a_goal_accepts_is_named() -> None:
 
 
 def scene_with(*goals: SceneGoal) -> Scene:
-    return COLOURS.model_copy(update={"goals": list(goals)})
+    return COLOURS.replace(goals=list(goals))
 
 
 def test_a_goal_the_policy_could_have_used_is_said_to_be_free() -> None:

@@ -95,8 +95,8 @@ def test_nothing_to_decide_without_visible_objects_or_goals(
 ) -> None:
     scene = make_stack_scene(2)
     entities = getattr(scene, missing)
-    hidden = [e.model_copy(update={"visible": False}) for e in entities]
-    scene = scene.model_copy(update={missing: hidden})
+    hidden = [e.replace(visible=False) for e in entities]
+    scene = scene.replace(**{missing: hidden})
     assert GNNPolicy(PolicyNet(ModelConfig("sage"))).decide(scene) is None
 
 

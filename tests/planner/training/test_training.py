@@ -106,7 +106,7 @@ def test_action_for_an_invisible_node_is_skipped(tmp_path: Path, demo_log: Path)
     ):
         data = item.data
         if item.topic == Action.key and n < 10:
-            data = Action.decode(data).model_copy(update={"object_id": "ghost"}).encode()
+            data = Action.decode(data).replace(object_id="ghost").encode()
         log.write(item.topic, data, item.log_time_ns)
     log.close()
     demos = load_demonstrations([path])

@@ -170,7 +170,7 @@ class DemoUiService(Service):
         episode_id = f"demo-{int(time.time())}-{self._episodes}"
         task_file = self.task_file if values["task"] == "file" else None
         try:
-            request = EpisodeRequest.model_validate(
+            request = EpisodeRequest.from_builtins(
                 {
                     "episode_id": episode_id,
                     "task": values["task"],

@@ -344,7 +344,7 @@ class DemoSession:
                 raise
             assert self.scene is not None
             label = self.proposals.label(action, self.scene)
-            action = action.model_copy(update={"policy": label})
+            action = action.replace(policy=label)
             self.proposals.forget()
             self.pending = _Pending(action, self.scene, time.monotonic())
             self.step += 1

@@ -311,7 +311,7 @@ def camera_info(info: CameraInfo) -> Any:
 
 
 def json_string(message: Message) -> Any:
-    return _new(STRING, data=message.model_dump_json())
+    return _new(STRING, data=message.to_json())
 
 
 class Converter:

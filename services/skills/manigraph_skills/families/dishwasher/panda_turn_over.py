@@ -194,9 +194,7 @@ def turn_dish(
         raise SkillError(
             "orientation_unreachable", f"{item.id} did not turn {ORIENTATION_NAMES[targets[0]]}"
         )
-    return item.model_copy(
-        update={"position": _vector(position), "orientation": quaternion_of(dish)}
-    )
+    return item.replace(position=_vector(position), orientation=quaternion_of(dish))
 
 
 def _tilt_once(
@@ -221,8 +219,8 @@ def _tilt_once(
     # Every up axis asked for first (a plate on any edge: the wrist may clear the counter
     # with the hand rolled one way only), then those a second tilt turns on from.
     wanted = list(dict.fromkeys([*targets, *(t.up_after for t in candidates)]))
-    current = item.model_copy(update={"position": _vector(position)})
-    lying = current.model_copy(update={"orientation": quaternion_of(dish)})
+    current = item.replace(position=_vector(position))
+    lying = current.replace(orientation=quaternion_of(dish))
     height = dish_grasp_height(scene, lying, position, grasp_height_for(float(position[2])))
     grasp = Grasp(height, 0.0, 0.0, scene_obstacles(scene, current, position), np.pi)
     tcp = position + np.array([0.0, 0.0, height])
@@ -297,9 +295,7 @@ def move_dish(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Carry the dish top-down, lying as it lies, to the first of ``cells`` it can be set down
     on: where it then lies and its rotation (turned about the vertical as the hand turned)."""
-    current = item.model_copy(
-        update={"position": _vector(position), "orientation": quaternion_of(dish)}
-    )
+    current = item.replace(position=_vector(position), orientation=quaternion_of(dish))
     # Its centre above what it lies on: the counter, or a rack's floor (then it comes to
     # rest on the counter as it lies, this high).
     resting = float(position[2]) if on_counter(position) else _half_height(item, dish)
