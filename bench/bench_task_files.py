@@ -1,6 +1,7 @@
 """Teach a task written only as a task file, and score it at twice the objects (issue #43).
 
-For each family of ``examples/tasks/`` the bench runs, as a user types them (a new process
+For each example task of ``examples/tasks/`` (a task of the block family written only as
+task files: a small file and larger ones) the bench runs, as a user types them (a new process
 each, imports included):
 
 1. ``manigraph demos --task-file SMALL --trajectories 20 --seed 0 -o DEMOS``  (seeds 0-19)
@@ -19,12 +20,12 @@ the network's own choice). Where the baseline's success is within ``--margin`` (
 0.10) of the learned policy's, the row says ``no learning``: the filter, not the
 demonstrations, made the figure.
 
-    uv run python bench/bench_task_files.py                      # every family
-    uv run python bench/bench_task_files.py --family size-sort   # one
-    uv run python bench/bench_task_files.py --family unwritten/colour-place \
+    uv run python bench/bench_task_files.py                       # every example
+    uv run python bench/bench_task_files.py --example size-sort   # one
+    uv run python bench/bench_task_files.py --example unwritten/colour-place \
         --trajectories 10 --seeds 0 1 2 --arch gat               # a rule nobody wrote
 
-The ``unwritten/`` families (issue #49) are demonstrated and judged by their rules file
+The ``unwritten/`` examples (issue #49) are demonstrated and judged by their rules file
 (``--rules``), which the policy never sees; their success counts only if the rule held.
 """
 
@@ -40,8 +41,8 @@ import time
 from pathlib import Path
 
 TASKS = Path(__file__).resolve().parents[1] / "examples" / "tasks"
-#: family -> (the file demonstrated, the files evaluated: twice the objects and more).
-FAMILIES = {
+#: example task -> (the file demonstrated, the files evaluated: twice the objects and more).
+EXAMPLES = {
     "size-sort": ("size-sort.toml", ("size-sort-8.toml", "size-sort-12.toml")),
     "colour-sort": ("colour-sort.toml", ("colour-sort-8.toml",)),
     "kitting": ("kitting.toml", ("kitting-6.toml",)),
@@ -59,11 +60,11 @@ UNWRITTEN = {
         ("size-tower", (6, 9)),
     )
 }
-FAMILIES.update(UNWRITTEN)
+EXAMPLES.update(UNWRITTEN)
 
 
 def rules_of(task_file: str) -> list[str]:
-    """``--rules R`` for an unwritten family's file, else nothing."""
+    """``--rules R`` for an unwritten example's file, else nothing."""
     rules = TASKS / task_file.replace(".toml", ".rules.toml")
     return ["--rules", str(rules)] if task_file.startswith("unwritten/") else []
 
@@ -99,7 +100,7 @@ def score(model: Path, evaluated: str, episodes: int, accepts_filter: str) -> tu
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--family", choices=sorted(FAMILIES), action="append")
+    parser.add_argument("--example", choices=sorted(EXAMPLES), action="append")
     parser.add_argument("--episodes", type=int, default=50, help="evaluation episodes per file")
     parser.add_argument("--arch", default="sage", help="GNN architecture (default sage)")
     parser.add_argument(
@@ -117,9 +118,9 @@ def main() -> int:
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench-task-files-") as scratch:
         out = Path(scratch)
-        for family, seed in ((f, s) for f in args.family or list(FAMILIES) for s in args.seeds):
-            small, large = FAMILIES[family]
-            name = family.replace("/", "-")
+        for example, seed in ((e, s) for e in args.example or list(EXAMPLES) for s in args.seeds):
+            small, large = EXAMPLES[example]
+            name = example.replace("/", "-")
             demos, model = out / f"{name}.mcap", out / f"{name}-{seed}.pt"
             baseline = out / f"{name}-{seed}-1-epoch.pt"
             t_demos = 0.0
@@ -132,7 +133,7 @@ def main() -> int:
             t_train, _ = manigraph(*train, *args.train_args.split(), "-o", str(model))
             manigraph(*train, "--epochs", "1", "-o", str(baseline))
             # A file without accepts has no filter to turn off: scored once.
-            filters = ("on",) if family in UNWRITTEN else ("on", "off")
+            filters = ("on",) if example in UNWRITTEN else ("on", "off")
             for index, evaluated in enumerate(large):
                 for accepts_filter in filters:
                     t_eval, summary = score(model, evaluated, args.episodes, accepts_filter)
@@ -140,7 +141,7 @@ def main() -> int:
                     teach = t_demos + t_train + t_eval
                     first = index == 0 and accepts_filter == "on"
                     row = {
-                        "family": family,
+                        "example": example,
                         "seed": seed,
                         "demonstrated": small,
                         "evaluated": evaluated,
@@ -162,7 +163,7 @@ def main() -> int:
                     rows.append(row)
                     print(json.dumps(row), file=sys.stderr, flush=True)
     print(
-        f"| family | seed | evaluated | filter | success | 1-epoch baseline "
+        f"| example | seed | evaluated | filter | success | 1-epoch baseline "
         f"| (margin {args.margin:.2f}) | wrong object | rule violations | demos s | train s "
         "| eval s | teach to run s | load |"
     )
@@ -170,7 +171,7 @@ def main() -> int:
     for r in rows:
         teach = "-" if r["teach_to_run_s"] is None else f"{r['teach_to_run_s']:.1f}"
         print(
-            f"| {r['family']} | {r['seed']} | {r['evaluated']} | {r['accepts_filter']} "
+            f"| {r['example']} | {r['seed']} | {r['evaluated']} | {r['accepts_filter']} "
             f"| {r['success']:.2f} | {r['baseline_1_epoch']:.2f} | {r['verdict']} "
             f"| {r['wrong_object']} | {r['rule_violations']} | {r['demos_s']:.1f} "
             f"| {r['train_s']:.1f} "

@@ -1,4 +1,4 @@
-"""The task families written only as task files (examples/tasks/, docs/task-files.md): each
+"""The example tasks written only as task files (examples/tasks/, docs/task-files.md): each
 small file and its evaluation file with twice the objects lay out varied scenes per seed, and
 the geometric world scores them by what each goal accepts."""
 
@@ -16,8 +16,8 @@ from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.world_model import Layout
 
 TASKS = Path(__file__).resolve().parents[2] / "examples" / "tasks"
-#: Each family: its training file and its evaluation file (twice the objects).
-FAMILIES = {
+#: Each example task: its training file and its evaluation file (twice the objects).
+EXAMPLES = {
     "size-sort": "size-sort-8",
     "colour-sort": "colour-sort-8",
     "kitting": "kitting-6",
@@ -25,7 +25,7 @@ FAMILIES = {
 }
 #: More evaluation sizes: size sort at three times its training file's blocks.
 LARGER = ("size-sort-12",)
-FILES = sorted([*FAMILIES, *FAMILIES.values(), *LARGER])
+FILES = sorted([*EXAMPLES, *EXAMPLES.values(), *LARGER])
 
 
 def text(name: str) -> str:
@@ -68,9 +68,9 @@ def play(name: str, seed: int, pairs: list[tuple[str, str]]) -> GeometricBackend
     return sim
 
 
-@pytest.mark.parametrize("small", sorted(FAMILIES))
+@pytest.mark.parametrize("small", sorted(EXAMPLES))
 def test_the_evaluation_file_has_twice_the_objects_and_goals(small: str) -> None:
-    a, b = parse_task_file(text(small)), parse_task_file(text(FAMILIES[small]))
+    a, b = parse_task_file(text(small)), parse_task_file(text(EXAMPLES[small]))
     assert len(b.objects) == 2 * len(a.objects) and len(b.goals) == 2 * len(a.goals)
     # The evaluation file names no attribute value the training file does not.
     values = {(n, str(v)) for o in a.objects for n, v in o.attributes.items()}
