@@ -180,8 +180,31 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
             sequence = self.camera.sequence if self.camera is not None else 0
             self.camera = TripodCamera(self.camera_config, world.scene)
             self.camera.sequence = sequence
+            self._warn_out_of_view(request, layout)
         self.layout = layout
         return self.begin(request, family.required_goals(layout), episode.max_steps, stamp)
+
+    def _warn_out_of_view(self, request: EpisodeRequest, layout: Layout) -> None:
+        """Name every body that starts partly outside the camera's picture: a perception that
+        finds objects by sight (RGB-D, markers) cannot find it, and the episode will wait."""
+        from manigraph_sim.physics.camera import out_of_view, top_corners
+
+        assert self.camera_config is not None
+        unseen = [
+            f"{body.id} at ({body.position[0]:.2f}, {body.position[1]:.2f})"
+            for body in layout.bodies
+            if out_of_view(self.camera_config, top_corners(body.position, body.size))
+        ]
+        if unseen and request.episode_id != "warm-up":
+            log.warning(
+                "camera: %s start%s outside the camera's picture: perception cannot find %s "
+                "(episode %s, seed %s); draw starts the camera sees (docs/perception.md)",
+                ", ".join(unseen),
+                "s" if len(unseen) > 1 else "",
+                "them" if len(unseen) > 1 else "it",
+                request.episode_id,
+                request.seed,
+            )
 
     def _warm_up(self) -> None:
         """Render one frame of a one-block episode: the first frame of a process compiles the

@@ -215,6 +215,30 @@ def ideal_calibration(config: CameraConfig) -> tuple[np.ndarray, np.ndarray]:
     return k, base_T_camera
 
 
+def out_of_view(config: CameraConfig, corners: np.ndarray) -> bool:
+    """Whether any of ``corners`` (:math:`(M, 3)`, robot base frame) is off the camera's
+    image or behind it: a body partly out of the picture cannot be found by its segment."""
+    k, base_T_camera = ideal_calibration(config)
+    camera_T_base = np.linalg.inv(base_T_camera)
+    points = corners @ camera_T_base[:3, :3].T + camera_T_base[:3, 3]
+    if np.any(points[:, 2] <= 0):
+        return True
+    u = k[0, 0] * points[:, 0] / points[:, 2] + k[0, 2]
+    v = k[1, 1] * points[:, 1] / points[:, 2] + k[1, 2]
+    inside = (u >= 0) & (u <= config.width - 1) & (v >= 0) & (v <= config.height - 1)
+    return not bool(np.all(inside))
+
+
+def top_corners(position: np.ndarray, size: np.ndarray) -> np.ndarray:
+    """The four corners of a box's top face, :math:`(4, 3)`."""
+    half = np.asarray(size, dtype=float) / 2
+    signs = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1]], dtype=float)
+    corners = np.empty((4, 3))
+    corners[:, :2] = np.asarray(position, dtype=float)[:2] + signs * half[:2]
+    corners[:, 2] = float(position[2]) + half[2]
+    return corners
+
+
 def light(scene: sapien.Scene, scale: float = 1.0) -> None:
     """Even light from above (the video recorder's), ``scale`` times as bright."""
     scene.set_ambient_light([0.45 * scale] * 3)
