@@ -15,6 +15,9 @@ from pathlib import Path
 OUT = Path("examples/tasks/unwritten")
 #: Where objects start: one of these per object and seed, 9-11 cm apart, none taken twice.
 SPOTS = [(x, round(-0.55 + 0.11 * i, 2), 0.0) for x in (0.30, 0.39, 0.48) for i in range(11)]
+#: The spots the physics sim's tripod camera sees whole (|y| <= 0.33; tests/physics/
+#: test_camera_view.py): the starts of the files perception must find by sight.
+CAMERA_SPOTS = [spot for spot in SPOTS if abs(spot[1]) <= 0.33]
 CUBE = (0.04, 0.04, 0.04)
 FLAT = (0.07, 0.07, 0.02)
 
@@ -86,7 +89,7 @@ def _bins(
 Family = Callable[[int], tuple[str, str, str]]
 
 
-def colour_place(n: int) -> tuple[str, str, str]:
+def colour_place(n: int, among: list[tuple[float, float, float]] = SPOTS) -> tuple[str, str, str]:
     left, right = _bins(n // 2)
     head = (
         f"# Colour to a place, {n} blocks: half red, half blue (which is which shuffled per\n"
@@ -96,7 +99,9 @@ def colour_place(n: int) -> tuple[str, str, str]:
         f'name = "colour to a place {n}"\nrandomize_xy = 0.02\nshuffle = ["colour"]\n\n'
     )
     body = "".join(
-        _object(f"block_{i}", i, CUBE, attributes={"colour": "red" if i < n // 2 else "blue"})
+        _object(
+            f"block_{i}", i, CUBE, among, attributes={"colour": "red" if i < n // 2 else "blue"}
+        )
         + "\n"
         for i in range(n)
     )
@@ -118,7 +123,9 @@ def same_colour(n: int) -> tuple[str, str, str]:
         f'name = "same colour as the bin {n}"\nrandomize_xy = 0.02\nshuffle = ["colour"]\n\n'
     )
     body = "".join(
-        _object(f"block_{i}", i, CUBE, attributes={"colour": "red" if i < n // 2 else "blue"})
+        _object(
+            f"block_{i}", i, CUBE, SPOTS, attributes={"colour": "red" if i < n // 2 else "blue"}
+        )
         + "\n"
         for i in range(n)
     )
@@ -211,14 +218,34 @@ SIZES: dict[Family, tuple[int, int, int]] = {
 }
 
 
+def colour_place_camera() -> tuple[str, str, str]:
+    """Colour place at 4 blocks, every start where the physics sim's tripod camera sees it:
+    for the closed loop with RGB-D perception as the only scene source."""
+    stem, task, rules = colour_place(4, CAMERA_SPOTS)
+    head = (
+        "# For a camera: colour-place.toml with every start where the physics sim's tripod\n"
+        "# camera sees the block whole (|y| <= 0.33), for RGB-D perception as the only scene\n"
+        "# source (docs/perception.md). Its rules are colour-place's.\n"
+    )
+    return (
+        f"{stem}-camera",
+        head + task.replace('"colour to a place 4"', '"colour to a place 4, camera"'),
+        rules,
+    )
+
+
+def _write(name: str, task: str, rules: str) -> None:
+    (OUT / f"{name}.toml").write_text(task.rstrip() + "\n")
+    (OUT / f"{name}.rules.toml").write_text(rules.rstrip() + "\n")
+
+
 def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     for family, sizes in SIZES.items():
         for rank, n in enumerate(sizes):
             stem, task, rules = family(n)
-            name = stem if rank == 0 else f"{stem}-{n}"
-            (OUT / f"{name}.toml").write_text(task.rstrip() + "\n")
-            (OUT / f"{name}.rules.toml").write_text(rules.rstrip() + "\n")
+            _write(stem if rank == 0 else f"{stem}-{n}", task, rules)
+    _write(*colour_place_camera())
 
 
 if __name__ == "__main__":
