@@ -63,6 +63,17 @@ def _demos_configure(parser: argparse.ArgumentParser) -> None:
         "--seed", type=int, default=0, help="seed of the first demonstration (default: 0)"
     )
     parser.add_argument(
+        "--objects",
+        type=int,
+        help="objects of a task that takes them (dishwasher: dishes, half plates, half bowls; "
+        "default 10); a task that does not is refused naming the field",
+    )
+    parser.add_argument(
+        "--preference",
+        help="how the dishwasher is loaded: top-bottom (default) or left-right; the family's "
+        "expert of that preference demonstrates it",
+    )
+    parser.add_argument(
         "--task-file",
         type=Path,
         help="demonstrate your own TOML layout instead of --tasks (docs/task-files.md), by the "
@@ -79,9 +90,20 @@ def _demos_configure(parser: argparse.ArgumentParser) -> None:
 def _demos_run(args: argparse.Namespace) -> int:
     from manigraph_lab.demos import DemoProtocol, record_demos
 
-    protocol = DemoProtocol(tuple(args.tasks), tuple(args.blocks), args.trajectories, args.seed)
+    protocol = DemoProtocol(
+        tuple(args.tasks),
+        tuple(args.blocks),
+        args.trajectories,
+        args.seed,
+        objects=args.objects,
+        preference=args.preference,
+    )
     if args.rules is not None and args.task_file is None:
         raise ConfigError("rules", "rules judge a task file's goals; give --task-file too")
+    if args.task_file is not None and (args.objects, args.preference) != (None, None):
+        raise ConfigError(
+            "task_file", "a task file lays out its own objects: drop --objects and --preference"
+        )
     if args.task_file is not None:
         protocol = _task_file_protocol(args.task_file, protocol, args.rules)
     # Each task's family's expert (demos.family_expert): ``expert`` for the block tasks and

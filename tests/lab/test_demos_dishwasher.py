@@ -7,17 +7,31 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_planner.families.dishwasher.expert import TopBottomExpert
+from manigraph_planner.families.dishwasher.expert import LeftRightExpert, TopBottomExpert
+from manigraph_planner.policies import Policy
 from manigraph_shared.cli import main
+from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, Scene, TrayAction
 
 
+@pytest.mark.parametrize(
+    ("flags", "expert", "dishes"),
+    [
+        ([], TopBottomExpert(), 10),  # no preference: the sim lays out top-bottom, 10 dishes
+        (["--objects", "4", "--preference", "left-right"], LeftRightExpert(), 4),
+    ],
+    ids=["defaults", "left-right"],
+)
 def test_demos_of_the_dishwasher_record_its_expert_s_decisions(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    flags: list[str],
+    expert: Policy,
+    dishes: int,
 ) -> None:
     log = tmp_path / "dishwasher.mcap"
-    argv = ["demos", "--tasks", "dishwasher", "--trajectories", "1", "-o", str(log)]
+    argv = ["demos", "--tasks", "dishwasher", "--trajectories", "1", *flags, "-o", str(log)]
     assert main(argv) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["trajectories"] == 1 and summary["decisions"] > 0
@@ -31,9 +45,9 @@ def test_demos_of_the_dishwasher_record_its_expert_s_decisions(
         elif isinstance(message, Action):
             actions.append(message)
     assert len(actions) == summary["decisions"]
-    expert = TopBottomExpert()  # the request sets no preference: the sim lays out top-bottom
+    assert len(scenes[actions[0].scene_sequence].objects) == dishes
     for action in actions:
-        assert action.policy == "dishwasher-top-bottom"
+        assert action.policy == expert.name
         decision = expert.decide(scenes[action.scene_sequence])
         assert decision is not None
         assert (action.object_id, action.goal_id, action.tray_action) == (
@@ -41,5 +55,14 @@ def test_demos_of_the_dishwasher_record_its_expert_s_decisions(
             decision.goal_id,
             decision.tray_action,
         )
-    # Both racks were pulled out and pushed back in: four tray actions, the rest dishes.
-    assert sum(a.tray_action is not TrayAction.NONE for a in actions) == 4
+    # Each dish placed once; a rack pulled out and pushed back in per rack it loads.
+    trays = sum(a.tray_action is not TrayAction.NONE for a in actions)
+    assert len(actions) - trays == dishes and trays == (4 if expert.name.endswith("bottom") else 2)
+
+
+def test_demos_refuse_dishes_for_a_block_task_naming_the_field(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["demos", "--tasks", "stack", "--trajectories", "1", "--objects", "4"]
+    assert main([*argv, "-o", str(tmp_path / "x.mcap")]) == CONFIG_EXIT_CODE
+    assert "objects" in capsys.readouterr().err
