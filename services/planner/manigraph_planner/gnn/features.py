@@ -34,6 +34,7 @@ from typing import Any
 import torch
 from torch import Tensor
 
+from manigraph_planner.gnn.goal_support import ready_goals
 from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import GoalCategory, ObjectCategory, Scene, SceneGoal, SceneObject
@@ -199,6 +200,7 @@ def scene_to_graph(scene: Scene, spec: FeatureSpec | None = None) -> GraphState:
             vocabulary, naming it.
     """
     task = spec.task if spec is not None else None
+    ready = ready_goals(scene) if task is not None and task.goal_support else frozenset()
     rows: list[list[float]] = []
     object_ids: list[str] = []
     goal_ids: list[str] = []
@@ -221,7 +223,7 @@ def scene_to_graph(scene: Scene, spec: FeatureSpec | None = None) -> GraphState:
             p = goal.position
             rows.append([_GOAL_CODE[goal.category], p.x, p.y, p.z, float(goal.filled)])
             if task is not None:
-                rows[-1].extend(task.goal_row(goal))
+                rows[-1].extend(task.goal_row(goal, ready=goal.id in ready))
             goal_ids.append(goal.id)
     num_nodes = len(rows)
     width = (spec or FEATURE_SPEC).num_features

@@ -20,6 +20,12 @@ whose goals list what they ``accepts`` (``colour = "red"``, ``id = "part_2"``, `
   ``goal.colour=red`` (the same vocabulary as ``colour``'s), or ``goal.weight`` scaled alike:
   the goal's own value, as an object's value is the object's; zeros on objects and on goals
   without it. These columns are not part of what a goal accepts (:meth:`TaskFeatures.admits`).
+* with ``goal_support`` (learned where some goal stands on another: a tower, a pyramid), last:
+  ``goal:ready``, 1 on a goal that can be filled now (free, every goal under it filled:
+  :mod:`.goal_support`), 0 on other goals and on objects. A tower taller than taught then
+  still shows which level is next, where absolute heights never seen do not (issue #49).
+  A checkpoint without ``goal_support`` in its stamp reads exactly the columns it was trained
+  on.
 
 What the columns are is learned from the demonstrations' scenes (:meth:`TaskFeatures.learn`)
 and stamped in the checkpoint (``feature_spec.task``). A text value outside a categorical
@@ -42,6 +48,8 @@ from typing import Any
 import torch
 from torch import Tensor
 
+from manigraph_planner.gnn.goal_support import READY_COLUMN, stands_on_goals
+from manigraph_shared.acceptance import SIZE_TOLERANCE
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject
 
@@ -56,6 +64,9 @@ GOAL_PREFIX = "goal."
 #: Size columns are in decimetres: a 4 cm block reads 0.4, beside positions in metres.
 SIZE_SCALE = 10.0
 SIZE_COLUMNS = ("size_x", "size_y", "size_z", "size:any")
+#: Sizes are compared in float32 columns: this much (decimetres) of rounding is no size gap.
+#: The tolerance itself is the judge's, ``manigraph_shared.acceptance.SIZE_TOLERANCE``.
+FLOAT32_SLACK = 1e-5
 
 
 @dataclass(frozen=True)
@@ -168,6 +179,8 @@ class TaskFeatures:
     size_scale: float = SIZE_SCALE
     #: Names of the attributes goals themselves carry (sorted; each one of ``attributes``).
     goal_attributes: tuple[str, ...] = ()
+    #: The ``goal:ready`` column last (:mod:`.goal_support`); False in every older stamp.
+    goal_support: bool = False
 
     def __post_init__(self) -> None:
         names = [a.name for a in self.attributes]
@@ -193,6 +206,7 @@ class TaskFeatures:
             *SIZE_COLUMNS,
             *(column for a in self.attributes for column in a.columns),
             *(column for a in self._goal_owned for column in a.goal_columns),
+            *((READY_COLUMN,) if self.goal_support else ()),
         )
 
     def object_row(self, obj: SceneObject) -> list[float]:
@@ -203,9 +217,11 @@ class TaskFeatures:
             0.0,
             *(cell for a in self.attributes for cell in a.object_cells(obj)),
             *own,
+            *((0.0,) if self.goal_support else ()),
         ]
 
-    def goal_row(self, goal: SceneGoal) -> list[float]:
+    def goal_row(self, goal: SceneGoal, ready: bool = False) -> list[float]:
+        """The goal's columns; ``ready``: it can be filled now (read with ``goal_support``)."""
         self._check_keys(goal)
         size = goal.accepts.get("size")
         if isinstance(size, list):
@@ -219,6 +235,7 @@ class TaskFeatures:
             *cells,
             *(cell for a in self.attributes for cell in a.goal_cells(goal)),
             *(cell for a in self._goal_owned for cell in a.own_cells(carried, f"goal {goal.id}")),
+            *((float(ready),) if self.goal_support else ()),
         ]
 
     def _check_keys(self, goal: SceneGoal) -> None:
@@ -233,7 +250,8 @@ class TaskFeatures:
     def admits(self, objects: Tensor, goals: Tensor) -> Tensor:
         """``admits[k, l]``: goal node ``l`` accepts object node ``k``, read off the task
         columns alone (``accepts`` as ``manigraph_shared.acceptance`` matches it: every
-        attribute a goal asks for equal, sizes within 1 mm); categories are not checked.
+        attribute a goal asks for equal, sizes within ``SIZE_TOLERANCE``, the judge's 1 mm);
+        categories are not checked.
 
         Shapes:
             - **objects:** :math:`(K, F)`, **goals:** :math:`(L, F)`: graph state rows
@@ -241,7 +259,7 @@ class TaskFeatures:
         """
         ok = torch.ones(objects.shape[0], goals.shape[0], dtype=torch.bool)
         start = 5
-        size_tolerance = 1.5e-3 * self.size_scale
+        size_tolerance = SIZE_TOLERANCE * self.size_scale + FLOAT32_SLACK
         gap = (objects[:, None, start : start + 3] - goals[None, :, start : start + 3]).abs()
         ok &= (goals[None, :, start + 3] > 0.5) | (gap <= size_tolerance).all(dim=2)
         start += len(SIZE_COLUMNS)
@@ -265,6 +283,8 @@ class TaskFeatures:
         }
         if self.goal_attributes:  # a stamp without goal attributes stays what it was
             values["goal_attributes"] = list(self.goal_attributes)
+        if self.goal_support:  # likewise without the ready column
+            values["goal_support"] = True
         return values
 
     @classmethod
@@ -272,7 +292,8 @@ class TaskFeatures:
         """Raises ``ValueError`` naming the field (below ``task``)."""
         if not isinstance(values, dict):
             raise ValueError("task: must be a table")
-        unknown = sorted(set(values) - {"size_scale", "attributes", "goal_attributes"})
+        known = {"size_scale", "attributes", "goal_attributes", "goal_support"}
+        unknown = sorted(set(values) - known)
         if unknown:
             raise ValueError(f"task.{unknown[0]}: unexpected key")
         attributes = values.get("attributes", [])
@@ -281,10 +302,16 @@ class TaskFeatures:
         owned = values.get("goal_attributes", [])
         if not isinstance(owned, list | tuple) or not all(isinstance(n, str) for n in owned):
             raise ValueError("task.goal_attributes: must be a list of names")
+        support = values.get("goal_support", False)
+        if not isinstance(support, bool):
+            raise ValueError("task.goal_support: must be true or false")
         try:
             scale = float(values.get("size_scale", SIZE_SCALE))
             return cls(
-                tuple(AttributeColumns.from_dict(a) for a in attributes), scale, tuple(owned)
+                tuple(AttributeColumns.from_dict(a) for a in attributes),
+                scale,
+                tuple(owned),
+                support,
             )
         except (TypeError, ValueError) as exc:
             raise ValueError(f"task.{exc}") from None
@@ -293,7 +320,8 @@ class TaskFeatures:
     def learn(cls, scenes: Iterable[Scene]) -> TaskFeatures | None:
         """The columns the scenes' attributes and accepts need; None when no object or goal
         carries an attribute, no goal lists what it accepts and the objects of each category
-        are all of one size (the paper's five columns then).
+        are all of one size (the paper's five columns then). ``goal_support`` is on where
+        some goal stands on another (a tower).
 
         Raises:
             ValueError: an attribute is text on one object and a number on another.
@@ -303,7 +331,9 @@ class TaskFeatures:
         owned: set[str] = set()
         sizes: dict[str, set[tuple[float, ...]]] = {}
         seen = False
+        stacked = False
         for scene in scenes:
+            stacked = stacked or stands_on_goals(scene)
             for obj in scene.objects:
                 seen = seen or bool(obj.attributes)
                 sizes.setdefault(str(obj.category), set()).add(
@@ -330,7 +360,7 @@ class TaskFeatures:
         columns = [_columns(name, found) for name, found in sorted(values.items())]
         if ids:
             columns.append(AttributeColumns("id", tuple(sorted(ids))))
-        return cls(tuple(columns), goal_attributes=tuple(sorted(owned)))
+        return cls(tuple(columns), goal_attributes=tuple(sorted(owned)), goal_support=stacked)
 
 
 def goal_attributes_of(goal: SceneGoal) -> Mapping[str, str | float]:
