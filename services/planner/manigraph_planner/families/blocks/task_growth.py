@@ -12,6 +12,20 @@ right, in a scene with more objects and goals than were demonstrated:
   that kind of pair first, still would: the label is kept;
 * **finished pairs again** (``finished`` copies): a filled goal and the object resting in it,
   copied together the same way. The expert never looks at done goals.
+* **taller towers**: where the finished goal is a level of a tower (goals stacked in one
+  column), its copy goes into that tower instead, half the time each way:
+
+  - *a free level on top*, its object's copy loose on the table (beside a loose object, at
+    the tower base's height): free levels over the next one that accept what finished levels
+    accept (a red level at 14 cm once the red level at 2 cm is done: the 6-level tower
+    ``r, g, b, r, g, b``), and the object for such a level loose while it is not its turn;
+  - *the level again, in place*: a filled copy right over the original, everything above it
+    (goals and the objects on them) one level higher: more levels done under the next one
+    than were ever demonstrated, in the same order (a size order stays an order).
+
+  The expert still fills the lowest level that can be filled now, with the object it chose:
+  the label is kept. A new level is either filled or free over a free level, so its
+  ``goal:ready`` column (copied from a filled goal: 0) stays right.
 
 With four blocks demonstrated, the last blue block is always the second; grown scenes show a
 blue block still loose after three, five or more are placed, so the network cannot read
@@ -22,6 +36,8 @@ Shapes: ``x`` is :math:`(N, F)`, objects first (the graph state's order).
 """
 
 from __future__ import annotations
+
+from itertools import pairwise
 
 import torch
 from torch import Tensor
@@ -61,17 +77,33 @@ def grow_task_graph(
         free[4] = 0.0
         new_objects.append(obj)
         new_goals.append(free)
+    columns = _tower_columns(goals)
+    in_towers: list[tuple[int, int, tuple[int, ...]]] = []
     for held, holder in _finished_pairs(objects, goals)[:finished]:
+        column = next((c for c in columns if held in c), None)
+        if column is not None:
+            in_towers.append((held, holder, column))
+            continue
         shift = _beside(goals, held, generator)
         obj, done = objects[holder].clone(), goals[held].clone()
         obj[1:3] += shift
         done[1:3] += shift
         new_objects.append(obj)
         new_goals.append(done)
-    if not new_objects:
+    if new_objects:
+        objects = torch.cat([objects, torch.stack(new_objects)])
+        goals = torch.cat([goals, torch.stack(new_goals)])
+    for held, holder, column in in_towers:
+        if float(torch.rand(1, generator=generator)) < 0.5:
+            objects, goals = _insert_level(objects, goals, held, holder, column)
+        else:
+            objects, goals = _free_level_on_top(
+                objects, goals, held, holder, column, object_index, generator
+            )
+    added = len(objects) - num_objects
+    if not added:
         return x, num_objects, goal_index, object_index
-    grown = torch.cat([objects, torch.stack(new_objects), goals, torch.stack(new_goals)])
-    added = len(new_objects)
+    grown = torch.cat([objects, goals])
     # The label stays on the original pair. Moving it to a copy at random (they are equally
     # right) was tried and scored worse at 8 and 12 objects (docs/training.md).
     return grown, num_objects + added, goal_index + added, object_index
@@ -85,6 +117,86 @@ def _beside(goals: Tensor, goal: int, generator: torch.Generator) -> Tensor:
     reach = float(gaps.min()) * GOAL_SHIFT_FRACTION if len(goals) > 1 else LONE_GOAL_SHIFT
     reach = min(reach, LONE_GOAL_SHIFT * 3)
     return (torch.rand(2, generator=generator) * 2 - 1) * reach / 2**0.5
+
+
+#: Goals this close in x and in y (metres) stand in one column: a tower.
+COLUMN_XY = 0.01
+#: An object this close in x and in y (metres) to a column stands on it.
+HOLD_XY = 0.02
+
+
+def _tower_columns(goals: Tensor) -> list[tuple[int, ...]]:
+    """Goal rows that stand in one column at two or more heights (a tower), each sorted by
+    row; a goal in no tower is in none."""
+    columns: list[tuple[int, ...]] = []
+    seen: set[int] = set()
+    for goal in range(len(goals)):
+        if goal in seen:
+            continue
+        gap = (goals[:, 1:3] - goals[goal, 1:3]).abs().max(dim=1).values
+        members = tuple(int(g) for g in torch.nonzero(gap <= COLUMN_XY).flatten())
+        seen.update(members)
+        if len({round(float(goals[g, 3]), 4) for g in members}) > 1:
+            columns.append(members)
+    return columns
+
+
+def _level_height(goals: Tensor, column: tuple[int, ...]) -> float:
+    """The smallest rise between two levels of ``column``."""
+    heights = sorted({round(float(goals[g, 3]), 4) for g in column})
+    return min(b - a for a, b in pairwise(heights))
+
+
+def _insert_level(
+    objects: Tensor, goals: Tensor, held: int, holder: int, column: tuple[int, ...]
+) -> tuple[Tensor, Tensor]:
+    """A filled copy of level ``held`` (with ``holder``) right over it; what stands higher
+    in the column, goals and objects, one level up."""
+    rise = _level_height(goals, column)
+    level, rest = float(goals[held, 3]), float(objects[holder, 3])
+    centre = goals[held, 1:3]
+    goals, objects = goals.clone(), objects.clone()
+    in_column = (goals[:, 1:3] - centre).abs().max(dim=1).values <= COLUMN_XY
+    goals[in_column & (goals[:, 3] > level + 1e-4), 3] += rise
+    on_column = (objects[:, 1:3] - centre).abs().max(dim=1).values <= HOLD_XY
+    objects[on_column & (objects[:, 3] > rest + 1e-4), 3] += rise
+    done, obj = goals[held].clone(), objects[holder].clone()
+    done[3] += rise
+    obj[3] += rise
+    return torch.cat([objects, obj[None]]), torch.cat([goals, done[None]])
+
+
+def _free_level_on_top(
+    objects: Tensor,
+    goals: Tensor,
+    held: int,
+    holder: int,
+    column: tuple[int, ...],
+    object_index: int,
+    generator: torch.Generator,
+) -> tuple[Tensor, Tensor]:
+    """A free copy of level ``held`` on top of its column, a loose copy of ``holder``."""
+    centre = goals[held, 1:3]
+    in_column = (goals[:, 1:3] - centre).abs().max(dim=1).values <= COLUMN_XY
+    done, obj = goals[held].clone(), objects[holder].clone()
+    done[3] = float(goals[in_column, 3].max()) + _level_height(goals, column)
+    done[4] = 0.0
+    obj[1:4] = _loose_spot(objects, object_index, float(goals[in_column, 3].min()), generator)
+    obj[4] = 0.0
+    return torch.cat([objects, obj[None]]), torch.cat([goals, done[None]])
+
+
+def _loose_spot(
+    objects: Tensor, object_index: int, base: float, generator: torch.Generator
+) -> Tensor:
+    """x, y, z of a new loose object: near a loose object (the decided one where none is),
+    moved as a copied object is, at the tower base's height ``base``."""
+    loose = [k for k in range(len(objects)) if objects[k, 4] < 0.5] or [object_index]
+    near = loose[int(torch.randint(len(loose), (1,), generator=generator))]
+    spot = objects[near, 1:4].clone()
+    spot[:2] += (torch.rand(2, generator=generator) * 2 - 1) * OBJECT_SHIFT
+    spot[2] = base
+    return spot
 
 
 def _finished_pairs(objects: Tensor, goals: Tensor) -> list[tuple[int, int]]:
