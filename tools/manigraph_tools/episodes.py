@@ -121,6 +121,12 @@ class ServiceWatch:
             return sorted(set(self.services) - self._alive)
 
 
+#: Refusals of a decision the planner made on the finished scene before the world said the
+#: episode had ended (a race between the last Scene and the end event): after the end event
+#: they are not refusals of the episode, and decisions published after it are not counted.
+ENDED_REASONS = frozenset({"episode_ended", "no_episode", "not_running_episode"})
+
+
 class EpisodeProgress:
     """End events, when the running episode last made progress (a decision or a status), and
     why its planner cannot decide on it, once it said so."""
@@ -131,6 +137,7 @@ class EpisodeProgress:
         self._decisions: set[str] = set()
         self._cannot_decide: str | None = None
         self._refusals: Counter[str] = Counter()
+        self._closed = False  # the running episode's end event has come
         self.last = time.monotonic()
         self._lock = threading.Lock()
         bus.subscribe(EpisodeEvent, self._on_event)
@@ -145,6 +152,7 @@ class EpisodeProgress:
             self._decisions.clear()
             self._cannot_decide = None
             self._refusals = Counter()
+            self._closed = False
             self.last = time.monotonic()
 
     def _on_planner_status(self, status: ServiceStatus) -> None:
@@ -160,11 +168,14 @@ class EpisodeProgress:
 
     def _on_event(self, event: EpisodeEvent) -> None:
         if event.phase is EpisodePhase.END:
+            with self._lock:
+                if event.episode_id == self.episode_id:
+                    self._closed = True
             self.ends.put(event)
 
     def _on_action(self, action: Action) -> None:
         with self._lock:
-            if action.episode_id == self.episode_id:
+            if action.episode_id == self.episode_id and not self._closed:
                 self._decisions.add(action.decision_id)
                 self.last = time.monotonic()
 
@@ -172,7 +183,9 @@ class EpisodeProgress:
         with self._lock:
             if status.decision_id in self._decisions:
                 self.last = time.monotonic()
-                if status.state is SkillState.FAILED:
+                if status.state is SkillState.FAILED and not (
+                    self._closed and status.reason in ENDED_REASONS
+                ):
                     self._refusals[status.reason or "unknown"] += 1
 
     def refusals(self) -> dict[str, int]:
