@@ -70,6 +70,14 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         help="task files: add up to N copies of the decided pair and of finished pairs to "
         "each augmented copy, so scenes grow past the demonstrated size (docs/training.md)",
     )
+    parser.add_argument(
+        "--decoder",
+        choices=["nodes", "pairs"],
+        default="nodes",
+        help="block policies: 'nodes', the paper's two softmaxes (objects, goals; default), or "
+        "'pairs', one softmax over (object, goal) pairs, the goal picked given the object "
+        "(docs/training.md)",
+    )
     add_threads_option(parser)
     parser.add_argument(
         "-o",
@@ -116,6 +124,7 @@ def _run(args: argparse.Namespace) -> int:
         epochs=150 if args.epochs is None else args.epochs,
         resample_every=args.resample_every,
         device=args.device,
+        decoder=args.decoder,
     )
     if args.copies is not None:
         config = replace(config, augmentation=augmentation_for(args.arch, copies=args.copies))

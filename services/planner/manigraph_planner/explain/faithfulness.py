@@ -26,6 +26,7 @@ from torch import Tensor
 
 from manigraph_planner.explain.masked_forward import MaskedNet
 from manigraph_planner.explain.masks import MaskExplanation
+from manigraph_planner.gnn.pair_decoder import best_pair, category_compatible, joint_log_probs
 from manigraph_planner.policies.gnn import best_compatible_pair
 
 __all__ = ["Faithfulness", "faithfulness"]
@@ -94,6 +95,15 @@ def _decision(
     come from the unmasked graph, as the policy's decoder reads them."""
     with torch.no_grad():
         logits = net(x * feature_mask, edge_index, edge_mask)
+        if net.decodes_pairs:
+            valid = category_compatible(x[:num_objects, 0], x[num_objects:, 0])
+            scores = joint_log_probs(
+                logits[:num_objects].log_softmax(0),
+                net.pair_logits(x * feature_mask)[:num_objects, num_objects:],
+                valid,
+            )
+            pair = best_pair(scores, valid)
+            return None if pair is None else (pair[0], num_objects + pair[1])
     found = best_compatible_pair(
         logits[:num_objects].log_softmax(0),
         logits[num_objects:].log_softmax(0),

@@ -87,6 +87,16 @@ class MaskedNet:
         hidden = _backbone(self.net.backbone, x * self.net.feature_scale, structure, weights)
         return self.net.head(hidden).squeeze(-1)
 
+    @property
+    def decodes_pairs(self) -> bool:
+        """The network has a ``pairs`` decoder (:mod:`~manigraph_planner.gnn.pair_decoder`)."""
+        return self.net.decodes_pairs
+
+    def pair_logits(self, x: Tensor) -> Tensor:
+        """A ``pairs`` decoder's pair logits of node features ``x`` :math:`(N, F)`: they read
+        the features only, so feature masks reach them and edge masks do not."""
+        return self.net.pair_logits(x)
+
     def _message_passing(self, x: Tensor, edge_index: Tensor, edge_mask: Tensor | None) -> Tensor:
         if edge_mask is None:
             return self.net(x, edge_index)

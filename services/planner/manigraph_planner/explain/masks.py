@@ -37,6 +37,12 @@ where :math:`S` is the masked graph and :math:`C \setminus S` its complement (ma
 :math:`1 - \sigma(M)`): the choice should hold on the explanation (fidelity-) and fall
 without it (fidelity+), as PyG's ``fidelity`` measures them.
 
+A network with a ``pairs`` decoder decides :math:`p(o)\,p(g \mid o)`
+(:mod:`~manigraph_planner.gnn.pair_decoder`): the first term is then
+:math:`-\log p_S(o^*) - \log p_S(g^* \mid o^*)`, and :math:`m_g` the chosen pair's score
+over the best other goal's for the same object, :math:`s(o^*, g^*) - \max_{g \ne g^*}
+s(o^*, g)`: what is explained is the chosen pair's score.
+
 After ``steps`` Adam steps the explanation keeps the top-:math:`c_E` edges and the
 top-:math:`c_F` features (hard masks); every edge and feature stays ranked. The initial mask
 logits come from a seeded generator and the optimisation is plain CPU arithmetic, so the
@@ -55,6 +61,7 @@ from torch import Tensor
 from manigraph_planner.explain.config import ExplainerConfig, Objective
 from manigraph_planner.explain.masked_forward import MaskedNet
 from manigraph_planner.gnn.models import PolicyNet
+from manigraph_planner.gnn.pair_decoder import category_compatible
 from manigraph_shared.errors import PolicyError
 
 __all__ = ["MaskExplainer", "MaskExplanation"]
@@ -110,6 +117,9 @@ class MaskExplainer:
     def __init__(self, net: PolicyNet, config: ExplainerConfig | None = None) -> None:
         self.config = config or ExplainerConfig()
         self.net = MaskedNet(net)
+        #: A ``pairs`` decoder's goals that fit the chosen object's category, set per
+        #: :meth:`explain` from the unmasked categories (as the policy reads them).
+        self._fitting_goals: Tensor | None = None
 
     def explain(
         self,
@@ -161,6 +171,7 @@ class MaskExplainer:
         feature_budget = min(cfg.feature_budget, num_features)
         optimiser = _Adam([edge_logits, feature_logits], cfg.learning_rate)
         x = x.detach().to(torch.float32)
+        self._fitting_goals = _fitting_goals(x, num_objects, object_index)
         loss_value = float("nan")
         with torch.inference_mode(False), torch.enable_grad():
             for step in range(steps):
@@ -229,6 +240,9 @@ class MaskExplainer:
         """:math:`\\log p(o^*) + \\log p(g^*)` with messages scaled by ``edge_mask``."""
         logits = self.net(x, edge_index, edge_mask)
         object_logp = logits[:num_objects].log_softmax(0)[object_index]
+        if self.net.decodes_pairs:
+            goals = self._goal_scores(x, num_objects, object_index)
+            return object_logp + goals.log_softmax(0)[goal_index - num_objects]
         goal_logp = logits[num_objects:].log_softmax(0)[goal_index - num_objects]
         return object_logp + goal_logp
 
@@ -244,12 +258,26 @@ class MaskExplainer:
         """:math:`(m_o, m_g)`: the chosen object's (goal's) logit over the best other one's
         (0 when it has no rival)."""
         logits = self.net(x, edge_index, edge_mask)
+        goals = (
+            self._goal_scores(x, num_objects, object_index)
+            if self.net.decodes_pairs
+            else logits[num_objects:]
+        )
         return torch.stack(
             [
                 _margin(logits[:num_objects], object_index),
-                _margin(logits[num_objects:], goal_index - num_objects),
+                _margin(goals, goal_index - num_objects),
             ]
         )
+
+    def _goal_scores(self, x: Tensor, num_objects: int, object_index: int) -> Tensor:
+        """A ``pairs`` decoder's scores :math:`s(o^*, g)` of every goal for the chosen object,
+        the lowest finite float for goals of another category. Shape :math:`(L,)`."""
+        scores = self.net.pair_logits(x)[object_index, num_objects:]
+        fitting = self._fitting_goals
+        if fitting is None:
+            fitting = _fitting_goals(x, num_objects, object_index)
+        return scores.masked_fill(~fitting, torch.finfo(scores.dtype).min)
 
     def _fidelity(
         self,
@@ -301,6 +329,12 @@ class _Adam:
             second.mul_(beta2).addcmul_(grad, grad, value=1 - beta2)
             denominator = (second.sqrt() / root_correction).add_(1e-8)
             param.addcdiv_(first, denominator, value=-step_size)
+
+
+def _fitting_goals(x: Tensor, num_objects: int, object_index: int) -> Tensor:
+    """``(L,)``: the goals whose category fits the chosen object's."""
+    chosen = x[object_index : object_index + 1, 0]
+    return category_compatible(chosen, x[num_objects:, 0])[0]
 
 
 def _margin(logits: Tensor, index: int) -> Tensor:

@@ -122,9 +122,13 @@ class SceneExplainer:
         finally:
             self._lock.release()
         logits = self.policy.node_logits(graph)
+        goal_scores = logits[graph.num_objects :]
+        if self.policy.net.decodes_pairs:  # the best other goal for the chosen object
+            scores, valid = self.policy.pair_scores(graph)
+            goal_scores = scores[object_index].masked_fill(~valid[object_index], float("-inf"))
         rivals = (
             _runner_up(logits[: graph.num_objects], object_index, graph.object_ids),
-            _runner_up(logits[graph.num_objects :], goal_index - graph.num_objects, graph.goal_ids),
+            _runner_up(goal_scores, goal_index - graph.num_objects, graph.goal_ids),
         )
         names = self.policy.net.config.feature_spec.names
         return to_message(result, graph, scene, self.policy.name, decision_id, seed, rivals, names)

@@ -12,6 +12,12 @@ from manigraph_planner.families import family_for_heads
 from manigraph_planner.gnn.checkpoint import CheckpointInfo, load_checkpoint
 from manigraph_planner.gnn.features import GraphState, scene_to_graph
 from manigraph_planner.gnn.models import PolicyNet
+from manigraph_planner.gnn.pair_decoder import (
+    best_pair,
+    category_compatible,
+    joint_log_probs,
+    ranked_pairs,
+)
 from manigraph_planner.policies.base import Decision, Policy
 from manigraph_shared.messages import Scene
 
@@ -59,6 +65,8 @@ class GNNPolicy(Policy):
     the task file states that rule; which pair of those comes first is what was learned.
     ``accepts_filter = False`` (``--accepts-filter off``) drops that filter, so the network's
     own choice is what is judged (docs/training.md).
+    A network with a ``pairs`` decoder (``ModelConfig.decoder``) scores the pairs itself:
+    the same filters, then the argmax of its pair logits (:meth:`pair_scores`).
     Sets torch to one thread: a single small graph is latency-bound, and the planner shares
     a 2-core machine with the simulator. For the same reason the network runs its dense path
     for one complete graph (:meth:`PolicyNet.forward_complete`) rather than PyG message
@@ -103,10 +111,33 @@ class GNNPolicy(Policy):
         with torch.inference_mode():
             return self.net.forward_complete(graph.x)
 
+    def pair_scores(self, graph: GraphState) -> tuple[Tensor, Tensor]:
+        r"""A ``pairs`` decoder's :math:`\log p(o) + \log p(g \mid o)`
+        (:mod:`~manigraph_planner.gnn.pair_decoder`), and the pairs it may take:
+        category-compatible, and admitted by the accepts filter where it is on.
+
+        Shapes: both :math:`(K, L)`."""
+        k = graph.num_objects
+        with torch.inference_mode():
+            node_logits, pair_logits = self.net.pairs_complete(graph.x)
+        valid = category_compatible(graph.x[:k, 0], graph.x[k:, 0])
+        admitted = self.admitted(graph)
+        if admitted is not None:
+            valid = valid & admitted
+        joint = joint_log_probs(node_logits[:k].log_softmax(0), pair_logits[:k, k:], valid)
+        return joint, valid
+
     def probabilities(self, scene: Scene) -> Probabilities:
         graph = self.graph(scene)
         logits = self.node_logits(graph)
         k = graph.num_objects
+        if self.net.decodes_pairs and 0 < k < graph.num_nodes:
+            # the joint's marginals over the pairs it may take: how likely each object
+            # (goal) is to be in the chosen pair
+            scores, valid = self.pair_scores(graph)
+            joint = scores.masked_fill(~valid, float("-inf")).flatten().softmax(0)
+            joint = joint.view_as(scores).nan_to_num(0.0)
+            return Probabilities(graph, logits, joint.sum(1), joint.sum(0))
         return Probabilities(graph, logits, logits[:k].softmax(0), logits[k:].softmax(0))
 
     def decide(self, scene: Scene) -> Decision | None:
@@ -114,15 +145,24 @@ class GNNPolicy(Policy):
         k = graph.num_objects
         if k == 0 or k == graph.num_nodes:
             return None
+        if self.net.decodes_pairs:
+            pair = best_pair(*self.pair_scores(graph))
+            if pair is None:
+                return None
+            return Decision(graph.object_ids[pair[0]], graph.goal_ids[pair[1]])
         return decision_from_logits(graph, self.node_logits(graph), self.admitted(graph))
 
     def ranked(self, scene: Scene) -> list[Decision]:
-        """Every compatible pair by ``log p(o) + log p(g)``, most likely first (the first is
-        :meth:`decide`'s; ties in scene order)."""
+        """Every compatible pair by ``log p(o) + log p(g)`` (a ``pairs`` decoder: by its
+        ``log p(o, g)``), most likely first (the first is :meth:`decide`'s; ties in scene
+        order)."""
         graph = self.graph(scene)
         k = graph.num_objects
         if k == 0 or k == graph.num_nodes:
             return []
+        if self.net.decodes_pairs:
+            found = ranked_pairs(*self.pair_scores(graph))
+            return [Decision(graph.object_ids[o], graph.goal_ids[g]) for o, g in found]
         logits = self.node_logits(graph)
         pairs = ranked_compatible_pairs(
             logits[:k].log_softmax(0),

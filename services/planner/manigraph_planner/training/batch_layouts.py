@@ -7,6 +7,9 @@ padded to their group's largest and every layer is dense algebra
 (:mod:`~manigraph_planner.gnn.models.complete_graph`). ``"pyg"`` gathers and scatters along
 the :math:`\sum_b N_b (N_b - 1)` edges of PyG message passing, the path the explainer needs
 for edge masks; the trainer keeps it selectable as a reference.
+
+A network with a ``pairs`` decoder (``net.decodes_pairs``) is trained and read by its pair
+logits instead (:mod:`~manigraph_planner.gnn.pair_decoder`), in both layouts.
 """
 
 from __future__ import annotations
@@ -20,6 +23,11 @@ from torch_geometric.data import Batch, Data
 
 from manigraph_planner.gnn.features import fully_connected_edge_index
 from manigraph_planner.gnn.models import PolicyNet
+from manigraph_planner.gnn.pair_decoder import (
+    padded_pair_loss,
+    padded_pair_select,
+    padded_valid_pairs,
+)
 from manigraph_planner.gnn.selection import (
     padded_select,
     padded_selection_loss,
@@ -66,10 +74,20 @@ class PaddedLayout(BatchLayout):
         parts = []
         for group in size_groups([packed.sizes[i] for i in indices]):
             batch = packed.padded([indices[i] for i in group]).to(_device_of(net))
-            logits = net.forward_complete(batch.x, batch.mask)
-            loss = padded_selection_loss(
-                logits, batch.is_object, batch.mask, batch.object_index, batch.goal_index
-            )
+            if net.decodes_pairs:
+                loss = padded_pair_loss(
+                    *net.pairs_complete(batch.x, batch.mask),
+                    batch.is_object,
+                    batch.mask,
+                    padded_valid_pairs(batch.x, batch.is_object, batch.mask),
+                    batch.object_index,
+                    batch.goal_index,
+                )
+            else:
+                logits = net.forward_complete(batch.x, batch.mask)
+                loss = padded_selection_loss(
+                    logits, batch.is_object, batch.mask, batch.object_index, batch.goal_index
+                )
             parts.append(loss * (len(group) / len(indices)))  # a mean over all samples
         return torch.stack(parts).sum()
 
@@ -77,6 +95,16 @@ class PaddedLayout(BatchLayout):
         objects = torch.empty(len(samples), dtype=torch.long)
         goals = torch.empty(len(samples), dtype=torch.long)
         for indices in size_groups([s.x.shape[0] for s in samples]):
+            if net.decodes_pairs:
+                batch = PaddedBatch.from_samples([samples[i] for i in indices])
+                batch = batch.to(_device_of(net))
+                valid = padded_valid_pairs(batch.x, batch.is_object, batch.mask)
+                node_logits, pair_logits = net.pairs_complete(batch.x, batch.mask)
+                chosen = padded_pair_select(
+                    node_logits, pair_logits, batch.is_object, batch.mask, valid
+                )
+                objects[indices], goals[indices] = (c.cpu() for c in chosen)
+                continue
             batch, logits = self._logits(net, [samples[i] for i in indices])
             chosen = padded_select(logits, batch.is_object, batch.mask)
             objects[indices], goals[indices] = (c.cpu() for c in chosen)
@@ -94,12 +122,17 @@ class PygLayout(BatchLayout):
     name = "pyg"
 
     def loss(self, net: PolicyNet, samples: list[Sample]) -> Tensor:
+        if net.decodes_pairs:
+            return torch.stack([_one_graph_pair_loss(net, s) for s in samples]).mean()
         batch, logits = self._logits(net, samples)
         return selection_loss(
             logits, batch.is_object, batch.batch, batch.object_index, batch.goal_index
         )
 
     def choices(self, net: PolicyNet, samples: list[Sample]) -> tuple[Tensor, Tensor]:
+        if net.decodes_pairs:
+            picked = [_one_graph_pair_choice(net, s) for s in samples]
+            return torch.tensor([o for o, _ in picked]), torch.tensor([g for _, g in picked])
         batch, logits = self._logits(net, samples)
         chosen = select(logits, batch.is_object, batch.batch, batch.num_graphs)
         first_node = batch.ptr[:-1]  # select counts nodes across the whole batch
@@ -110,6 +143,34 @@ class PygLayout(BatchLayout):
     def _logits(net: PolicyNet, samples: list[Sample]) -> tuple[Batch, Tensor]:
         batch = pyg_batch(samples).to(_device_of(net))
         return batch, net(batch.x, batch.edge_index, batch.batch)
+
+
+def _one_graph_pairs(
+    net: PolicyNet, sample: Sample
+) -> tuple[Tensor, Tensor, Tensor, Tensor, Tensor]:
+    """Node and pair logits of one sample by PyG message passing, as a padded batch of one
+    graph with its node mask and valid pairs (for the :class:`PygLayout` reference)."""
+    device = _device_of(net)
+    x = sample.x.to(device)
+    node_logits = net(x, fully_connected_edge_index(x.shape[0]).to(device)).unsqueeze(0)
+    pair_logits = net.pair_logits(x).unsqueeze(0)
+    is_object = sample.is_object.to(device).unsqueeze(0)
+    mask = torch.ones_like(is_object)
+    valid = padded_valid_pairs(x.unsqueeze(0), is_object, mask)
+    return node_logits, pair_logits, is_object, mask, valid
+
+
+def _one_graph_pair_loss(net: PolicyNet, sample: Sample) -> Tensor:
+    parts = _one_graph_pairs(net, sample)
+    device = parts[0].device
+    target = torch.tensor([sample.object_index], device=device)
+    goal = torch.tensor([sample.goal_index], device=device)
+    return padded_pair_loss(*parts, target, goal)
+
+
+def _one_graph_pair_choice(net: PolicyNet, sample: Sample) -> tuple[int, int]:
+    objects, goals = padded_pair_select(*_one_graph_pairs(net, sample))
+    return int(objects[0]), int(goals[0])
 
 
 def _device_of(net: PolicyNet) -> torch.device:

@@ -60,6 +60,9 @@ class TrainConfig:
     #: A task's feature spec (:meth:`FeatureSpec.for_task`); None: the paper's five columns.
     #: :func:`train` sets it from demonstrations that carry attributes or accepts.
     features: FeatureSpec | None = None
+    #: How node states become a decision (:data:`~manigraph_planner.gnn.models.config.DECODERS`):
+    #: "nodes", the paper's two softmaxes; "pairs", one softmax over (object, goal) pairs.
+    decoder: str = "nodes"
 
     def __post_init__(self) -> None:
         for name in ("epochs", "batch_size"):
@@ -90,6 +93,7 @@ class TrainConfig:
             num_layers=self.num_layers,
             feature_scale=scale,
             features=self.features,
+            decoder=self.decoder,
         )
 
     def for_task(self, spec: FeatureSpec) -> TrainConfig:
@@ -98,12 +102,15 @@ class TrainConfig:
         if spec.task is None:
             return self
         assert self.augmentation is not None  # set in __post_init__
-        return replace(self, features=spec, augmentation=self.augmentation.for_task())
+        return replace(self, features=spec, augmentation=self.augmentation.for_task(spec))
 
     def to_dict(self) -> dict[str, object]:
-        """Plain types (the feature spec is stamped in the checkpoint on its own)."""
+        """Plain types (the feature spec is stamped in the checkpoint on its own; the decoder
+        only when it is not the paper's)."""
         values = asdict(self)
         values.pop("features")
+        if values["decoder"] == "nodes":  # as before there was a choice
+            values.pop("decoder")
         return values
 
 

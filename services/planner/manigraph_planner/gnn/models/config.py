@@ -12,7 +12,14 @@ from manigraph_planner.gnn.models.backbone import ARCHITECTURES
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.registry import Registry
 
-__all__ = ["HEADS", "ModelConfig", "feature_spec_for"]
+__all__ = ["DECODERS", "HEADS", "ModelConfig", "feature_spec_for"]
+
+#: How node states become a decision (``ModelConfig.decoder``): ``nodes``, the paper's two
+#: independent softmaxes (objects, goals) over the node logits; ``pairs``, one softmax over
+#: the compatible (object, goal) pairs, each scored from both nodes' states
+#: (:class:`~manigraph_planner.gnn.models.pair_head.PairHead`), so the goal is picked given
+#: the object (docs/training.md, "A decoder over pairs").
+DECODERS = ("nodes", "pairs")
 
 #: The policy's output heads -> the feature spec its graph states are built with.
 #: ``object-goal``: the paper's node logits (object and goal), over the paper's five columns
@@ -54,6 +61,8 @@ class ModelConfig:
         features: a task's feature spec (:meth:`FeatureSpec.for_task`, ``object-goal`` heads
             only); None, the heads' own. Not in :meth:`to_dict`: the checkpoint stamps it as
             its ``feature_spec`` and :meth:`from_dict` takes it back from there.
+        decoder: one of :data:`DECODERS` (``object-goal`` heads only for ``pairs``); the
+            default ``nodes`` is the paper's, and what every checkpoint without the key holds.
 
     Raises:
         ConfigError: (a ``ValueError``) naming the offending field.
@@ -67,6 +76,7 @@ class ModelConfig:
     heads: str = "object-goal"
     ensemble: int = 1
     features: FeatureSpec | None = None
+    decoder: str = "nodes"
 
     @property
     def feature_spec(self) -> FeatureSpec:
@@ -100,6 +110,12 @@ class ModelConfig:
                 f"must equal the feature spec's {spec.num_features} features, "
                 f"got {self.in_channels}",
             )
+        if self.decoder not in DECODERS:
+            raise ConfigError("decoder", f"'{self.decoder}' is not one of {', '.join(DECODERS)}")
+        if self.decoder != "nodes" and self.heads != "object-goal":
+            raise ConfigError(
+                "decoder", f"only 'object-goal' heads decode pairs, not {self.heads!r}"
+            )
         if self.ensemble > 1 and not family_for_heads(self.heads).ensembles:
             with_members = [f.heads for _, f in FAMILIES.items() if f.ensembles]
             raise ConfigError(
@@ -119,8 +135,8 @@ class ModelConfig:
         object.__setattr__(self, "feature_scale", tuple(float(s) for s in scale))
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain types only, for checkpoints (``ensemble`` only when above 1, so a
-        single network's file is what it was before ensembles)."""
+        """Plain types only, for checkpoints (``ensemble`` only when above 1 and ``decoder``
+        only when not ``nodes``, so such a network's file is what it was before either)."""
         values: dict[str, Any] = {
             "architecture": self.architecture,
             "hidden_channels": self.hidden_channels,
@@ -131,6 +147,8 @@ class ModelConfig:
         }
         if self.ensemble > 1:
             values["ensemble"] = self.ensemble
+        if self.decoder != "nodes":
+            values["decoder"] = self.decoder
         return values
 
     @classmethod

@@ -6,6 +6,9 @@ r"""A GNN policy network: registered message-passing backbone plus a one-logit n
 with :math:`s` the fixed ``feature_scale``. The :math:`N` node logits :math:`v` are read as
 the paper's :math:`K + L` outputs: a softmax over the object nodes picks the object, a
 softmax over the goal nodes picks the goal (see :mod:`manigraph_planner.gnn.selection`).
+With ``decoder = "pairs"`` the object logits still give :math:`p(o)`, and a
+:class:`~manigraph_planner.gnn.models.pair_head.PairHead` scores every (object, goal) pair
+for :math:`p(g \mid o)` (:mod:`manigraph_planner.gnn.pair_decoder`).
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ from torch import Tensor, nn
 
 from manigraph_planner.gnn.models.backbone import ARCHITECTURES
 from manigraph_planner.gnn.models.config import ModelConfig
+from manigraph_planner.gnn.models.pair_head import PairHead
 
 __all__ = ["PolicyNet"]
 
@@ -43,6 +47,8 @@ class PolicyNet(nn.Module):
             config.input_size, config.hidden_channels, config.num_layers, message_passing
         )
         self.head = nn.Linear(config.hidden_channels, 1)
+        # Only a pairs decoder has one: a nodes network's state_dict is what it always was.
+        self.pair_head = PairHead(config.input_size) if config.decoder == "pairs" else None
         # Not persistent: ModelConfig is the source of truth and travels in the checkpoint.
         scale = torch.tensor(config.feature_scale, dtype=torch.float32)
         self.feature_scale: Tensor
@@ -74,3 +80,25 @@ class PolicyNet(nn.Module):
         """
         hidden = self.backbone.forward_complete(x * self.feature_scale, mask)
         return self.head(hidden).squeeze(-1)
+
+    @property
+    def decodes_pairs(self) -> bool:
+        return self.pair_head is not None
+
+    def pair_logits(self, x: Tensor) -> Tensor:
+        r"""Every node pair's score for :math:`p(g \mid o)` from the (unscaled) input features
+        (a ``pairs`` decoder only).
+
+        Shapes:
+            - **x:** :math:`(N, F)` or :math:`(B, N, F)`
+            - **output:** :math:`(N, N)` or :math:`(B, N, N)`, ``[o, g]``: node ``o`` as
+              the object, node ``g`` as the goal
+        """
+        if self.pair_head is None:
+            raise ValueError("decoder: this network decodes nodes, it has no pair head")
+        return self.pair_head(x * self.feature_scale)
+
+    def pairs_complete(self, x: Tensor, mask: Tensor | None = None) -> tuple[Tensor, Tensor]:
+        """Node logits (:meth:`forward_complete`) and :meth:`pair_logits` of one complete
+        graph, or of each graph of a padded batch (the pairs' shape has one more :math:`N`)."""
+        return self.forward_complete(x, mask), self.pair_logits(x)
