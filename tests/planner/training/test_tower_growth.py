@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import pytest
 import torch
 
+from manigraph_planner.families.blocks.augment import Augmentation
 from manigraph_planner.families.blocks.task_growth import grow_task_graph
 from manigraph_planner.gnn.features import FeatureSpec, scene_to_graph
 from manigraph_planner.gnn.task_features import TaskFeatures
@@ -38,21 +40,35 @@ def rgb_tower_two_done() -> Scene:
     return Scene(episode_id="t", stamp=1.0, sequence=0, objects=objects, goals=goals)
 
 
-def grown(seed: int) -> tuple[torch.Tensor, torch.Tensor, int, int, int, FeatureSpec]:
+def grown(
+    seed: int, written: bool
+) -> tuple[torch.Tensor, torch.Tensor, int, int, int, FeatureSpec]:
     scene = rgb_tower_two_done()
     spec = FeatureSpec.for_task(TaskFeatures.learn([scene]))
+    growth = Augmentation().for_task(spec)
+    assert growth.ready_column == spec.names.index("goal:ready")
     x = scene_to_graph(scene, spec).x
-    # the expert's decision: the blue block (object 2) to level_2 (node 3 + 2)
+    # the expert's decision: the blue block (object 2) to level_2 (node 3 + 2); without
+    # written accepts the goals' any columns are read as open (a rule nobody wrote)
     out, objects, goal_index, object_index = grow_task_graph(
-        x, 3, 2, 5, 0, 2, torch.Generator().manual_seed(seed)
+        x,
+        3,
+        2,
+        5,
+        0,
+        2,
+        torch.Generator().manual_seed(seed),
+        growth.ready_column,
+        growth.any_columns if written else (),
     )
     return x, out, objects, goal_index, object_index, spec
 
 
-def test_finished_levels_grow_the_tower_in_place_or_as_free_levels_on_top() -> None:
+@pytest.mark.parametrize("written", [True, False])
+def test_finished_levels_grow_the_tower_in_place_or_as_free_levels_on_top(written: bool) -> None:
     kinds = set()
     for seed in range(12):
-        x, out, objects, goal_index, object_index, spec = grown(seed)
+        x, out, objects, goal_index, object_index, spec = grown(seed, written)
         ready = spec.names.index("goal:ready")
         red = spec.names.index("colour=red")
         assert objects == 5 and out.shape == (x.shape[0] + 4, x.shape[1])
@@ -77,5 +93,8 @@ def test_finished_levels_grow_the_tower_in_place_or_as_free_levels_on_top() -> N
                 kinds.add("on top")
                 assert obj[4] == 0 and float(obj[3]) == float(x[3, 3])
                 assert float(goal[3]) > float(out[goal_index, 3])
+                # written: a finished level (red, green); else the decided one (blue) again
+                same_as_label = torch.equal(obj[5:], x[2, 5:])
+                assert same_as_label is not written
             assert torch.equal(goal[red], obj[red])  # the level accepts its own object
     assert kinds == {"in place", "on top"}

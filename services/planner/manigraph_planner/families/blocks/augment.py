@@ -112,6 +112,8 @@ from manigraph_planner.families.blocks.structure import (
     open_box_contents,
 )
 from manigraph_planner.families.blocks.task_growth import grow_task_graph
+from manigraph_planner.gnn.features import FeatureSpec
+from manigraph_planner.gnn.goal_support import READY_COLUMN
 from manigraph_planner.training.dataset import Sample
 
 #: The probabilities of the structural steps 1-4 (see the module docstring).
@@ -156,6 +158,11 @@ class Augmentation:
     #: copy (:mod:`~manigraph_planner.families.blocks.task_growth`); 0: none.
     grow_pairs: int = 0
     grow_finished: int = 0
+    #: The ``goal:ready`` column of the task's spec (:meth:`for_task`), None without one: a
+    #: free level grown on top of a tower reads 0 there.
+    ready_column: int | None = None
+    #: The spec's ``...:any`` columns (a goal reading 0 in one states what it accepts).
+    any_columns: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         if self.copies < 0:
@@ -182,11 +189,17 @@ class Augmentation:
         off: dict[str, Any] = {name: 0.0 for name in STRUCTURAL_PROBABILITIES}
         return replace(self, **off)
 
-    def for_task(self) -> Augmentation:
+    def for_task(self, spec: FeatureSpec | None = None) -> Augmentation:
         """Rigid translation and position noise only (steps 5, 6), on the position columns
         of any feature spec: for demonstrations of a task file, whose structure no step of
-        this module knows."""
-        return replace(self.without_structure(), generic=True)
+        this module knows. ``spec``: the task's, whose ``goal:ready`` column growth keeps
+        right."""
+        names = spec.names if spec is not None else ()
+        ready = names.index(READY_COLUMN) if READY_COLUMN in names else None
+        open_ = tuple(k for k, name in enumerate(names) if name.endswith(":any"))
+        return replace(
+            self.without_structure(), generic=True, ready_column=ready, any_columns=open_
+        )
 
     def apply(self, samples: list[Sample], generator: torch.Generator) -> list[Sample]:
         """The originals followed by ``copies`` randomized copies of each."""
@@ -249,6 +262,8 @@ class Augmentation:
             pairs,
             finished,
             generator,
+            self.ready_column,
+            self.any_columns,
         )
         is_object = torch.zeros(x.shape[0], dtype=torch.bool)
         is_object[:objects] = True

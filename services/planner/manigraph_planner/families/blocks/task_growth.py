@@ -15,17 +15,22 @@ right, in a scene with more objects and goals than were demonstrated:
 * **taller towers**: where the finished goal is a level of a tower (goals stacked in one
   column), its copy goes into that tower instead, half the time each way:
 
-  - *a free level on top*, its object's copy loose on the table (beside a loose object, at
-    the tower base's height): free levels over the next one that accept what finished levels
-    accept (a red level at 14 cm once the red level at 2 cm is done: the 6-level tower
-    ``r, g, b, r, g, b``), and the object for such a level loose while it is not its turn;
+  - *a free level on top*, a copy of its object loose on the table (beside a loose object,
+    at the tower base's height), not its turn yet. Where the finished level states what it
+    accepts (written rules), that level is copied: a red level over the next one once the
+    red bottom is done, the 6-level ``r, g, b, r, g, b`` tower, and its accepts columns say
+    which object it takes. Where it states nothing (a rule nobody wrote), the decided level
+    and object are copied instead: the label's object then has a twin, so whatever order
+    the teacher follows among loose objects still puts it first. (Copying the finished
+    level there broke a size order: a 7 cm block loose after the 7 cm level is done told
+    the network that the largest loose block is not next; docs/training.md.)
   - *the level again, in place*: a filled copy right over the original, everything above it
     (goals and the objects on them) one level higher: more levels done under the next one
     than were ever demonstrated, in the same order (a size order stays an order).
 
   The expert still fills the lowest level that can be filled now, with the object it chose:
-  the label is kept. A new level is either filled or free over a free level, so its
-  ``goal:ready`` column (copied from a filled goal: 0) stays right.
+  the label is kept. A new level is either filled (``goal:ready`` 0, copied) or free over a
+  free level (``goal:ready`` set to 0: the spec's column, given).
 
 With four blocks demonstrated, the last blue block is always the second; grown scenes show a
 blue block still loose after three, five or more are placed, so the network cannot read
@@ -60,10 +65,14 @@ def grow_task_graph(
     pairs: int,
     finished: int,
     generator: torch.Generator,
+    ready_column: int | None = None,
+    any_columns: tuple[int, ...] = (),
 ) -> tuple[Tensor, int, int, int]:
     """``x`` with ``pairs`` copies of the decided pair and up to ``finished`` copies of filled
     pairs added; returns the new features, object count, goal index and object index (the
-    labelled pair: the original's, moved past the added objects)."""
+    labelled pair: the original's, moved past the added objects). ``ready_column``: the
+    spec's ``goal:ready`` column, 0 on a free level grown on a tower's top; ``any_columns``:
+    its ``...:any`` columns, where a goal that states what it accepts reads 0."""
     objects, goals = x[:num_objects], x[num_objects:]
     goal = goal_index - num_objects
     new_objects: list[Tensor] = []
@@ -97,8 +106,10 @@ def grow_task_graph(
         if float(torch.rand(1, generator=generator)) < 0.5:
             objects, goals = _insert_level(objects, goals, held, holder, column)
         else:
+            written = bool(any_columns) and bool((goals[held, list(any_columns)] < 0.5).any())
+            level, its = (held, holder) if written else (goal, object_index)
             objects, goals = _free_level_on_top(
-                objects, goals, held, holder, column, object_index, generator
+                objects, goals, level, its, object_index, column, generator, ready_column
             )
     added = len(objects) - num_objects
     if not added:
@@ -169,21 +180,26 @@ def _insert_level(
 def _free_level_on_top(
     objects: Tensor,
     goals: Tensor,
-    held: int,
+    level: int,
     holder: int,
-    column: tuple[int, ...],
     object_index: int,
+    column: tuple[int, ...],
     generator: torch.Generator,
+    ready_column: int | None,
 ) -> tuple[Tensor, Tensor]:
-    """A free copy of level ``held`` on top of its column, a loose copy of ``holder``."""
-    centre = goals[held, 1:3]
+    """A free copy of ``level`` on top of the tower ``column``, not ready, and a loose copy
+    of its object ``holder``."""
+    centre = goals[column[0], 1:3]
     in_column = (goals[:, 1:3] - centre).abs().max(dim=1).values <= COLUMN_XY
-    done, obj = goals[held].clone(), objects[holder].clone()
-    done[3] = float(goals[in_column, 3].max()) + _level_height(goals, column)
-    done[4] = 0.0
+    free, obj = goals[level].clone(), objects[holder].clone()
+    free[1:3] = centre
+    free[3] = float(goals[in_column, 3].max()) + _level_height(goals, column)
+    free[4] = 0.0
+    if ready_column is not None:
+        free[ready_column] = 0.0
     obj[1:4] = _loose_spot(objects, object_index, float(goals[in_column, 3].min()), generator)
     obj[4] = 0.0
-    return torch.cat([objects, obj[None]]), torch.cat([goals, done[None]])
+    return torch.cat([objects, obj[None]]), torch.cat([goals, free[None]])
 
 
 def _loose_spot(
