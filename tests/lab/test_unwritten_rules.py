@@ -25,7 +25,11 @@ KINDS = {
     "red-only-tower": (8, 12),
     "flat-back": (8, 12),
 }
-FILES = sorted([k for k in KINDS] + [f"{k}-{n}" for k, sizes in KINDS.items() for n in sizes])
+#: Variants of a kind: the same task drawn where the physics sim's tripod camera sees it.
+CAMERA = ["colour-place-camera"]
+FILES = sorted(
+    [k for k in KINDS] + [f"{k}-{n}" for k, sizes in KINDS.items() for n in sizes] + CAMERA
+)
 
 
 def texts(name: str) -> tuple[str, str]:
@@ -49,6 +53,15 @@ def test_the_teacher_told_the_rules_solves_it_without_a_violation(name: str) -> 
     summary = evaluate(with_rules(POLICIES["expert"](), rules), spec)
     assert summary["success_rate"] == 1.0
     assert summary["rule_violations"] == 0 and summary["wrong_object"] == 0
+
+
+def test_the_camera_variant_is_its_kind_drawn_where_the_camera_sees() -> None:
+    task, rules = texts("colour-place-camera")
+    kind_task, kind_rules = texts("colour-place")
+    assert rules.split("\n", 1)[1] == kind_rules.split("\n", 1)[1]  # the same rules
+    starts = {tuple(p) for o in parse_task_file(task).objects for p in o.positions or ()}
+    kind_starts = {tuple(p) for o in parse_task_file(kind_task).objects for p in o.positions or ()}
+    assert starts < kind_starts and all(abs(y) <= 0.33 for _, y, _ in starts)
 
 
 def test_the_rule_free_expert_is_judged_by_the_rules() -> None:
