@@ -14,11 +14,12 @@ Why so small a head, measured on ten demonstrations of "same colour as the bin" 
 seeds, docs/training.md): a head over the message-passing states (an MLP over
 :math:`[h_o, h_g]` and :math:`(Q h_o)^\top (K h_g)`, with or without the node logits) fits
 each demonstrated scene as a whole and sends every block to the bin the teacher filled next,
-whatever its colour (0.27-0.37 at the demonstrated size); an MLP over :math:`[x_o, x_g]`
-beside :math:`M` holds at the demonstrated size but extrapolates a new bin's rank past the
-colour match at 3x the objects (0.70 / 0.90 / 1.00). Linear in each node, this head can
-neither memorise a scene nor rank an unseen position above the match it learned. The object
-itself is still chosen by the graph network (:math:`p(o)`, the paper's object head).
+whatever its colour (0.27-0.73 at the demonstrated size); an MLP over :math:`[x_o, x_g]`
+beside :math:`M` holds at the demonstrated size but ranks a new bin's position above the
+colour match at 3x the objects (0.70 / 0.90, training seeds 0 / 1). Linear in each node,
+this head can neither memorise a scene nor rank an unseen position above the match it
+learned. The object itself is still chosen by the graph network (:math:`p(o)`, the paper's
+object head).
 """
 
 from __future__ import annotations
