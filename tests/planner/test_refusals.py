@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import math
+
+import msgspec
 import pytest
 from test_recovery import Preferences, finished, obj, scene, slot
 
 from manigraph_planner.decisions import DecisionMaker, OutOfOptions
 from manigraph_planner.refusals import RefusalMemory, scope_of
 from manigraph_shared.decision_failure import OUT_OF_OPTIONS, cannot_decide
-from manigraph_shared.messages import Action, ServiceState, ServiceStatus
+from manigraph_shared.messages import Action, Quaternion, ServiceState, ServiceStatus
 
 GOALS = [slot("g0", 0.3, 0), slot("g1", 0.3, 1)]
 
@@ -117,3 +120,17 @@ def test_an_action_names_the_refusal_it_passes_over_and_old_logs_decode() -> Non
     named = Action.decode(action.replace(passed_over="a->g0: no_ik_solution").encode())
     assert named.passed_over == "a->g0: no_ik_solution"
     assert Action.decode(action.encode()).passed_over is None
+
+
+def test_a_reach_refusal_stands_while_a_measured_pose_jitters_and_ends_once_it_turns() -> None:
+    def turned(degrees: float) -> tuple[list, list]:
+        objects, goals = world()
+        half = math.radians(degrees) / 2
+        quaternion = Quaternion(z=math.sin(half), w=math.cos(half))
+        objects[0] = msgspec.structs.replace(objects[0], orientation=quaternion)  # a
+        return objects, goals
+
+    episode = Episode(("a", "g0"), ("b", "g1"))
+    episode.step(turned(0.0), "no_ik_solution")
+    assert episode.step(turned(2.0), None).object_id == "b"  # RGB-D jitter: still no
+    assert episode.step(turned(30.0), None).object_id == "a"  # turned: ask again
