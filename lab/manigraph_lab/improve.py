@@ -300,10 +300,10 @@ def improve(plan: ImprovePlan, progress: TextIO | None = None) -> dict[str, obje
             metrics={**metrics, "improved_from": str(plan.policy), "improve_round": round_},
         )
         policy = load_policy(str(checkpoint))
-        report.final_loss = float(metrics["final_loss"])
-        report.demo_accuracy = float(metrics["demo_accuracy"])
-        report.training_samples = int(metrics["training_samples"])
-        report.train_seconds = float(metrics["train_seconds"])
+        report.final_loss = _number(metrics, "final_loss")
+        report.demo_accuracy = _number(metrics, "demo_accuracy")
+        report.training_samples = int(_number(metrics, "training_samples"))
+        report.train_seconds = _number(metrics, "train_seconds")
         report.checkpoint = str(checkpoint)
         report.seconds = time.perf_counter() - round_started
         reports.append(report)
@@ -319,3 +319,11 @@ def improve(plan: ImprovePlan, progress: TextIO | None = None) -> dict[str, obje
         "labels_files": [str(p) for p in labelled],
         "seconds": round(time.perf_counter() - started, 2),
     }
+
+
+def _number(metrics: dict[str, object], key: str) -> float:
+    """A numeric training metric (the trainer's metrics are a JSON-ready table)."""
+    value = metrics[key]
+    if not isinstance(value, int | float):
+        raise TypeError(f"training metric {key!r} is not a number: {value!r}")
+    return float(value)
