@@ -130,7 +130,8 @@ def main() -> int:
                     "--trajectories", str(args.trajectories), "--seed", "0", "-o", str(demos),
                 )  # fmt: skip
             train = ["train", str(demos), "--arch", args.arch, "--seed", str(seed)]
-            t_train, _ = manigraph(*train, *args.train_args.split(), "-o", str(model))
+            train += args.train_args.split()  # the baseline is the same network: same flags
+            t_train, _ = manigraph(*train, "-o", str(model))
             manigraph(*train, "--epochs", "1", "-o", str(baseline))
             # A file without accepts has no filter to turn off: scored once.
             filters = ("on",) if example in UNWRITTEN else ("on", "off")
