@@ -163,8 +163,11 @@ def test_a_closing_terminal_or_a_killed_up_leaves_nothing_behind(
                 time.sleep(0.1)
             up.send_signal(signum)
         up.wait(timeout=60)
-        # after SIGKILL the children stop by themselves: as fast as on a stop, plus a margin
-        _assert_nothing_left(port, children, log, within=15.0)
+        # after SIGKILL the children stop by themselves. Not a timing: a child still importing
+        # torch when its parent dies (the planner, right after "stack is up") ends only once
+        # the import is done, 15-30 s on a loaded 2-core machine; what must not be is a
+        # process that outlives the stack.
+        _assert_nothing_left(port, children, log, within=60.0)
         # As a shell reports it: 128 + the first signal's number (Ctrl-C 130, SIGHUP 129);
         # a SIGKILL ends it before it can say anything (docs/running.md, "Exit codes").
         killed = signal.SIGKILL in signals
