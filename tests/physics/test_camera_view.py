@@ -6,9 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from manigraph_sim.physics.camera import CameraConfig, out_of_view, top_corners
+from manigraph_sim.physics.camera import CameraConfig, ideal_calibration, out_of_view, top_corners
 
 BLOCK = np.array([0.04, 0.04, 0.04])
+
+
+def unseen(config: CameraConfig, corners: np.ndarray) -> bool:
+    k, base_T_camera = ideal_calibration(config)
+    return out_of_view(k, base_T_camera, (config.width, config.height), corners)
 
 
 @pytest.mark.parametrize(
@@ -26,10 +31,10 @@ def test_a_start_is_seen_only_when_its_whole_top_is_in_the_picture(
     x: float, y: float, seen: bool
 ) -> None:
     corners = top_corners(np.array([x, y, 0.02]), BLOCK)
-    assert out_of_view(CameraConfig(), corners) is (not seen)
+    assert unseen(CameraConfig(), corners) is (not seen)
 
 
 def test_a_wider_lens_sees_what_the_default_does_not() -> None:
     corners = top_corners(np.array([0.474, 0.546, 0.02]), BLOCK)
-    assert out_of_view(CameraConfig(), corners)
-    assert not out_of_view(CameraConfig(fovy_degrees=75.0), corners)
+    assert unseen(CameraConfig(), corners)
+    assert not unseen(CameraConfig(fovy_degrees=75.0), corners)

@@ -189,11 +189,15 @@ class PhysicsBackend(EpisodeBackend, JointedArmBackend):
         finds objects by sight (RGB-D, markers) cannot find it, and the episode will wait."""
         from manigraph_sim.physics.camera import out_of_view, top_corners
 
-        assert self.camera_config is not None
+        assert self.camera is not None
+        # The rendered camera's own pose: with --camera-offset/--camera-tilt it is not the
+        # nominal one.
+        k, base_T_camera = self.camera.camera_matrix(), self.camera.base_T_camera()
+        size = (self.camera.config.width, self.camera.config.height)
         unseen = [
             f"{body.id} at ({body.position[0]:.2f}, {body.position[1]:.2f})"
             for body in layout.bodies
-            if out_of_view(self.camera_config, top_corners(body.position, body.size))
+            if out_of_view(k, base_T_camera, size, top_corners(body.position, body.size))
         ]
         if unseen and request.episode_id != "warm-up":
             log.warning(

@@ -215,17 +215,20 @@ def ideal_calibration(config: CameraConfig) -> tuple[np.ndarray, np.ndarray]:
     return k, base_T_camera
 
 
-def out_of_view(config: CameraConfig, corners: np.ndarray) -> bool:
-    """Whether any of ``corners`` (:math:`(M, 3)`, robot base frame) is off the camera's
-    image or behind it: a body partly out of the picture cannot be found by its segment."""
-    k, base_T_camera = ideal_calibration(config)
+def out_of_view(
+    k: np.ndarray, base_T_camera: np.ndarray, size: tuple[int, int], corners: np.ndarray
+) -> bool:
+    """Whether any of ``corners`` (:math:`(M, 3)`, robot base frame) is off the image of a
+    camera (``k``, its pose ``base_T_camera``, ``size`` = (width, height) pixels) or behind it:
+    a body partly out of the picture cannot be found by its segment."""
     camera_T_base = np.linalg.inv(base_T_camera)
     points = corners @ camera_T_base[:3, :3].T + camera_T_base[:3, 3]
     if np.any(points[:, 2] <= 0):
         return True
     u = k[0, 0] * points[:, 0] / points[:, 2] + k[0, 2]
     v = k[1, 1] * points[:, 1] / points[:, 2] + k[1, 2]
-    inside = (u >= 0) & (u <= config.width - 1) & (v >= 0) & (v <= config.height - 1)
+    width, height = size
+    inside = (u >= 0) & (u <= width - 1) & (v >= 0) & (v <= height - 1)
     return not bool(np.all(inside))
 
 
