@@ -29,6 +29,18 @@ log = logging.getLogger("manigraph.router")
 #: that does not finish within :data:`STOP_GRACE` seconds ends the process outright.
 SUPERVISOR_ENV = "MANIGRAPH_SUPERVISOR_PID"
 STOP_GRACE = 5.0
+#: Seconds from the stop request to the kernel ending the process (SIGALRM, default action),
+#: whatever the interpreter is doing then: a close stuck in native code that holds the GIL
+#: keeps every Python thread, the ``STOP_GRACE`` timer included, from running. A stack killed
+#: mid-stop once left its router on the port this way (SIGINT, then SIGKILL of ``up``).
+HARD_STOP_S = 10
+
+
+def _request_stop(stop: threading.Event) -> None:
+    """Ask the router to stop, and arm the deadline no hang outlives (any thread may call)."""
+    if not stop.is_set():
+        signal.alarm(HARD_STOP_S)
+    stop.set()
 
 
 def _watch_supervisor(stop: threading.Event) -> None:
@@ -40,7 +52,7 @@ def _watch_supervisor(stop: threading.Event) -> None:
         while not stop.is_set():
             if os.getppid() != int(supervisor):
                 log.info("the supervisor went away: stopping")
-                stop.set()
+                _request_stop(stop)
             time.sleep(0.5)
 
     threading.Thread(target=watch, name="supervisor-watch", daemon=True).start()
@@ -50,8 +62,9 @@ def run_router(config: BusConfig, state: Path | None = None) -> int:
     """Route until SIGINT/SIGTERM, keeping the stack's emergency-stop latch in ``state`` (the
     state directory; default: :func:`~manigraph_tools.estop_keeper.state_dir`)."""
     stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    signal.signal(signal.SIGALRM, signal.SIG_DFL)  # the hard deadline of _request_stop
+    signal.signal(signal.SIGINT, lambda *_: _request_stop(stop))
+    signal.signal(signal.SIGTERM, lambda *_: _request_stop(stop))
     _watch_supervisor(stop)
     # The certificate set's cells.json (if any) names each cell identity's cells.
     cells = read_cell_identities(config.tls_dir) if config.tls else {}
