@@ -4,11 +4,15 @@
 from __future__ import annotations
 
 import json
+from collections import Counter
 
 import pytest
 
 from manigraph_sim.physics.video import vulkan_available
 from manigraph_testkit.testing import run_up
+
+#: Frames of the recorded camera the blur is measured on.
+MEASURED_FRAMES = 12
 
 pytestmark = pytest.mark.integration
 
@@ -86,9 +90,16 @@ def test_up_degrades_the_camera_it_renders_and_perception_still_sees(tmp_path) -
     )
     summary = json.loads(result.stdout.strip().splitlines()[-1])
     assert summary["success_rate"] == 1.0
-    image = next(iter(read_log(log, ["manigraph/camera/front/image"]))).decode()
-    grey = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_GRAYSCALE)
-    markers = sim_marker_map()
-    found = detect(detector_for(markers)._replace(gauge=None), grey)
+    images = [message.decode() for message in read_log(log, ["manigraph/camera/front/image"])]
+    detector = detector_for(sim_marker_map())._replace(gauge=None)
     gauge = BlurGauge(cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_250))
-    assert gauge.measure(grey, [(m.id, m.corners) for m in found]) == Blur(1, 5)
+    # The smear is the camera's, on every frame; one noisy frame's gauge may be a pixel off
+    # (once 4 for 5), so the camera's smear is the one most of a dozen frames measure.
+    measured = []
+    for image in images[:: max(1, len(images) // MEASURED_FRAMES)][:MEASURED_FRAMES]:
+        grey = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_GRAYSCALE)
+        found = detect(detector, grey)
+        measured.append(gauge.measure(grey, [(m.id, m.corners) for m in found]))
+    assert len(measured) >= 3, len(images)
+    most, count = Counter(measured).most_common(1)[0]
+    assert most == Blur(1, 5) and count > len(measured) // 2, measured
