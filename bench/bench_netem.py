@@ -37,7 +37,7 @@ from manigraph_testkit.netlab import (
 )
 from manigraph_testkit.testing import free_port
 from manigraph_tools.access import cell_identities, write_cell_identities
-from manigraph_tools.certs import IDENTITIES, make_certificates
+from manigraph_tools.certificates import IDENTITIES, make_certificates
 
 CELLS = {
     **cell_identities(["cell-1"]),

@@ -26,7 +26,7 @@ from bench_roundtrip import scene_for  # type: ignore[import-not-found]
 from manigraph_shared.bus import Bus
 from manigraph_shared.messages import Action, Scene
 from manigraph_testkit.testing import Stack, stack
-from manigraph_tools.certs import make_certificates
+from manigraph_tools.certificates import make_certificates
 
 
 class Timer:

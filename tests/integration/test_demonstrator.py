@@ -13,7 +13,7 @@ import pytest
 from manigraph_shared.mcap_log import decode_log
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase
 from manigraph_testkit.testing import stack
-from manigraph_tools.certs import make_certificates
+from manigraph_tools.certificates import make_certificates
 
 REPO = Path(__file__).resolve().parents[2]
 KITTING = REPO / "examples" / "tasks" / "kitting.toml"

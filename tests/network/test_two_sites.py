@@ -32,7 +32,7 @@ from manigraph_testkit.netlab import (
     netns_problem,
 )
 from manigraph_tools.access import cell_identities, write_cell_identities
-from manigraph_tools.certs import IDENTITIES, make_certificates
+from manigraph_tools.certificates import IDENTITIES, make_certificates
 
 pytestmark = pytest.mark.integration
 CUT_SECONDS = 4.0

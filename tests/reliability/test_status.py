@@ -15,7 +15,7 @@ from reliability_helpers import STARTUP, start
 
 from manigraph_shared.messages import ServiceStatus
 from manigraph_testkit.testing import Stack, free_port, stack
-from manigraph_tools.certs import make_certificates
+from manigraph_tools.certificates import make_certificates
 
 pytestmark = pytest.mark.integration
 

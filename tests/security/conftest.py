@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_tools.certs import make_certificates
+from manigraph_tools.certificates import make_certificates
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.messages.base import Delivery
 from manigraph_tools.access import GRANTS, access_control
-from manigraph_tools.certs import IDENTITIES
+from manigraph_tools.certificates import IDENTITIES
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "security.md"
 

@@ -27,7 +27,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_testkit.testing import Stack, stack
 from manigraph_tools.access import cell_identities, write_cell_identities
-from manigraph_tools.certs import IDENTITIES, make_certificates
+from manigraph_tools.certificates import IDENTITIES, make_certificates
 
 pytestmark = pytest.mark.integration
 NOW = 1_700_000_000.0

@@ -12,7 +12,7 @@ from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
 from manigraph_shared.cli import main
 from manigraph_shared.errors import CONFIG_EXIT_CODE, ConfigError
-from manigraph_tools.certs import IDENTITIES, make_certificates
+from manigraph_tools.certificates import IDENTITIES, make_certificates
 
 
 def load(path: Path) -> x509.Certificate:

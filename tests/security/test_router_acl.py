@@ -29,7 +29,7 @@ from manigraph_shared.messages import (
     Vector3,
 )
 from manigraph_testkit.testing import Stack, open_raw_session, stack
-from manigraph_tools.certs import make_certificates
+from manigraph_tools.certificates import make_certificates
 
 pytestmark = pytest.mark.integration
 NOW = 1_700_000_000.0

@@ -30,10 +30,10 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN, nearest_orientation
 from manigraph_sim.geometric.backend import GeometricBackend
-from manigraph_tools.demo_ui.clicks import Click, ClickRefused
-from manigraph_tools.demo_ui.http import BadRequest, DemoHttpServer, click_from_json
-from manigraph_tools.demo_ui.scene_view import scene_view, world_extent
-from manigraph_tools.demo_ui.session import DemoSession
+from manigraph_tools.click_page.clicks import Click, ClickRefused
+from manigraph_tools.click_page.http import BadRequest, DemoHttpServer, click_from_json
+from manigraph_tools.click_page.scene_view import scene_view, world_extent
+from manigraph_tools.click_page.session import DemoSession
 
 
 class Sink:
@@ -501,7 +501,7 @@ def test_a_proposal_for_a_world_that_is_gone_or_one_the_page_would_refuse_is_not
 
 def test_the_proposer_asks_the_policy_in_its_own_thread_and_a_bad_policy_is_refused() -> None:
     from manigraph_shared.errors import ConfigError
-    from manigraph_tools.demo_ui.proposer import Proposer, load_proposer
+    from manigraph_tools.click_page.proposer import Proposer, load_proposer
 
     world = stack_world()
     session, _ = proposing_session(world)

@@ -8,7 +8,7 @@ import importlib.util
 import sys
 from pathlib import Path
 
-from manigraph_tools.commands.run import episode_arguments, plan_from_args
+from manigraph_tools.commands.episode_flags import episode_arguments, plan_from_args
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -21,7 +21,7 @@ from manigraph_shared.bus_config import (
 from manigraph_shared.cli import build_parser
 from manigraph_shared.errors import CONFIG_EXIT_CODE, BusError, ConfigError
 from manigraph_testkit.testing import free_port
-from manigraph_tools.certs import make_certificates
+from manigraph_tools.certificates import make_certificates
 from manigraph_tools.up_guide import guide
 
 #: The client commands of issue #45, with what each needs besides the bus flags.

@@ -15,7 +15,7 @@ import time
 import pytest
 
 from manigraph_testkit.testing import free_port
-from manigraph_tools.router import HARD_STOP_S
+from manigraph_tools.zenoh_router import HARD_STOP_S
 
 pytestmark = pytest.mark.integration
 

@@ -55,7 +55,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.messages.base import PREFIX
 from manigraph_shared.messages.status import ServiceStatus
-from manigraph_tools.certs import IDENTITIES
+from manigraph_tools.certificates import IDENTITIES
 
 #: Zenoh 1.x access-control message kinds, grouped by what a process does.
 PUBLISH = ("put", "delete")

@@ -17,16 +17,12 @@ before it moves. Both commands say whether the latch holds what they sent.
 
 from __future__ import annotations
 
-import argparse
 import getpass
 import socket
-import sys
 import threading
 import time
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
-from manigraph_shared.cli import Command
 from manigraph_shared.estop_latch import EstopLatch
 from manigraph_shared.messages import EmergencyStop, ServiceStatus
 
@@ -68,48 +64,3 @@ def send(bus: Bus, engaged: bool, reason: str, wait: float, by: str = "") -> boo
     time.sleep(0.05)  # let the subscription reach the router before the answer can
     bus.publish(EmergencyStop(engaged=engaged, reason=reason, by=by, stamp=time.time()))
     return acknowledged.wait(wait)
-
-
-def _configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--reason", default="", help="why, for the log and `manigraph status`")
-    parser.add_argument(
-        "--by", default=None, help="who sends it, for the log and `status` (default: user@host)"
-    )
-    parser.add_argument(
-        "--wait", type=float, default=2.0, help="seconds to wait for skills to acknowledge"
-    )
-    add_bus_arguments(parser)
-
-
-def _run(args: argparse.Namespace, engaged: bool) -> int:
-    reason = args.reason or ("manigraph stop" if engaged else "manigraph resume")
-    with Bus.open(bus_config_from_args(args, wait_seconds=5.0)) as bus:
-        ok = send(bus, engaged, reason, args.wait, by=args.by or operator())
-        held = latched(bus, engaged)
-    what = "engaged" if engaged else "released"
-    latch = (
-        "latched by the stack"
-        if held
-        else "NOT confirmed by the stack's latch (is the router a manigraph router?)"
-    )
-    if ok:
-        print(f"emergency stop {what}, {latch}; skills acknowledged", file=sys.stderr)
-        return 0 if held else 1
-    print(
-        f"emergency stop {what} (published, {latch}), but skills did not acknowledge within "
-        f"{args.wait:g} s: is it running?",
-        file=sys.stderr,
-    )
-    return 1
-
-
-stop_command = Command(
-    help="emergency stop: halt the robot now and refuse every action until `manigraph resume`",
-    configure=_configure,
-    run=lambda args: _run(args, engaged=True),
-)
-resume_command = Command(
-    help="release the emergency stop: skills accepts actions again",
-    configure=_configure,
-    run=lambda args: _run(args, engaged=False),
-)

@@ -154,7 +154,7 @@ class Supervisor:
         env = {
             **os.environ,
             "PYTHONUNBUFFERED": "1",
-            "MANIGRAPH_SUPERVISOR_PID": str(parent),  # the router watches it (router.py)
+            "MANIGRAPH_SUPERVISOR_PID": str(parent),  # the router watches it (zenoh_router.py)
             **spec.env,
         }
         process = subprocess.Popen(

@@ -26,7 +26,7 @@ def _keys_run(args: argparse.Namespace) -> int:
     return 0
 
 
-keys_command = Command(
+command = Command(
     help="print the key expression / message table (Markdown, as in the README)",
     configure=_keys_configure,
     run=_keys_run,

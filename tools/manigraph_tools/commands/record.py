@@ -63,7 +63,7 @@ def _record_run(args: argparse.Namespace) -> int:
     )
 
 
-record_command = Command(
+command = Command(
     help="record every manigraph/** sample to MCAP (flushed every 100 ms, rotated by size "
     "and age), every robot cell on its own channels (--cell NAME: that cell only); --recover "
     "finalises a killed recorder's file",

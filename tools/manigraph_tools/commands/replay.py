@@ -16,7 +16,7 @@ from manigraph_shared.errors import INTERRUPTED_EXIT_CODE, ConfigError
 from manigraph_shared.mcap_log import LoggedMessage
 from manigraph_shared.messages import Action
 from manigraph_tools.commands.common import emit_json, wait_services
-from manigraph_tools.replay import ActionCheck, Replayer, recorded_actions
+from manigraph_tools.log_replay import ActionCheck, Replayer, recorded_actions
 
 
 def _replay_configure(parser: argparse.ArgumentParser) -> None:
@@ -123,7 +123,7 @@ def _replay_run(args: argparse.Namespace) -> int:
         return 0 if not problems else 1
 
 
-replay_command = Command(
+command = Command(
     help="publish a recorded MCAP log back onto the bus with its original timing",
     configure=_replay_configure,
     run=_replay_run,

@@ -8,7 +8,7 @@ from pathlib import Path
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
 from manigraph_tools.estop_keeper import STATE_DIR_ENV
-from manigraph_tools.router import run_router
+from manigraph_tools.zenoh_router import run_router
 
 
 def _router_configure(parser: argparse.ArgumentParser) -> None:
@@ -21,7 +21,7 @@ def _router_configure(parser: argparse.ArgumentParser) -> None:
     add_bus_arguments(parser)
 
 
-router_command = Command(
+command = Command(
     help="run a Zenoh router (default: listen on tcp/127.0.0.1:7447) and keep the stack's "
     "emergency-stop latch",
     configure=_router_configure,

@@ -3,28 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import secrets
-import time
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
 from manigraph_shared.cli import Command
-from manigraph_shared.options import add_option_arguments, options_from_args
 from manigraph_tools.commands.common import emit_json, wait_services
-from manigraph_tools.episode_plan import EpisodeOptions, EpisodePlan
+from manigraph_tools.commands.episode_flags import episode_arguments, plan_from_args
 from manigraph_tools.episodes import raise_if_aborted, run_episodes
-
-
-def episode_arguments(parser: argparse.ArgumentParser) -> None:
-    add_option_arguments(parser.add_argument_group("episodes"), EpisodeOptions)
-
-
-def plan_from_args(args: argparse.Namespace, episodes: int) -> EpisodePlan:
-    options = options_from_args(EpisodeOptions, args)
-    # Seconds alone repeat: two runs started in one second (cells driven side by side) would
-    # give their episodes the same ids, and the logs would mix them.
-    run_id = f"{options.label()}-{int(time.time())}-{secrets.token_hex(2)}"
-    return options.plan(episodes, run_id=run_id)
 
 
 def _run_configure(parser: argparse.ArgumentParser) -> None:
@@ -48,7 +33,7 @@ def _run_run(args: argparse.Namespace) -> int:
     return 0
 
 
-run_command = Command(
+command = Command(
     help="run seeded episodes on an already running stack (--cell NAME: in that robot cell); "
     "last line: one JSON object",
     configure=_run_configure,

@@ -39,7 +39,7 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-status_command = Command(
+command = Command(
     help="the stack at a glance: endpoint, cells, security, each service's version and uptime, "
     "the planner's policy and checkpoint, the emergency stop, warnings",
     configure=_configure,

@@ -26,9 +26,9 @@ from manigraph_shared.preflight import vulkan_problem
 from manigraph_shared.registry import Registry
 from manigraph_tools.access import CELL_SEPARATOR, cell_identities, write_cell_identities
 from manigraph_tools.cell_episodes import run_cells
-from manigraph_tools.certs import IDENTITIES, make_certificates
+from manigraph_tools.certificates import IDENTITIES, make_certificates
 from manigraph_tools.commands.common import emit_json
-from manigraph_tools.commands.run import episode_arguments, plan_from_args
+from manigraph_tools.commands.episode_flags import episode_arguments, plan_from_args
 from manigraph_tools.episodes import EpisodePlan, raise_if_aborted, run_episodes
 from manigraph_tools.owned_dir import OwnedDirectory
 from manigraph_tools.supervisor import STOP_SIGNALS, ProcessSpec, Supervisor
@@ -61,7 +61,7 @@ NOBODY = "none"
 def _demo_ui_argv(args: argparse.Namespace) -> list[str]:
     """``manigraph demo-ui`` flags from ``up``'s: the page's port and file, and the episode
     flags as the page's first episode."""
-    from manigraph_tools.demo_ui.service import DemoUiOptions
+    from manigraph_tools.click_page.service import DemoUiOptions
 
     values = {
         "http_port": args.demo_port,
@@ -481,7 +481,7 @@ def _up_run(args: argparse.Namespace) -> int:
     return 0
 
 
-up_command = Command(
+command = Command(
     help="start the router and every service locally; with --episodes run them and exit",
     configure=_up_configure,
     run=_up_run,

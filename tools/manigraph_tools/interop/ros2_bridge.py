@@ -14,7 +14,6 @@ declared with congestion control DROP, like the contract's state streams.
 
 from __future__ import annotations
 
-import argparse
 import re
 import time
 from dataclasses import dataclass
@@ -22,18 +21,14 @@ from dataclasses import dataclass
 import zenoh
 
 from manigraph_shared.bus import Bus
-from manigraph_shared.bus_config import add_bus_arguments, bus_config_from_args
-from manigraph_shared.cli import Command
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import JointState, Scene
 from manigraph_shared.options import (
     Interval,
     Options,
-    add_option_arguments,
     option,
-    options_from_args,
 )
-from manigraph_shared.service import Service, run_service
+from manigraph_shared.service import Service
 from manigraph_tools.interop import rmw_zenoh
 from manigraph_tools.interop.ros2_messages import (
     JOINT_STATE,
@@ -154,20 +149,3 @@ class Ros2Bridge(Service):
         for publisher in self.publishers.values():
             publisher.undeclare()
         self._node_token.undeclare()
-
-
-def _configure(parser: argparse.ArgumentParser) -> None:
-    add_option_arguments(parser, Ros2BridgeOptions)
-    add_bus_arguments(parser)
-
-
-def _run(args: argparse.Namespace) -> int:
-    options = options_from_args(Ros2BridgeOptions, args)
-    return run_service(lambda bus: Ros2Bridge(bus, options), bus_config_from_args(args))
-
-
-ros2_command = Command(
-    help="republish joint states, /tf and the scene markers for ROS 2 (rmw_zenoh's format)",
-    configure=_configure,
-    run=_run,
-)

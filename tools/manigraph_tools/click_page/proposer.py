@@ -15,8 +15,8 @@ from collections.abc import Callable
 
 from manigraph_shared.errors import ConfigError, PolicyError
 from manigraph_shared.messages import Scene
-from manigraph_tools.demo_ui.clicks import Click
-from manigraph_tools.demo_ui.session import DemoSession
+from manigraph_tools.click_page.clicks import Click
+from manigraph_tools.click_page.session import DemoSession
 
 log = logging.getLogger("manigraph.demo-ui.proposer")
 

@@ -11,14 +11,14 @@ from manigraph_shared.service import run_service
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
-    from manigraph_tools.demo_ui.service import DemoUiOptions
+    from manigraph_tools.click_page.service import DemoUiOptions
 
     add_option_arguments(parser, DemoUiOptions)
     add_bus_arguments(parser)
 
 
 def _run(args: argparse.Namespace) -> int:
-    from manigraph_tools.demo_ui.service import DemoUiOptions, DemoUiService
+    from manigraph_tools.click_page.service import DemoUiOptions, DemoUiService
 
     options = options_from_args(DemoUiOptions, args)  # a bad flag stops here, naming it
     return run_service(lambda bus: DemoUiService(bus, options), bus_config_from_args(args))

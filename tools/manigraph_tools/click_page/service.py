@@ -27,9 +27,14 @@ from manigraph_shared.messages import Action, EpisodeEvent, EpisodeRequest, Scen
 from manigraph_shared.options import Interval, Options, option
 from manigraph_shared.scene_gate import SceneGate
 from manigraph_shared.service import Service
-from manigraph_tools.demo_ui.http import READY_WAIT, BadRequest, DemoHttpServer, ServiceUnavailable
-from manigraph_tools.demo_ui.proposer import Proposer, load_proposer
-from manigraph_tools.demo_ui.session import Click, DemoSession
+from manigraph_tools.click_page.http import (
+    READY_WAIT,
+    BadRequest,
+    DemoHttpServer,
+    ServiceUnavailable,
+)
+from manigraph_tools.click_page.proposer import Proposer, load_proposer
+from manigraph_tools.click_page.session import Click, DemoSession
 from manigraph_tools.episodes import read_task_file
 
 AT_LEAST_ONE = Interval(1, None)

@@ -26,8 +26,8 @@ from importlib.resources import files
 from typing import Any, Protocol
 
 from manigraph_shared.messages import Action, TrayAction
-from manigraph_tools.demo_ui.clicks import Click, ClickRefused
-from manigraph_tools.demo_ui.session import DemoSession
+from manigraph_tools.click_page.clicks import Click, ClickRefused
+from manigraph_tools.click_page.session import DemoSession
 
 log = logging.getLogger("manigraph.demo-ui.http")
 
@@ -163,7 +163,7 @@ class _Handler(BaseHTTPRequestHandler):
         app = self.server.app
         if path in STATIC:
             name, content_type = STATIC[path]
-            page = files("manigraph_tools.demo_ui").joinpath("static", name).read_bytes()
+            page = files("manigraph_tools.click_page").joinpath("static", name).read_bytes()
             self._send(HTTPStatus.OK, page, content_type)
         elif path == "/api/state":
             self._json(HTTPStatus.OK, {**app.session.snapshot(), "defaults": app.page_defaults()})

@@ -16,7 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from manigraph_shared.messages import Action, Scene
-from manigraph_tools.demo_ui.clicks import (
+from manigraph_tools.click_page.clicks import (
     ACCEPTED,
     CORRECTED,
     POLICY,
@@ -26,7 +26,7 @@ from manigraph_tools.demo_ui.clicks import (
     describe,
     same_decision,
 )
-from manigraph_tools.demo_ui.scene_view import same_world
+from manigraph_tools.click_page.scene_view import same_world
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """What a click on the demonstration page asks for, and the ``Action`` it becomes: checked
 against the scene before it is sent (:func:`action_for`), refused with a message for the page
 (:class:`ClickRefused`) where the scene does not allow it. Whether the robot is free to take
-it is the session's business (:class:`~manigraph_tools.demo_ui.session.DemoSession`)."""
+it is the session's business (:class:`~manigraph_tools.click_page.session.DemoSession`)."""
 
 from __future__ import annotations
 

@@ -45,7 +45,7 @@ from manigraph_shared.messages import (
     TrayAction,
 )
 from manigraph_shared.orientations import ORIENTATION_NAMES
-from manigraph_tools.demo_ui.clicks import (
+from manigraph_tools.click_page.clicks import (
     ACCEPTED,
     CORRECTED,
     Click,
@@ -53,8 +53,8 @@ from manigraph_tools.demo_ui.clicks import (
     action_for,
     describe,
 )
-from manigraph_tools.demo_ui.proposals import Proposals
-from manigraph_tools.demo_ui.scene_view import same_world, scene_view
+from manigraph_tools.click_page.proposals import Proposals
+from manigraph_tools.click_page.scene_view import same_world, scene_view
 
 #: A decision whose skill never reports is given up after this long (seconds).
 DECISION_TIMEOUT = 60.0

@@ -32,6 +32,6 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-export_command = Command(
+command = Command(
     help="export a log as a ROS 2 bag or a LeRobot dataset", configure=_configure, run=_run
 )

@@ -17,7 +17,7 @@ from manigraph_tools.access import (
     read_cell_identities,
     write_cell_identities,
 )
-from manigraph_tools.certs import DEFAULT_DAYS, IDENTITIES, CertificateSet, make_certificates
+from manigraph_tools.certificates import DEFAULT_DAYS, IDENTITIES, CertificateSet, make_certificates
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:
@@ -107,7 +107,7 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-certs_command = Command(
+command = Command(
     help="make a local CA and one TLS certificate per bus identity (router, sim, planner, ...)",
     configure=_configure,
     run=_run,
