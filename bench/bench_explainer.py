@@ -29,7 +29,7 @@ warnings.filterwarnings("ignore", category=FutureWarning)  # torch.jit.script, f
 
 from scenes import stack_scene  # noqa: E402  (bench/scenes.py)
 
-from manigraph_lab.explain_study import collect_explanations, edges_touch_object  # noqa: E402
+from manigraph_lab.explanation_study import collect_explanations, edges_touch_object  # noqa: E402
 from manigraph_planner.explain import ExplainerConfig, SceneExplainer  # noqa: E402
 from manigraph_planner.gnn import ModelConfig, PolicyNet  # noqa: E402
 from manigraph_planner.policies.gnn import GNNPolicy  # noqa: E402

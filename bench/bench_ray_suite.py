@@ -43,10 +43,10 @@ from pathlib import Path
 
 import psutil
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
+from manigraph_lab.generalization_suite import cells as table_cells
+from manigraph_lab.generalization_suite import run_suite
 from manigraph_lab.ray_local import TEMP_PREFIX, temp_root
-from manigraph_lab.suite import cells as table_cells
-from manigraph_lab.suite import run_suite
 from manigraph_lab.sweep import SweepOptions, ray_session
 from manigraph_planner.policies import load_policy
 
@@ -76,7 +76,7 @@ def under_uv_run() -> bool:
 
 def _import_a_cell() -> int:
     """A task that imports what a cell imports, as a worker's first task does."""
-    import manigraph_lab.suite  # noqa: F401  (torch, the planner, the sim)
+    import manigraph_lab.generalization_suite  # noqa: F401  (torch, the planner, the sim)
 
     return os.getpid()
 

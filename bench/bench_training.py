@@ -21,7 +21,7 @@ from pathlib import Path
 
 import torch
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
 from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
 from manigraph_planner.training.dataset import load_demonstrations

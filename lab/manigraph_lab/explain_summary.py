@@ -312,7 +312,7 @@ def run_summary(args: Namespace) -> int:
     import json
     import sys
 
-    from manigraph_lab.commands import _checked_files  # the files checked as eval checks them
+    from manigraph_lab.task_files import checked_files  # the files checked as eval checks them
     from manigraph_planner.policies import load_policy
     from manigraph_planner.policies.teacher_rules import TEACHERS, with_rules
     from manigraph_shared.errors import ConfigError
@@ -329,7 +329,7 @@ def run_summary(args: Namespace) -> int:
     episodes = EpisodeOptions(
         task_file=args.task_file, rules=args.rules, seed=args.seed, episodes=args.episodes
     )
-    task_file, blocks, rules = _checked_files(episodes)  # a bad file stops here, naming it
+    task_file, blocks, rules = checked_files(episodes)  # a bad file stops here, naming it
     label = episodes.label()
     spec = EvalSpec("file", blocks, 1, args.episodes, args.seed, 0.0, task_file, label, rules=rules)
     policy = load_policy(args.policy, accepts_filter=args.accepts_filter)

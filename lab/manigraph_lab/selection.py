@@ -4,10 +4,10 @@ episodes that no reported figure uses.
 Imitation from 20 demonstrations leaves much of a policy's behaviour on unseen scenes to
 chance: on this project, training seeds of the same recipe range from 0.05 to 1.00 on K = 40
 stacking. Selection is the usual remedy. Each candidate plays the suite's cells (see
-:func:`manigraph_lab.suite.cells`) on episodes seeded from :data:`VALIDATION_SEED` on (the
-suite and ``manigraph eval`` report seeds 0-99, the success-vs-K curve 10,000 on), and the
-candidate with the highest mean success rate is copied to the output, with every candidate's
-scores recorded in its ``metrics["selection"]``.
+:func:`manigraph_lab.generalization_suite.cells`) on episodes seeded from
+:data:`VALIDATION_SEED` on (the suite and ``manigraph eval`` report seeds 0-99, the
+success-vs-K curve 10,000 on), and the candidate with the highest mean success rate is copied
+to the output, with every candidate's scores recorded in its ``metrics["selection"]``.
 
 The suite's mean ± std over training seeds measures the *recipe*; a selected checkpoint is
 one artifact of it, chosen knowing the kinds of tasks it will be tested on (not the episodes).
@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TextIO
 
-from manigraph_lab.suite import Cell, cells, eval_cell
+from manigraph_lab.generalization_suite import Cell, cells, eval_cell
 from manigraph_lab.sweep import (
     Job,
     Outcome,

@@ -18,7 +18,7 @@ import pytest
 from lerobot_helpers import lerobot_python, load_with_lerobot
 from PIL import Image
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
 from manigraph_shared import lerobot_codes as codes
 from manigraph_shared.errors import LogError

@@ -20,7 +20,7 @@ import pyarrow.parquet as pq
 import pytest
 import torch
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.families.dishwasher.expert import dishwasher_expert
 from manigraph_planner.families.dishwasher.training import load_dish_demonstrations
 from manigraph_planner.policies import load_policy

@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 import torch
 
-from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_lab.explain_command import explain_offline, summary
-from manigraph_lab.explain_study import StudySpec, markdown_table, run_study, summarise
+from manigraph_lab.decision_explanations import explain_offline, summary
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_lab.explain_viz import render_explanation
+from manigraph_lab.explanation_study import StudySpec, markdown_table, run_study, summarise
 from manigraph_planner.gnn.checkpoint import save_checkpoint
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_planner.policies import load_policy

@@ -13,9 +13,9 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_lab.demos import family_expert
+from manigraph_lab.demo_recording import family_expert
 from manigraph_lab.episode_loop import run_episode
-from manigraph_lab.improve import ImprovePlan, VisitedScenes
+from manigraph_lab.teacher_dagger import ImprovePlan, VisitedScenes
 from manigraph_planner.policies import load_policy
 from manigraph_planner.policies.teacher_rules import with_rules
 from manigraph_shared.cli import main

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_lab.ray_local import TEMP_PREFIX, temp_root
 from manigraph_lab.sweep import Job, Outcome, SweepOptions, run_jobs
 from manigraph_planner.policies import load_policy

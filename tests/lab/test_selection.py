@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_lab.generalization_suite import cells
 from manigraph_lab.selection import (
     VALIDATION_SEED,
     Candidate,
@@ -13,7 +14,6 @@ from manigraph_lab.selection import (
     select_checkpoint,
     validation_cells,
 )
-from manigraph_lab.suite import cells
 from manigraph_planner.gnn import load_checkpoint
 
 CHECKPOINTS = Path(__file__).resolve().parents[2] / "checkpoints"

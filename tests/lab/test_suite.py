@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_lab.suite import CURVE_K, cells, run_suite
+from manigraph_lab.generalization_suite import CURVE_K, cells, run_suite
 
 
 @pytest.mark.slow

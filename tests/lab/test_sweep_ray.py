@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 from manigraph_lab import ray_local
-from manigraph_lab.demos import DemoProtocol, record_demos
-from manigraph_lab.suite import run_suite
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
+from manigraph_lab.generalization_suite import run_suite
 from manigraph_lab.sweep import Job, SweepError, SweepOptions, run_jobs
 from manigraph_planner.policies import load_policy
 from manigraph_shared.cli import main

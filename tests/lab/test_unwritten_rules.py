@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_lab.demos import DemoProtocol
+from manigraph_lab.demo_recording import DemoProtocol
 from manigraph_lab.episode_loop import run_episode
 from manigraph_lab.evaluate import EvalSpec, evaluate
 from manigraph_planner.policies import POLICIES

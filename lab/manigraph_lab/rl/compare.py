@@ -206,7 +206,7 @@ def demo_source(out: Path) -> Callable[[], Sequence[Sample]]:
 
     @cache
     def load() -> tuple[Sample, ...]:
-        from manigraph_lab.demos import DemoProtocol, record_demos
+        from manigraph_lab.demo_recording import DemoProtocol, record_demos
         from manigraph_planner.policies import load_policy
         from manigraph_planner.training.dataset import load_demonstrations
 

@@ -143,7 +143,7 @@ def explain_top_features(spec: CompareSpec, store: RunStore) -> dict[str, Any] |
     """The explainer's top-2 features of RL-GNN-Seq (its K = ``explain_blocks`` stage, first
     seed) and of the IL checkpoint of the same architecture, over ``explain_decisions``
     decisions of ``explain_blocks``-block stacking (cached in ``explain.json``)."""
-    from manigraph_lab.explain_study import cell_text, collect_explanations, summarise
+    from manigraph_lab.explanation_study import cell_text, collect_explanations, summarise
     from manigraph_lab.rl.baselines import BASELINES, load_model
     from manigraph_planner.policies import load_policy
 

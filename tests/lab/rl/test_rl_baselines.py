@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 import torch
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_lab.rl.baselines import BASELINES, PPOSettings, Stage, load_model, train_stage
 from manigraph_lab.rl.imitation import ImitationAdam, ImitationTerm
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet

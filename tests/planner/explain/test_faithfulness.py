@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from manigraph_lab.episode_loop import run_episode
-from manigraph_lab.explain_faithfulness import decisions_of, measure, table
+from manigraph_lab.faithfulness_study import decisions_of, measure, table
 from manigraph_planner.explain import ExplainerConfig, SceneExplainer
 from manigraph_planner.explain.config import Objective
 from manigraph_planner.policies.gnn import GNNPolicy
@@ -64,7 +64,7 @@ def test_pair_centred_explanations_hold_the_decision_and_point_at_it() -> None:
 
 
 def test_the_faithfulness_table_has_a_row_per_task_policy_and_objective() -> None:
-    from manigraph_lab.explain_faithfulness import run
+    from manigraph_lab.faithfulness_study import run
 
     cells = run({"sage": CHECKPOINTS / "sage.pt"}, 1, ("distribution", "pair-context"), None)
     text = table(cells)

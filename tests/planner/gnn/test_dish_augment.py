@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 import torch
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.families.dishwasher.augment import DishSample, add_dishes, counter_dishes
 from manigraph_planner.families.dishwasher.expert import dishwasher_expert, preferred
 from manigraph_planner.families.dishwasher.features import DISH_FEATURE_SPEC, TRAY_ACTIONS

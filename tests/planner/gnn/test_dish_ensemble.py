@@ -102,7 +102,7 @@ def test_members_have_their_own_seeds_and_the_first_is_the_training_seed() -> No
 def test_training_several_members_makes_an_ensemble_whose_first_is_the_single_net(
     tmp_path: Path,
 ) -> None:
-    from manigraph_lab.demos import DemoProtocol, record_demos
+    from manigraph_lab.demo_recording import DemoProtocol, record_demos
     from manigraph_planner.families.dishwasher.expert import dishwasher_expert
     from manigraph_planner.families.dishwasher.training import load_dish_demonstrations, train_dish
 

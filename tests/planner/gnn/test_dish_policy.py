@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 import torch
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.families.dishwasher.expert import dishwasher_expert
 from manigraph_planner.families.dishwasher.features import DISH_FEATURE_SPEC, dish_scene_to_graph
 from manigraph_planner.families.dishwasher.gnn_policy import (

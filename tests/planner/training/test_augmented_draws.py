@@ -7,7 +7,7 @@ from dataclasses import replace
 import pytest
 import torch
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.families.blocks.augment import Augmentation
 from manigraph_planner.families.blocks.recipes import augmentation_for
 from manigraph_planner.policies import load_policy

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 import torch
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.families.blocks.augment import Augmentation
 from manigraph_planner.families.blocks.expert import ExpertPolicy
 from manigraph_planner.families.blocks.structure import (

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 import torch
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
 from manigraph_planner.training.dataset import load_demonstrations
 from manigraph_planner.training.trainer import TrainConfig, train

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TextIO
 
-from manigraph_lab.demos import family_expert
+from manigraph_lab.demo_recording import family_expert
 from manigraph_lab.episode_loop import run_episode
 from manigraph_lab.improve_recipe import demos_of, recipe_of
 from manigraph_planner.gnn import save_checkpoint

@@ -1,5 +1,5 @@
 """``manigraph improve --policy P --task-file F --rules R --rounds N --episodes M -o P2``:
-DAgger with the teacher (:mod:`manigraph_lab.improve`, docs/training.md)."""
+DAgger with the teacher (:mod:`manigraph_lab.teacher_dagger`, docs/training.md)."""
 
 from __future__ import annotations
 
@@ -49,8 +49,8 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from manigraph_lab.commands import _checked_files
-    from manigraph_lab.improve import ImprovePlan, improve
+    from manigraph_lab.task_files import checked_files
+    from manigraph_lab.teacher_dagger import ImprovePlan, improve
     from manigraph_planner.threads import use_threads
     from manigraph_shared.results import checkpoint_field, rounded
     from manigraph_tools.episode_plan import EpisodeOptions
@@ -58,7 +58,7 @@ def _run(args: argparse.Namespace) -> int:
     use_threads(args.threads)
     episodes = EpisodeOptions(task_file=args.task_file, rules=args.rules)
     # A bad file, or rules that do not fit the task file, stop here naming the file and field.
-    task_file, _, rules = _checked_files(episodes)
+    task_file, _, rules = checked_files(episodes)
     assert task_file is not None and rules is not None
     plan = ImprovePlan(
         policy=args.policy,
@@ -78,7 +78,7 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-improve_command = Command(
+command = Command(
     help="DAgger with the teacher: play a policy on a task file, have the rules' teacher "
     "label every scene it visited, add the labels to its data and retrain, N rounds",
     configure=_configure,

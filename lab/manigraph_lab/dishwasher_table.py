@@ -1,4 +1,4 @@
-"""``manigraph dishwasher-experiment``: the paper's Table 'dishwasher', reproduced.
+"""The paper's Table 'dishwasher', reproduced (``manigraph dishwasher-experiment``).
 
 For each preference: record 5 expert demonstrations of the 5-plate, 5-bowl task through the
 demo recorder (MCAP), train the four-headed policy with 3 seeds, and evaluate each on 6, 8, 10
@@ -9,17 +9,13 @@ checkpoint.
 
 from __future__ import annotations
 
-import argparse
 import json
 import multiprocessing
 import statistics
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
-
-from manigraph_shared.cli import Command
 
 PREFERENCES = ("top-bottom", "left-right")
 #: The paper's protocol: 5 demonstrations of 10 dishes, tested on 6, 8, 10 and 12.
@@ -47,7 +43,7 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
     once, each in its own process (the results do not depend on it)."""
     # Imported here: every ``manigraph`` command loads this module to build its parser, and
     # torch with PyG takes seconds (minutes on a loaded machine) to import.
-    from manigraph_lab.demos import DemoProtocol, record_demos
+    from manigraph_lab.demo_recording import DemoProtocol, record_demos
     from manigraph_planner.families.dishwasher.training import DishTrainConfig
 
     config.out.mkdir(parents=True, exist_ok=True)
@@ -182,52 +178,3 @@ def plot(summary: dict[str, Any], path: Path) -> None:
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     plt.close(figure)
-
-
-def _configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "-o",
-        "--out",
-        type=Path,
-        default=Path("results/dishwasher"),
-        help="folder of table.md and table.json (default: results/dishwasher)",
-    )
-    parser.add_argument("--arch", default="sage", help="architecture: gcn, sage, gated or gat")
-    parser.add_argument(
-        "--seeds", type=int, nargs="+", default=[0, 1, 2], help="training seeds (default: 0 1 2)"
-    )
-    parser.add_argument("--episodes", type=int, default=100, help="episodes per table cell")
-    parser.add_argument("--epochs", type=int, default=300, help="training epochs (default: 300)")
-    parser.add_argument(
-        "--checkpoints", type=Path, default=Path("checkpoints"), help="where seed 0's nets go"
-    )
-    parser.add_argument(
-        "--jobs", type=int, default=1, help="(preference, seed) runs at once, one process each"
-    )
-
-
-def _run(args: argparse.Namespace) -> int:
-    import torch
-
-    torch.set_num_threads(1)
-    config = ExperimentConfig(
-        args.out,
-        args.arch,
-        tuple(args.seeds),
-        5,
-        args.episodes,
-        args.epochs,
-        args.checkpoints,
-        args.jobs,
-    )
-    summary = run_experiment(config, sys.stderr)
-    print((config.out / "table.md").read_text(), end="")
-    print(json.dumps({"table": str(config.out / "table.json"), "seconds": summary["seconds"]}))
-    return 0
-
-
-command = Command(
-    help="the paper's dishwasher table: 5 demos, 3 seeds, 6-12 dishes, both preferences",
-    configure=_configure,
-    run=_run,
-)

@@ -97,7 +97,7 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-rl_compare_command = Command(
+command = Command(
     help="train the paper's RL baselines (PPO) on K-block stacking and compare them with IL",
     configure=_configure,
     run=_run,

@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TextIO
 
-from manigraph_lab.demos import DemoProtocol, record_demos
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.policies.base import Policy
 from manigraph_shared.errors import ConfigError
