@@ -1,0 +1,1 @@
+"""The sim's subcommand (``manigraph.commands`` entry point): ``commands/sim.py``."""
