@@ -11,7 +11,7 @@ def test_manifest_variants_are_the_registered_drivers() -> None:
 
 
 def test_driver_auto_follows_the_sim_backend_variable() -> None:
-    from manigraph_skills.main import auto_driver
+    from manigraph_skills.commands.skills import auto_driver
 
     assert auto_driver({"MANIGRAPH_SIM_BACKEND": "physics"}) == "panda-sim"
     assert auto_driver({"MANIGRAPH_SIM_BACKEND": "geometric"}) == "sim-gripper"

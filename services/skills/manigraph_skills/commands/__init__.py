@@ -1,0 +1,1 @@
+"""The skills service's subcommand (``manigraph.commands`` entry point): ``commands/skills.py``."""
