@@ -31,7 +31,7 @@ import sapien
 from manigraph_perception.calibration_file import Calibration
 from manigraph_perception.calibration_fit import KnownMarker, fit_camera_pose
 from manigraph_perception.detection import detect, detector_for
-from manigraph_perception.pipeline import Perception
+from manigraph_perception.pipelines.aruco.pipeline import Perception
 from manigraph_shared.markers import MarkerMap, MarkerSpec, marker_in_object, sim_marker_map
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_sim.physics.backend import PhysicsBackend

@@ -26,7 +26,7 @@ import cv2
 import numpy as np
 
 from manigraph_perception.calibration_file import Calibration
-from manigraph_perception.pipeline import Perception
+from manigraph_perception.pipelines.aruco.pipeline import Perception
 from manigraph_perception.world_belief import WorldConfig
 from manigraph_shared.markers import sim_marker_map
 from manigraph_shared.messages import EpisodeRequest, TaskLayout

@@ -43,9 +43,11 @@ import numpy as np
 import sapien
 
 from manigraph_perception.calibration_file import Calibration
-from manigraph_perception.pipeline import Perception
-from manigraph_perception.rgbd.identity import IdentityMode
-from manigraph_perception.rgbd.pipeline import BadFrame, RgbdPerception, decode_depth
+from manigraph_perception.pipeline import BadFrame
+from manigraph_perception.pipelines.aruco.pipeline import Perception
+from manigraph_perception.pipelines.rgbd.frames import decode_depth
+from manigraph_perception.pipelines.rgbd.identity import IdentityMode
+from manigraph_perception.pipelines.rgbd.pipeline import RgbdPerception
 from manigraph_shared.acceptance import admits
 from manigraph_shared.markers import sim_marker_map
 from manigraph_shared.messages import EpisodeRequest, TaskLayout, Vector3

@@ -16,7 +16,8 @@ from manigraph_perception.image_guard import (
     read_header,
     size_problem,
 )
-from manigraph_perception.pipeline import Perception
+from manigraph_perception.pipeline import BadFrame
+from manigraph_perception.pipelines.aruco.pipeline import Perception
 from manigraph_shared.markers import MarkerMap
 from manigraph_shared.messages import CompressedImage
 from manigraph_testkit.hostile_images import zero_png
@@ -113,15 +114,15 @@ def test_the_marker_pipeline_refuses_an_oversized_image_without_decoding_it(
     assert perception.counters.corrupt == 1
 
 
-def test_an_opencv_error_in_marker_detection_skips_the_frame(
-    perception: Perception, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+def test_an_opencv_error_in_marker_detection_refuses_the_frame_by_name(
+    perception: Perception, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     def detect(*_: object) -> None:
         cv2.cvtColor(np.zeros((0, 0), np.uint8), cv2.COLOR_BGR2HSV)
 
-    monkeypatch.setattr("manigraph_perception.pipeline.detect", detect)
-    scene, detections = perception.process(np.zeros((480, 640), np.uint8), NOW, NOW)
-    assert scene is None and detections.markers == []
-    assert perception.counters.corrupt == 1
-    assert "opencv failed detecting markers: cvtColor (assertion failed)" in caplog.text
-    assert "color.cpp" not in caplog.text
+    monkeypatch.setattr("manigraph_perception.pipelines.aruco.pipeline.detect", detect)
+    with pytest.raises(BadFrame) as refused:
+        perception.process(np.zeros((480, 640), np.uint8), NOW, NOW)
+    assert refused.value.kind == "corrupt" and perception.counters.corrupt == 1
+    assert str(refused.value) == "opencv failed detecting markers: cvtColor (assertion failed)"
+    assert "color.cpp" not in str(refused.value)

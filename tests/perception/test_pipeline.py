@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from manigraph_perception.pipeline import Perception, draw_detections
+from manigraph_perception.pipelines.aruco.pipeline import Perception, draw_detections
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import CompressedImage, LayoutObject, Vector3
 

@@ -1,160 +1,167 @@
-"""Perception as a plain class: an image in, a ``Scene`` and the detected markers out.
+"""What every perception pipeline is to the one service that runs it (``service.py``).
 
-No bus here (the service wires it): every step takes and returns values or contract
-messages, so it is tested on rendered images directly.
+A pipeline turns camera frames into a ``Scene``. The service does the rest, once for all of
+them: the bus, the frame's parts paired by ``sequence`` and checked from their headers, the
+newest frame first, health, the layout, the robot's actions and gripper, and what a stale
+camera means (below). A pipeline lives in ``pipelines/<name>/`` and is registered by name in
+``registry.py``; ``manigraph perception --pipeline NAME`` looks it up there.
+
+A pipeline (:class:`Pipeline`) declares the camera messages one frame is made of
+(``parts``: ArUco a ``CompressedImage``, RGB-D that and a ``DepthImage`` of the same
+sequence), checks each from its header (``check``), decodes a whole frame (``assemble``) and
+observes it (``observe``): the Scene, or None with the reason it cannot give one yet, and any
+other messages it publishes (ArUco's ``MarkerDetections``). A frame it cannot use raises
+:class:`BadFrame` naming why; ``observe`` counts its own, the service counts the rest.
+
+**A stale camera** is handled here for every pipeline alike (issue 50): the planner decides
+only on a Scene observed after its last skill ended, so a Scene is made only from a frame.
+A frame that cannot be used, a frame no newer than the last one used (a frozen camera), and
+no usable frame for ``--stale-after`` seconds are each named in the service's status with the
+age of the last good Scene; that Scene is published again, ``stale``, with its own (old)
+stamp, at most once a second: every reader sees the camera is not seeing, and the planner,
+which needs a newer stamp, never acts on it.
 """
 
 from __future__ import annotations
 
-import logging
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Protocol, TypeAlias, TypeVar
 
-import cv2
-import numpy as np
+from manigraph_shared.messages import CompressedImage, DepthImage, Message, Scene, TaskLayout
 
-from manigraph_perception.calibration_file import Calibration
-from manigraph_perception.detection import ObjectPoser, detect, detector_for
-from manigraph_perception.image_guard import ImageProblem, opencv_reason, size_problem
-from manigraph_perception.world_belief import WorldConfig, WorldModel
-from manigraph_shared.errors import ConfigError
-from manigraph_shared.markers import MarkerMap
-from manigraph_shared.messages import (
-    CompressedImage,
-    DetectedMarker,
-    MarkerDetections,
-    Scene,
-    TaskLayout,
-)
+if TYPE_CHECKING:  # imports nothing heavy: the command's --help reads the registry
+    from manigraph_perception.calibration_file import Calibration
+    from manigraph_perception.image_guard import ImageProblem
+    from manigraph_perception.world_belief import WorldConfig, WorldModel
 
-log = logging.getLogger("manigraph.perception")
+#: This many failed reads in a row and a camera source is declared gone.
+MAX_FAILED_READS = 50
+
+#: A camera message a frame is made of.
+CameraPart: TypeAlias = CompressedImage | DepthImage
+
+
+class BadFrame(ValueError):
+    """A frame a pipeline cannot use; ``kind`` names its counter (``no_plane``, ``corrupt``)."""
+
+    def __init__(self, kind: str, reason: str) -> None:
+        super().__init__(reason)
+        self.kind = kind
 
 
 @dataclass
-class Counters:
-    """What the service reports in its status."""
+class FrameCounters:
+    """What every pipeline counts for the status; a pipeline adds its own kinds as fields."""
 
     frames: int = 0
-    corrupt: int = 0
     stale: int = 0
-    unknown_markers: set[int] = field(default_factory=set)
+    #: Parts of frames let go without the rest of their frame (``pairing.py``).
+    unpaired: int = 0
+
+    def count(self, kind: str) -> None:
+        """One more frame refused as ``kind`` (a field of the pipeline's counters)."""
+        setattr(self, kind, getattr(self, kind) + 1)
 
     def summary(self) -> str:
-        return (
-            f"frames {self.frames}, corrupt {self.corrupt} skipped, stale {self.stale}, "
-            f"unknown marker ids {sorted(self.unknown_markers)[:10]}"
-        )
+        return f"frames {self.frames}, stale {self.stale}"
 
 
-class Perception:
-    """Detects markers, poses objects, keeps the world model."""
-
-    def __init__(
-        self,
-        markers: MarkerMap,
-        calibration: Calibration,
-        camera: str = "front",
-        world: WorldConfig | None = None,
-    ) -> None:
-        if calibration.base_T_camera is None:
-            raise ConfigError("calibration.base_T_camera", "missing: run calibrate extrinsics")
-        self.markers = markers
-        self.calibration = calibration
-        self.camera = camera
-        self.detector = detector_for(markers)
-        self.world = WorldModel(world, calibration.base_T_camera[:3, 3])
-        self.poser: ObjectPoser | None = None
-        self.known_ids = set(markers.by_id())
-        self.counters = Counters()
-
-    def set_layout(self, layout: TaskLayout) -> None:
-        """Take a new episode's layout; ``ConfigError`` names an object with no marker."""
-        if self.world.layout is not None and layout.episode_id == self.world.layout.episode_id:
-            return
-        self.markers.check_objects((o.id, o.category.value) for o in layout.objects)
-        sizes = {o.id: np.array(o.size.as_tuple()) for o in layout.objects}
-        self.poser = ObjectPoser(self.markers, self.calibration, sizes)
-        self.world.set_layout(
-            layout, {o.id: self.markers.attributes_of(o.id) for o in layout.objects}
-        )
+class Frame(Protocol):
+    """One frame, decoded: what ``observe`` takes."""
 
     @property
-    def layout(self) -> TaskLayout | None:
-        return self.world.layout
+    def stamp(self) -> float: ...
 
-    def decode(self, image: CompressedImage) -> np.ndarray | None:
-        """The grey image, or None (counted) if it does not decode or has the wrong size;
-        the size is read from the header first, so an oversized image is never decoded."""
-        width, height = self.calibration.width, self.calibration.height
-        problem = size_problem("image", image.data, width, height)
-        grey = None
-        if problem is None:
-            try:
-                grey = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_GRAYSCALE)
-            except cv2.error as exc:
-                problem = ImageProblem("unreadable", opencv_reason(exc, "decoding it"))
-        if problem is None and (grey is None or grey.shape != (height, width)):
-            problem = ImageProblem("unreadable", "image does not decode")
-        if problem is not None:
-            self.counters.corrupt += 1
-            log.warning("frame %d skipped: %s", image.sequence, problem.reason)
-            return None
-        return grey
-
-    def process(
-        self, grey: np.ndarray, stamp: float, now: float
-    ) -> tuple[Scene | None, MarkerDetections]:
-        """One frame: the Scene (None before a layout) and what was detected."""
-        self.counters.frames += 1
-        try:
-            found = detect(self.detector, grey)
-        except cv2.error as exc:
-            self.counters.corrupt += 1
-            log.warning("frame skipped: %s", opencv_reason(exc, "detecting markers"))
-            return None, MarkerDetections(camera=self.camera, stamp=stamp, markers=[])
-        for marker in found:
-            if marker.id not in self.known_ids and marker.id not in self.counters.unknown_markers:
-                self.counters.unknown_markers.add(marker.id)
-                log.warning("marker id %d is not in the marker map: ignored", marker.id)
-        specs = self.markers.by_id()
-        detections = MarkerDetections(
-            camera=self.camera,
-            stamp=stamp,
-            markers=[
-                DetectedMarker(
-                    id=m.id,
-                    corners=[float(v) for v in m.corners.ravel()],
-                    object_id=specs[m.id].object if m.id in specs else "",
-                )
-                for m in found
-            ],
-        )
-        if self.poser is None:
-            return None, detections
-        self.world.update(self.poser.poses(found), stamp)
-        scene = self.world.scene(stamp, now)
-        if scene is not None and scene.stale:
-            self.counters.stale += 1
-        return scene, detections
-
-    def process_image(
-        self, image: CompressedImage, now: float
-    ) -> tuple[Scene | None, MarkerDetections | None]:
-        grey = self.decode(image)
-        if grey is None:
-            return None, None
-        return self.process(grey, image.stamp, now)
+    @property
+    def sequence(self) -> int: ...
 
 
-def draw_detections(bgr: np.ndarray, detections: MarkerDetections) -> np.ndarray:
-    """``bgr`` with every detected marker outlined and labelled (its object, or its id)."""
-    out = bgr.copy()
-    for marker in detections.markers:
-        corners = np.array(marker.corners).reshape(4, 2)
-        colour = (40, 220, 40) if marker.object_id else (40, 40, 230)
-        cv2.polylines(out, [np.round(corners).astype(np.int32)], True, colour, 1, cv2.LINE_AA)
-        label = marker.object_id.replace("block_", "b").replace("cover_", "c") or str(marker.id)
-        x, y = corners.min(axis=0)
-        cv2.putText(
-            out, label, (int(x), int(y) - 2), cv2.FONT_HERSHEY_SIMPLEX, 0.35, colour, 1, cv2.LINE_AA
-        )
-    return out
+FrameT = TypeVar("FrameT", bound=Frame)
+FrameT_co = TypeVar("FrameT_co", bound=Frame, covariant=True)
+
+
+@dataclass
+class Observation:
+    """What one frame gave: the Scene (None: ``waiting`` says why not yet, if anything does)
+    and the other messages to publish before it."""
+
+    scene: Scene | None
+    messages: list[Message] = field(default_factory=list)
+    waiting: str = ""
+
+
+class Pipeline(Protocol[FrameT]):
+    """Camera frames in, a Scene out; no bus (the service wires it)."""
+
+    camera: str
+    calibration: Calibration
+    world: WorldModel
+
+    @property
+    def counters(self) -> FrameCounters: ...
+
+    @property
+    def parts(self) -> Mapping[str, type[CameraPart]]:
+        """The messages one frame is made of, by the last segment of their key
+        (``manigraph/camera/<camera>/<part>``)."""
+        ...
+
+    @property
+    def layout(self) -> TaskLayout | None: ...
+
+    def set_layout(self, layout: TaskLayout) -> None:
+        """Take an episode's layout (again: nothing); ``ConfigError`` if it cannot be seen."""
+
+    def check(self, part: str, data: bytes) -> ImageProblem | None:
+        """Why ``data`` cannot be this frame part, from its header alone (None: it can)."""
+
+    def assemble(self, parts: Mapping[str, CameraPart]) -> FrameT:
+        """A whole frame's parts, decoded; ``BadFrame`` naming why not (not counted)."""
+        ...
+
+    def observe(self, frame: FrameT, now: float) -> Observation:
+        """One frame; ``BadFrame`` (counted) if it cannot be used."""
+        ...
+
+
+class FrameSource(Protocol[FrameT_co]):
+    """Frames from a device or a file, not the bus."""
+
+    def read(self) -> FrameT_co | None:
+        """The next frame, None for none yet, ``BadFrame`` for one that cannot be used;
+        ``ConfigError`` once the source has stopped."""
+        ...
+
+    def close(self) -> None: ...
+
+
+@dataclass(frozen=True)
+class CameraSetup:
+    """What every pipeline is opened with (the flags all of them take)."""
+
+    camera: str  # 'bus', or a device, file or URL the pipeline's source reads
+    camera_name: str
+    calibration: Calibration
+    world: WorldConfig
+    layout_path: str | None = None
+
+
+@dataclass
+class OpenedPipeline:
+    """A pipeline ready to run: its frames from ``source`` (None: the bus); ``layout``: a
+    fixed one from a file (None: the sim's, from the bus)."""
+
+    pipeline: Pipeline[Any]
+    source: FrameSource[Any] | None = None
+    layout: TaskLayout | None = None
+
+
+@dataclass(frozen=True)
+class PipelineUnit:
+    """A registered pipeline: the messages its frames are made of and the others it
+    publishes (its manifest variant declares both), and how it is opened from its options."""
+
+    parts: Mapping[str, type[CameraPart]]
+    produces: tuple[type[Message], ...]
+    open: Callable[[Any, CameraSetup], OpenedPipeline]

@@ -9,7 +9,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from manigraph_perception.rgbd.pipeline import decode_depth
+from manigraph_perception.pipelines.rgbd.frames import decode_depth
 from manigraph_shared.messages import EpisodeRequest, TaskLayout
 
 ROOT = Path(__file__).resolve().parents[3]

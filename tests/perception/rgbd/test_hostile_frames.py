@@ -12,9 +12,10 @@ import pytest
 from synthetic import draw
 
 from manigraph_perception.calibration_file import load_calibration
-from manigraph_perception.rgbd.pairing import UNPAIRED_LIMIT, HalfBuffer
-from manigraph_perception.rgbd.pipeline import BadFrame, RgbdPerception
-from manigraph_perception.rgbd.sources import decode_pair
+from manigraph_perception.pairing import UNPAIRED_LIMIT, HalfBuffer
+from manigraph_perception.pipeline import BadFrame
+from manigraph_perception.pipelines.rgbd.frames import decode_pair
+from manigraph_perception.pipelines.rgbd.pipeline import RgbdPerception
 from manigraph_shared.messages import CompressedImage, DepthImage
 from manigraph_sim.physics.depth_noise import encode_depth_png
 from manigraph_testkit.hostile_images import zero_png

@@ -14,15 +14,15 @@ from synthetic import draw
 
 from manigraph_perception.calibration_file import Calibration
 from manigraph_perception.layout_file import load_layout
-from manigraph_perception.rgbd.identity import (
+from manigraph_perception.pipelines.rgbd.identity import (
     FORBIDDEN,
     IdentityMode,
     min_cost_assignment,
     strip_positions,
 )
-from manigraph_perception.rgbd.objects import DetectedObject, palette_hues
-from manigraph_perception.rgbd.pipeline import RgbdPerception
-from manigraph_perception.rgbd.tracker import Tracker
+from manigraph_perception.pipelines.rgbd.objects import DetectedObject, palette_hues
+from manigraph_perception.pipelines.rgbd.pipeline import RgbdPerception
+from manigraph_perception.pipelines.rgbd.tracker import Tracker
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import (
     GoalCategory,

@@ -8,8 +8,8 @@ import pytest
 from rgbd_frames import RenderedFrame
 
 from manigraph_perception.calibration_file import Calibration
-from manigraph_perception.rgbd.identity import IdentityMode
-from manigraph_perception.rgbd.pipeline import RgbdPerception
+from manigraph_perception.pipelines.rgbd.identity import IdentityMode
+from manigraph_perception.pipelines.rgbd.pipeline import RgbdPerception
 from manigraph_shared.messages import GoalCategory, LayoutGoal, TaskLayout, Vector3
 from manigraph_sim.physics.video import vulkan_available
 

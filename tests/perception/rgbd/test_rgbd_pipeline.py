@@ -8,10 +8,11 @@ import pytest
 from synthetic import draw
 
 from manigraph_perception.calibration_file import Calibration
-from manigraph_perception.rgbd.identity import IdentityMode
-from manigraph_perception.rgbd.pipeline import BadFrame, RgbdPerception
-from manigraph_perception.rgbd.plane import PlaneConfig, fit_table
-from manigraph_perception.rgbd.segment import SegmentConfig, hue_peaks
+from manigraph_perception.pipeline import BadFrame
+from manigraph_perception.pipelines.rgbd.identity import IdentityMode
+from manigraph_perception.pipelines.rgbd.pipeline import RgbdPerception
+from manigraph_perception.pipelines.rgbd.plane import PlaneConfig, fit_table
+from manigraph_perception.pipelines.rgbd.segment import SegmentConfig, hue_peaks
 from manigraph_shared.messages import (
     GoalCategory,
     LayoutGoal,
@@ -214,7 +215,7 @@ def test_one_peak_per_colour_even_for_a_small_share() -> None:
 def test_the_segmentation_picture_shows_each_segment_beside_the_depth(
     calibration: Calibration,
 ) -> None:
-    from manigraph_perception.rgbd.drawing import draw_segmentation
+    from manigraph_perception.pipelines.rgbd.drawing import draw_segmentation
 
     bgr, depth = draw(calibration, [(RED, SIDE, "red"), (GREEN, SIDE, "green")])
     perception = RgbdPerception(calibration, identity=IdentityMode.PRIOR)

@@ -12,8 +12,12 @@ import pytest
 from synthetic import draw
 
 from manigraph_perception.calibration_file import load_calibration
-from manigraph_perception.rgbd.pipeline import RgbdPerception
-from manigraph_perception.rgbd.sources import McapRgbdSource, RealSenseSource, open_rgbd_source
+from manigraph_perception.pipelines.rgbd.pipeline import RgbdPerception
+from manigraph_perception.pipelines.rgbd.sources import (
+    McapRgbdSource,
+    RealSenseSource,
+    open_rgbd_source,
+)
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.mcap_log import McapLogWriter
 from manigraph_shared.messages import CameraInfo, CompressedImage, DepthImage

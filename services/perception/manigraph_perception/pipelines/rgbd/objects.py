@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from manigraph_perception.rgbd.segment import hue_distance
+from manigraph_perception.pipelines.rgbd.segment import hue_distance
 from manigraph_shared.colours import PALETTE
 
 #: Palette colours a hue can name (white, black and grey have none).

@@ -1,62 +1,23 @@
 """Where RGB-D frames come from when not from the bus: an Intel RealSense (``pyrealsense2``,
 imported only when asked for) or a recorded MCAP file of ``CompressedImage`` + ``DepthImage``
 (a user's own recording replayed through the pipeline). Both give ``RgbdFrame``s and say
-when the camera has stopped with a ``ConfigError``, as ``sources.VideoSource`` does.
+when the camera has stopped with a ``ConfigError``, as ArUco's ``VideoSource`` does.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
-import cv2
 import numpy as np
 
-from manigraph_perception.image_guard import depth_problem, opencv_reason, size_problem
-from manigraph_perception.rgbd.pairing import HalfBuffer
-from manigraph_perception.rgbd.pipeline import BadFrame, decode_depth
-from manigraph_perception.sources import MAX_FAILED_READS
+from manigraph_perception.pairing import HalfBuffer
+from manigraph_perception.pipeline import MAX_FAILED_READS, BadFrame, FrameSource
+from manigraph_perception.pipelines.rgbd.frames import RgbdFrame, decode_pair
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import CameraInfo, CompressedImage, DepthImage
-
-
-@dataclass
-class RgbdFrame:
-    bgr: np.ndarray  # H x W x 3 uint8
-    depth: np.ndarray  # H x W metres, 0: none
-    stamp: float
-    sequence: int
-
-
-class RgbdSource(Protocol):
-    def read(self) -> RgbdFrame | None:
-        """The next frame, None for a dropped one, ``BadFrame`` for one that cannot be used;
-        ``ConfigError`` once it has stopped."""
-
-    def close(self) -> None: ...
-
-
-def decode_pair(image: CompressedImage, depth: DepthImage, width: int, height: int) -> RgbdFrame:
-    """Colour and depth messages of a ``width`` x ``height`` camera -> a frame; ``BadFrame``
-    naming why not. The size is checked from each header before anything is decoded."""
-    problem = depth_problem(depth.data, width, height) or size_problem(
-        "colour image", image.data, width, height
-    )
-    if problem is not None:
-        raise BadFrame(problem.kind, f"frame {image.sequence}: {problem.reason}")
-    try:
-        bgr = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_COLOR)
-        metres = decode_depth(depth.data)
-    except cv2.error as exc:
-        raise BadFrame(
-            "unreadable", f"frame {image.sequence}: {opencv_reason(exc, 'decoding it')}"
-        ) from None
-    if bgr is None or metres is None:
-        raise BadFrame("unreadable", f"frame {image.sequence} does not decode")
-    return RgbdFrame(bgr, metres, image.stamp, image.sequence)
 
 
 class McapRgbdSource:
@@ -203,7 +164,7 @@ class RealSenseSource:
 
 def open_rgbd_source(
     spec: str, camera: str = "front", size: tuple[int, int] | None = None
-) -> RgbdSource:
+) -> FrameSource[RgbdFrame]:
     """``realsense`` or an ``.mcap`` recording (``ConfigError`` for anything else); ``size``:
     the calibrated (width, height) a recording's frames are checked against."""
     if spec == "realsense":

@@ -20,52 +20,49 @@ raises ``BadFrame`` naming why; the caller keeps the last good Scene.
 from __future__ import annotations
 
 import logging
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from typing import ClassVar
 
 import cv2
 import numpy as np
 
 from manigraph_perception.calibration_file import Calibration
 from manigraph_perception.detection import ObjectPose
-from manigraph_perception.image_guard import opencv_reason
-from manigraph_perception.rgbd.identity import IdentityMode, strip_positions
-from manigraph_perception.rgbd.objects import (
+from manigraph_perception.image_guard import (
+    ImageProblem,
+    depth_problem,
+    opencv_reason,
+    size_problem,
+)
+from manigraph_perception.pipeline import BadFrame, CameraPart, FrameCounters, Observation
+from manigraph_perception.pipelines.rgbd.frames import RgbdFrame, decode_pair
+from manigraph_perception.pipelines.rgbd.identity import IdentityMode, strip_positions
+from manigraph_perception.pipelines.rgbd.objects import (
     CHROMATIC,
     DetectedObject,
     ObjectConfig,
     describe_object,
     palette_hues,
 )
-from manigraph_perception.rgbd.plane import NoTablePlane, Plane, PlaneConfig, fit_table
-from manigraph_perception.rgbd.segment import SegmentConfig, above_table, segments
-from manigraph_perception.rgbd.tracker import Tracker
+from manigraph_perception.pipelines.rgbd.plane import NoTablePlane, Plane, PlaneConfig, fit_table
+from manigraph_perception.pipelines.rgbd.segment import SegmentConfig, above_table, segments
+from manigraph_perception.pipelines.rgbd.tracker import Tracker
 from manigraph_perception.world_belief import WorldConfig, WorldModel
 from manigraph_shared.colours import COLOUR_KEYS
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.messages import Scene, TaskLayout
+from manigraph_shared.messages import CompressedImage, DepthImage, Scene, TaskLayout
 
 log = logging.getLogger("manigraph.perception")
 
 
-class BadFrame(ValueError):
-    """A frame the pipeline cannot use; ``kind`` is its counter's name."""
-
-    def __init__(self, kind: str, reason: str) -> None:
-        super().__init__(reason)
-        self.kind = kind
-
-
 @dataclass
-class RgbdCounters:
-    frames: int = 0
+class RgbdCounters(FrameCounters):
     no_plane: int = 0
     wrong_size: int = 0
     #: Refused before or while decoding: a header of the wrong size or format, an OpenCV error.
     unreadable: int = 0
     unmatched: int = 0
-    stale: int = 0
-    #: Colour or depth halves let go without their other half (``rgbd/pairing.py``).
-    unpaired: int = 0
 
     def summary(self) -> str:
         return (
@@ -87,7 +84,13 @@ class RgbdFrameResult:
 
 
 class RgbdPerception:
-    """Segments, poses and tracks the objects of a layout in RGB-D frames."""
+    """Segments, poses and tracks the objects of a layout in RGB-D frames (a
+    ``Pipeline[RgbdFrame]``: a frame is a colour image and a depth image of one sequence)."""
+
+    parts: ClassVar[Mapping[str, type[CameraPart]]] = {
+        "depth": DepthImage,
+        "image": CompressedImage,
+    }
 
     def __init__(
         self,
@@ -151,6 +154,27 @@ class RgbdPerception:
         return [object_id for object_id, belief in self.world.beliefs.items() if not belief.seen]
 
     # --- frames -----------------------------------------------------------------------------
+    def check(self, part: str, data: bytes) -> ImageProblem | None:
+        width, height = self.calibration.width, self.calibration.height
+        if part == "depth":
+            return depth_problem(data, width, height)
+        return size_problem("colour image", data, width, height)
+
+    def assemble(self, parts: Mapping[str, CameraPart]) -> RgbdFrame:
+        image, depth = parts["image"], parts["depth"]
+        assert isinstance(image, CompressedImage) and isinstance(depth, DepthImage)
+        return decode_pair(image, depth, self.calibration.width, self.calibration.height)
+
+    def observe(self, frame: RgbdFrame, now: float) -> Observation:
+        scene, _ = self.process(frame.bgr, frame.depth, frame.stamp, now)
+        waiting = ""
+        if scene is None and self.missing:  # appearance identity: no Scene until all found
+            missing = self.missing
+            waiting = f"not found yet: {', '.join(missing[:8])}" + (
+                f" and {len(missing) - 8} more" if len(missing) > 8 else ""
+            )
+        return Observation(scene, waiting=waiting)
+
     def measure(self, bgr: np.ndarray, depth: np.ndarray) -> RgbdFrameResult:
         """Plane, segments and objects of one frame (``depth`` in metres, 0: none);
         ``BadFrame`` if it cannot be used. Needs no layout; matches only with one."""
@@ -247,7 +271,7 @@ class RgbdPerception:
 
     def count(self, problem: BadFrame) -> None:
         """Count ``problem`` under its kind."""
-        setattr(self.counters, problem.kind, getattr(self.counters, problem.kind) + 1)
+        self.counters.count(problem.kind)
 
     def _pose(self, object_id: str, detection: DetectedObject) -> ObjectPose:
         assert self.tracker is not None
@@ -290,11 +314,3 @@ def _mark_covered(detections: list[DetectedObject]) -> None:
                 and np.linalg.norm(upper.centre[:2] - lower.centre[:2]) < 0.05
             ):
                 lower.covered = True
-
-
-def decode_depth(data: bytes) -> np.ndarray | None:
-    """The contract's 16-bit PNG of millimetres -> metres (0: none); None if it is not one."""
-    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
-    if image is None or image.dtype != np.uint16 or image.ndim != 2:
-        return None
-    return image.astype(np.float64) / 1000.0

@@ -1,5 +1,5 @@
-"""Halves of RGB-D frames (a colour image, a depth image) waiting for the other half of the
-same ``sequence``, in a buffer whose bound holds whatever the sequence numbers do.
+"""Parts of frames (an RGB-D frame's colour image and depth image) waiting for the rest of the
+same ``sequence``, in buffers whose bound holds whatever the sequence numbers do.
 
 A camera sends both halves within milliseconds, so one or two wait at a time. Halves whose
 partner never comes (a dropped sample, or a forger's: 1,500 depth images with descending
@@ -18,8 +18,8 @@ At most ``limit`` x ``MAX_IMAGE_BYTES`` (8 x 700 kB) per kind is held.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
-from typing import Generic, TypeVar
+from collections.abc import Callable, Iterable
+from typing import Generic, Protocol, TypeVar
 
 T = TypeVar("T")
 
@@ -77,3 +77,42 @@ class HalfBuffer(Generic[T]):
         for old in [s for s, (at, _) in self._held.items() if now - at > self.max_age]:
             del self._held[old]
             self.dropped += 1
+
+
+class Sequenced(Protocol):
+    @property
+    def sequence(self) -> int: ...
+
+
+P = TypeVar("P", bound=Sequenced)
+
+
+class FrameAssembler(Generic[P]):
+    """A frame's named parts joined by ``sequence`` in any order, each part waiting in a
+    :class:`HalfBuffer` of its own; a frame of one part is whole at once."""
+
+    def __init__(self, parts: Iterable[str]) -> None:
+        names = list(parts)
+        if not names:
+            raise ValueError("a frame has at least one part")
+        self._waiting: dict[str, HalfBuffer[P]] = {name: HalfBuffer() for name in names}
+
+    @property
+    def dropped(self) -> int:
+        """Parts let go without the rest of their frame, over the assembler's life."""
+        return sum(buffer.dropped for buffer in self._waiting.values())
+
+    def add(self, part: str, message: P) -> dict[str, P] | None:
+        """The whole frame ``message`` completes (its parts by name), or None: it waits."""
+        found = {part: message}
+        for name, buffer in self._waiting.items():
+            if name == part:
+                continue
+            other = buffer.pop(message.sequence)
+            if other is not None:
+                found[name] = other
+        if len(found) == len(self._waiting):
+            return found
+        for name, held in found.items():  # not whole yet: everything found waits again
+            self._waiting[name].hold(message.sequence, held)
+        return None

@@ -27,9 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from manigraph_perception.rgbd.identity import FORBIDDEN, min_cost_assignment
-from manigraph_perception.rgbd.objects import DetectedObject, palette_hues
-from manigraph_perception.rgbd.segment import hue_distance
+from manigraph_perception.pipelines.rgbd.identity import FORBIDDEN, min_cost_assignment
+from manigraph_perception.pipelines.rgbd.objects import DetectedObject, palette_hues
+from manigraph_perception.pipelines.rgbd.segment import hue_distance
 from manigraph_shared.colours import COLOUR_KEYS
 from manigraph_shared.messages import TaskLayout
 

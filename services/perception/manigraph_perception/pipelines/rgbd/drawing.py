@@ -1,7 +1,7 @@
 """A picture of what the RGB-D pipeline saw in a frame: every segment outlined in the
 colour it was named, its object id (or ``?`` if it matched none), and the depth beside.
 
-    python -m manigraph_perception.rgbd.drawing RECORDING.mcap --calibration CAL.yaml \\
+    python -m manigraph_perception.pipelines.rgbd.drawing RECORDING.mcap --calibration CAL.yaml \\
         --frame 12 -o segmentation.png
 """
 
@@ -14,7 +14,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from manigraph_perception.rgbd.pipeline import RgbdFrameResult
+from manigraph_perception.pipelines.rgbd.pipeline import RgbdFrameResult
 from manigraph_shared.colours import PALETTE
 
 
@@ -48,8 +48,8 @@ def draw_segmentation(bgr: np.ndarray, depth: np.ndarray, result: RgbdFrameResul
 
 def main(argv: list[str] | None = None) -> int:
     from manigraph_perception.calibration_file import load_calibration
-    from manigraph_perception.rgbd.pipeline import BadFrame, RgbdPerception
-    from manigraph_perception.rgbd.sources import McapRgbdSource
+    from manigraph_perception.pipelines.rgbd.pipeline import BadFrame, RgbdPerception
+    from manigraph_perception.pipelines.rgbd.sources import McapRgbdSource
     from manigraph_shared.errors import ConfigError
     from manigraph_shared.mcap_log import read_log
     from manigraph_shared.messages import TaskLayout

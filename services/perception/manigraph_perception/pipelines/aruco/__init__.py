@@ -1,0 +1,1 @@
+"""Objects posed from the ArUco markers on them (docs/perception.md)."""
