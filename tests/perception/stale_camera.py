@@ -1,8 +1,9 @@
 """One stale-camera check for every pipeline (issue 50): a service on a real bus is shown a
 good frame, then a bad one, then the good one again with its old stamp (a frozen camera),
-then nothing; at no point is an old world published as a fresh observation, and each time
-the status says why with the age of the last good Scene, which is served again, stale,
-with its own stamp, at most once a second."""
+then nothing, then the next episode's layout and a bad frame. At no point is an old world
+published as a fresh observation: the status says why each time with the age of the last
+good Scene, which a bad or frozen frame has served again, stale, with its own stamp, at most
+once a second, and never as the next episode's."""
 
 from __future__ import annotations
 
@@ -93,7 +94,14 @@ def check_stale_camera(
             _status_saying(
                 statuses, "no usable frame for", "last good scene", "no newer than the last one"
             )
-            # Nothing at all: still said, still served stale with the old stamp.
+            # Nothing at all: said in the status; nothing fresh, at most the old world, stale.
             silent = _drain(scenes, 2.5)
-            assert silent and all(s.stale and s.stamp == old for s in silent)
+            assert all(s.stale and s.stamp == old for s in silent)
             _status_saying(statuses, "no usable frame for", "last good scene")
+            # The next episode: the last one's world is never served again as its own.
+            bus.publish(layout.replace(episode_id="next", stamp=time.time()))
+            time.sleep(0.5)
+            _publish(bus, bad(30, time.time()))
+            detail = _status_saying(statuses, bad_words, "frame 30")
+            assert "last good scene" not in detail, detail
+            assert _drain(scenes, 1.5) == []

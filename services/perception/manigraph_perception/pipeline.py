@@ -13,13 +13,14 @@ observes it (``observe``): the Scene, or None with the reason it cannot give one
 other messages it publishes (ArUco's ``MarkerDetections``). A frame it cannot use raises
 :class:`BadFrame` naming why; ``observe`` counts its own, the service counts the rest.
 
-**A stale camera** is handled here for every pipeline alike (issue 50): the planner decides
-only on a Scene observed after its last skill ended, so a Scene is made only from a frame.
-A frame that cannot be used, a frame no newer than the last one used (a frozen camera), and
-no usable frame for ``--stale-after`` seconds are each named in the service's status with the
-age of the last good Scene; that Scene is published again, ``stale``, with its own (old)
-stamp, at most once a second: every reader sees the camera is not seeing, and the planner,
-which needs a newer stamp, never acts on it.
+**A stale camera** is handled by the service for every pipeline alike (issue 50): the
+planner decides only on a Scene observed after its last skill ended, so a Scene is made only
+from a new frame. A frame that cannot be used and a frame no newer than the last one used (a
+frozen camera) are named in the service's status with the age of the last good Scene, and
+that Scene is published again, ``stale``, with its own (old) stamp, at most once a second:
+every reader sees the camera is not seeing, and the planner, which needs a newer stamp, never
+acts on it. No usable frame for ``--stale-after`` seconds is named in the status (with that
+age, and the last frame refused).
 """
 
 from __future__ import annotations

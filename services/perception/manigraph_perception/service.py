@@ -10,9 +10,10 @@ replaces the waiting one instead of queueing behind it (bounded work per frame, 
 point 12).
 
 A stale camera is treated the same whatever the pipeline (``pipeline.py``): a frame that
-cannot be used, one no newer than the last used, and no usable frame for ``--stale-after``
-seconds are named in the status with the age of the last good Scene, which is published
-again, ``stale``, with its own (old) stamp, at most once a second.
+cannot be used and one no newer than the last used are named in the status with the age of
+the last good Scene, which is published again, ``stale``, with its own (old) stamp, at most
+once a second; no usable frame for ``--stale-after`` seconds is named in the status. At most
+one Scene is published per frame received.
 """
 
 from __future__ import annotations
@@ -185,7 +186,7 @@ class PerceptionService(Service):
     def _observe(self, frame: Frame) -> None:
         if frame.stamp <= self._last_stamp:
             # Not a new observation: a frozen camera repeating itself, or one overtaken.
-            self._note(f"frame {frame.sequence} is no newer than the last one used")
+            self._bad(BadFrame("old", f"frame {frame.sequence} is no newer than the last one used"))
             return
         now = time.time()
         self.last_frame = now
@@ -246,7 +247,6 @@ class PerceptionService(Service):
             # A frame refused meanwhile (a forged 18000 x 18000 depth) stays named beside it.
             refused = f"; last refused: {self._problem}" if self._problem else ""
             self.last_error = f"{_NO_FRAME} {waited}{self._last_good_age(now)}{refused}"
-            self._serve_stale()
 
     def _read_source(self) -> None:
         assert self.source is not None
