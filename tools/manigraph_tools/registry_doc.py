@@ -21,6 +21,7 @@ REGISTRIES: tuple[tuple[str, str, str], ...] = (
     ("FAMILIES", "manigraph_sim.families.base", "manigraph_sim.families"),
     ("DRIVERS", "manigraph_skills.drivers.registry", "manigraph_skills.drivers"),
     ("FAMILIES", "manigraph_skills.families.family", "manigraph_skills.families"),
+    ("PIPELINES", "manigraph_perception.registry", "manigraph_perception.registry"),
     ("POLICIES", "manigraph_planner.policies.base", "manigraph_planner.policies"),
     ("POLICY_FILE_LOADERS", "manigraph_planner.policies.base", "manigraph_planner.policies"),
     ("HEADS", "manigraph_planner.gnn.models.config", "manigraph_planner.gnn.models"),
