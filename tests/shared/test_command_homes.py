@@ -17,7 +17,7 @@ from manigraph_shared.cli import GROUP, Command
 
 #: Packages whose commands have not moved to ``commands/<verb>.py`` yet; a package leaves the
 #: list when they have (the planner's ``train`` waits for the training package of item 4).
-NOT_YET_MOVED = frozenset({"manigraph_planner", "manigraph_perception"})
+NOT_YET_MOVED = frozenset({"manigraph_planner"})
 
 
 def _package(value: str) -> str:
