@@ -14,7 +14,7 @@ from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_planner.gnn.task_features import AttributeColumns, TaskFeatures
 from manigraph_shared.cli import main
-from manigraph_tools.commands.up import _planner_argv
+from manigraph_tools.stack_processes import planner_argv
 
 REPO = Path(__file__).resolve().parents[2]
 COLOUR_SORT = REPO / "examples" / "tasks" / "colour-sort.toml"
@@ -54,6 +54,6 @@ def test_a_policy_without_the_filter_cannot_turn_it_off(
 
 def test_up_passes_the_switch_to_its_planner() -> None:
     args = argparse.Namespace(policy="p.pt", explain_decisions=False, accepts_filter="off")
-    assert _planner_argv(args, None)[-2:] == ["--accepts-filter", "off"]
+    assert planner_argv(args, None)[-2:] == ["--accepts-filter", "off"]
     args.accepts_filter = "on"
-    assert "--accepts-filter" not in _planner_argv(args, None)
+    assert "--accepts-filter" not in planner_argv(args, None)

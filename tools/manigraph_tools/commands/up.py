@@ -6,97 +6,40 @@ from __future__ import annotations
 import argparse
 import contextlib
 import signal
-import socket
 import sys
 import time
-from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
 
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import DEFAULT_PORT, BusConfig, loopback_endpoint
 from manigraph_shared.cells import cell_names
 from manigraph_shared.cli import Command
 from manigraph_shared.errors import CONFIG_EXIT_CODE, ConfigError, ManigraphError
-from manigraph_shared.manifest import driver_for_world, load_manifests
 from manigraph_shared.markers import load_marker_map
-from manigraph_shared.options import option_argv
 from manigraph_shared.preflight import vulkan_problem
-from manigraph_shared.registry import Registry
-from manigraph_tools.access import CELL_SEPARATOR, cell_identities, write_cell_identities
+from manigraph_tools.access import cell_identities, write_cell_identities
 from manigraph_tools.cell_episodes import run_cells
 from manigraph_tools.certificates import IDENTITIES, make_certificates
 from manigraph_tools.commands.common import emit_json
 from manigraph_tools.commands.episode_flags import episode_arguments, plan_from_args
-from manigraph_tools.episodes import EpisodePlan, raise_if_aborted, run_episodes
+from manigraph_tools.episodes import raise_if_aborted, run_episodes
 from manigraph_tools.owned_dir import OwnedDirectory
+from manigraph_tools.stack_processes import (
+    HUMAN,
+    NOBODY,
+    SHARED_PLANNER,
+    cell_specs,
+    client_identity,
+    identity_of,
+    in_cell,
+    planner_argv,
+    refuse_busy_port,
+    service_of,
+    sim_backends,
+)
 from manigraph_tools.supervisor import STOP_SIGNALS, ProcessSpec, Supervisor
 from manigraph_tools.up_guide import guide
-
-
-def _skills_driver(sim_backend: str) -> str:
-    """The skills driver that needs only what the sim backend offers, from their manifests."""
-    manifests = load_manifests()
-    return driver_for_world(manifests["sim"], sim_backend, manifests["skills"])
-
-
-def _sim_backends() -> Registry[Any] | None:
-    """The sim's backend registry, whose options ``up`` forwards to ``manigraph sim``; None
-    where the sim is not installed (an image with one service, which cannot run ``up``)."""
-    try:
-        from manigraph_sim.backends import BACKENDS
-    except ImportError:
-        return None
-    return BACKENDS
-
-
-#: ``up --policy human``: no planner; the demonstration page (``manigraph demo-ui``) decides.
-HUMAN = "human"
-#: ``up --policy none``: no decider at all; a client of one's own plays the planner's part
-#: (``examples/demonstrator.py``), and ``--record`` keeps its demonstrations.
-NOBODY = "none"
-
-
-def _demo_ui_argv(args: argparse.Namespace) -> list[str]:
-    """``manigraph demo-ui`` flags from ``up``'s: the page's port and file, and the episode
-    flags as the page's first episode."""
-    from manigraph_tools.click_page.service import DemoUiOptions
-
-    values = {
-        "http_port": args.demo_port,
-        "output": args.demo_output,
-        "propose": args.propose,
-        **{
-            name: getattr(args, name)
-            for name in ("task", "task_file", "blocks", "stacks", "objects", "preference", "seed")
-        },
-    }
-    return ["demo-ui", *option_argv(DemoUiOptions, values)]
-
-
-#: Perception of the physics sim's rendered camera: its markers and exact calibration.
-SIM_CAMERA_PERCEPTION = [
-    "perception",
-    "--camera",
-    "bus",
-    "--markers",
-    "sim",
-    "--calibration",
-    str(Path(__file__).resolve().parents[3] / "examples" / "calibration" / "sim-front.yaml"),
-]
-
-
-#: The same camera's colour and depth, no markers (the RGB-D pipeline).
-SIM_RGBD_PERCEPTION = [
-    "perception",
-    "--pipeline",
-    "rgbd",
-    "--camera",
-    "bus",
-    "--calibration",
-    SIM_CAMERA_PERCEPTION[-1],
-]
 
 
 class StackRefusedConfiguration(ManigraphError):
@@ -203,103 +146,11 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
         "in a temporary directory (default: plain TCP on loopback, for development)",
     )
     parser.add_argument("--log-dir", type=Path, help="also write <service>.log files here")
-    backends = _sim_backends()
+    backends = sim_backends()
     if backends is not None:
         backends.add_arguments(
             parser.add_argument_group("sim backend options (passed to manigraph sim)")
         )
-
-
-def _cell_specs(
-    args: argparse.Namespace,
-    plan: EpisodePlan | None,
-    sim_options: list[str],
-    human: bool,
-    cell: str | None,
-    spec: Callable[[str, list[str], dict[str, str]], ProcessSpec],
-    with_planner: bool = True,
-) -> list[ProcessSpec]:
-    """The processes of one robot cell: its sim, planner (or demonstration page; no planner
-    where one serves every cell) and skills, named ``sim@cell-1`` and so on where the cell is
-    not the default."""
-    where = {"MANIGRAPH_CELL": cell or ""}
-    suffix = f"{CELL_MARK}{cell}" if cell else ""
-    specs = [spec(f"sim{suffix}", ["sim", "--backend", args.sim, *sim_options], where)]
-    if human:
-        specs.append(spec(f"demo-ui{suffix}", _demo_ui_argv(args), where))
-    elif with_planner:
-        specs.append(spec(f"planner{suffix}", _planner_argv(args, plan), where))
-    specs.append(spec(f"skills{suffix}", ["skills", "--driver", _skills_driver(args.sim)], where))
-    if args.scene_source == "camera":
-        perception = [*SIM_CAMERA_PERCEPTION]
-        markers = args.markers if args.markers == "sim" else str(Path(args.markers).resolve())
-        perception[perception.index("--markers") + 1] = markers
-        specs.append(spec(f"perception{suffix}", perception, where))
-    elif args.scene_source == "rgbd":
-        identity = ["--identity", args.rgbd_identity]
-        specs.append(spec(f"perception{suffix}", [*SIM_RGBD_PERCEPTION, *identity], where))
-    return specs
-
-
-def _planner_argv(args: argparse.Namespace, plan: EpisodePlan | None) -> list[str]:
-    planner = ["planner", "--policy", args.policy]
-    if args.explain_decisions:
-        planner.append("--explain-decisions")
-    if args.accepts_filter == "off":
-        planner += ["--accepts-filter", "off"]
-    rules = getattr(args, "rules", None)  # a namespace of up's flags has it
-    if rules is not None and args.policy == "expert":
-        # The teacher is told the rules (the sim's judge gets them in every reset request).
-        planner += ["--rules", str(Path(rules).resolve())]
-    if plan is not None:
-        # A decision may run as long as the run lets an episode go without news (a physics
-        # PickAndPlace that turns a dish over first takes 20-60 s).
-        planner += ["--decision-timeout", f"{plan.stall_timeout:g}"]
-    return planner
-
-
-#: Between a service and its cell in a process name: ``sim@cell-1``.
-CELL_MARK = "@"
-
-
-def _service(process: str) -> str:
-    return process.partition(CELL_MARK)[0]
-
-
-#: The certificate CN of ``up``'s one planner for every cell (granted each of them).
-SHARED_PLANNER = f"planner{CELL_SEPARATOR}shared"
-
-
-def _identity(process: str) -> str:
-    """The TLS identity of a process: ``sim@cell-1`` presents ``sim.cell-1``."""
-    service, _, cell = process.partition(CELL_MARK)
-    return f"{service}{CELL_SEPARATOR}{cell}" if cell else service
-
-
-def _client_identity(client: BusConfig, cell: str | None) -> str | None:
-    """The episode client of ``cell``: ``client.cell-1`` (granted that cell's resets only)."""
-    if client.tls_identity is None or cell is None:
-        return client.tls_identity
-    return f"{client.tls_identity}{CELL_SEPARATOR}{cell}"
-
-
-def _in(process: ProcessSpec, cell: str | None) -> bool:
-    """Whether ``process`` belongs to ``cell`` (the router and recorder: the default cell)."""
-    _, _, its_cell = process.name.partition(CELL_MARK)
-    return (its_cell or None) == cell
-
-
-def _refuse_busy_port(port: int) -> None:
-    """A second ``up`` on a port another stack's router holds would join that stack: its sim
-    would answer the other's resets and both runs would be garbage. Refuse it instead."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
-        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as a router's listener
-        try:
-            probe.bind(("127.0.0.1", port))
-        except OSError as exc:
-            raise ConfigError(
-                "port", f"127.0.0.1:{port} is in use ({exc.strerror}; another stack?): pass --port"
-            ) from exc
 
 
 def _interrupt(signum: int, _frame: object) -> None:
@@ -312,7 +163,7 @@ def _up_run(args: argparse.Namespace) -> int:
     # should stop it the same way. Once children run, the supervisor's handlers take over.
     for signum in STOP_SIGNALS:
         signal.signal(signum, _interrupt)
-    backends = _sim_backends()
+    backends = sim_backends()
     sim_options = (
         backends.argv(args.sim, backends.given_options(args)) if backends is not None else []
     )
@@ -356,7 +207,7 @@ def _up_run(args: argparse.Namespace) -> int:
     if args.planner_per_cell and args.cells is None:
         raise ConfigError("planner-per-cell", "only with --cells")
     # The options first: a run refused for them names them, whatever else is on the port.
-    _refuse_busy_port(args.port)
+    refuse_busy_port(args.port)
     # Every private key of the stack: removed when up stops, and by a watcher should up be
     # killed (owned_dir: it does not outlive up, even SIGKILLed).
     certs = OwnedDirectory() if args.secure else None
@@ -383,7 +234,7 @@ def _up_run(args: argparse.Namespace) -> int:
             write_cell_identities(tls_dir, in_cells)
 
     def spec(name: str, argv: list[str], extra: dict[str, str] | None = None) -> ProcessSpec:
-        identity = {"MANIGRAPH_TLS_IDENTITY": _identity(name)} if tls_dir else {}
+        identity = {"MANIGRAPH_TLS_IDENTITY": identity_of(name)} if tls_dir else {}
         return ProcessSpec(name, argv, {**bus_env, **identity, **(extra or {})})
 
     specs = [spec("router", ["router", "--listen", endpoint])]
@@ -391,10 +242,10 @@ def _up_run(args: argparse.Namespace) -> int:
         specs.append(spec("recorder", ["record", "--output", str(args.record)]))
     for cell in cells:
         deciding = not shared_planner and args.policy != NOBODY
-        specs += _cell_specs(args, plan, sim_options, human, cell, spec, deciding)
+        specs += cell_specs(args, plan, sim_options, human, cell, spec, deciding)
     if shared_planner:
         served = ",".join(str(cell) for cell in cells)
-        planner = spec("planner", [*_planner_argv(args, plan), "--cells", served])
+        planner = spec("planner", [*planner_argv(args, plan), "--cells", served])
         if tls_dir is not None:
             planner.env["MANIGRAPH_TLS_IDENTITY"] = SHARED_PLANNER
         specs.append(planner)
@@ -417,15 +268,13 @@ def _up_run(args: argparse.Namespace) -> int:
         with contextlib.ExitStack() as stack:
             buses = {
                 cell: stack.enter_context(
-                    Bus.open(
-                        replace(client, cell=cell, tls_identity=_client_identity(client, cell))
-                    )
+                    Bus.open(replace(client, cell=cell, tls_identity=client_identity(client, cell)))
                 )
                 for cell in cells
             }
             # Services import torch and SAPIEN: 40-90 s each at load 15+ on two cores.
             for cell, bus in buses.items():
-                names = [_service(s.name) for s in specs if _in(s, cell)]
+                names = [service_of(s.name) for s in specs if in_cell(s, cell)]
                 if shared_planner:  # its token is in every cell it serves
                     names.append("planner")
                 supervisor.wait_alive(bus, names, 180.0)
