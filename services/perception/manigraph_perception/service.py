@@ -142,17 +142,17 @@ class PerceptionService(Service):
         if not waiting:
             self.call_soon(self._process_waiting)
 
-    def _refuse(self, part: CameraPart, problem: ImageProblem) -> None:
+    def _refuse(self, message: CameraPart, problem: ImageProblem) -> None:
         """Zenoh thread: a part refused from its header, neither held nor decoded. Counted
         among the rejections and named in the status (one report waits at most, so a flood
         of them costs the service thread one turn, not one per part); the rest of its frame,
         if it comes, waits for another, and a camera's own part of that sequence still joins."""
-        self.reject(part, problem.kind, f"#{part.sequence}: {problem.reason}")
+        self.reject(message, problem.kind, f"#{message.sequence}: {problem.reason}")
         with self._lock:
             self._halves_refused += 1
             self._refused_counts[problem.kind] = self._refused_counts.get(problem.kind, 0) + 1
             pending = self._refused is not None
-            self._refused = BadFrame(problem.kind, f"frame {part.sequence}: {problem.reason}")
+            self._refused = BadFrame(problem.kind, f"frame {message.sequence}: {problem.reason}")
         if not pending:
             self.call_soon(self._report_refused)
 

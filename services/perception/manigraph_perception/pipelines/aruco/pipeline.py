@@ -112,9 +112,9 @@ class Perception:
                 problem = ImageProblem("unreadable", opencv_reason(exc, "decoding it"))
         if problem is None and (grey is None or grey.shape != (height, width)):
             problem = ImageProblem("unreadable", "image does not decode")
-        if problem is not None or grey is None:
-            reason = problem.reason if problem is not None else "image does not decode"
-            raise BadFrame("corrupt", f"frame {image.sequence}: {reason}")
+        if problem is not None:
+            raise BadFrame("corrupt", f"frame {image.sequence}: {problem.reason}")
+        assert grey is not None
         return GreyFrame(grey, image.stamp, image.sequence)
 
     def decode(self, image: CompressedImage) -> np.ndarray | None:

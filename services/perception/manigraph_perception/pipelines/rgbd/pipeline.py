@@ -167,9 +167,8 @@ class RgbdPerception:
 
     def observe(self, frame: RgbdFrame, now: float) -> Observation:
         scene, _ = self.process(frame.bgr, frame.depth, frame.stamp, now)
-        waiting = ""
-        if scene is None and self.missing:  # appearance identity: no Scene until all found
-            missing = self.missing
+        waiting, missing = "", self.missing
+        if scene is None and missing:  # appearance identity: no Scene until all found
             waiting = f"not found yet: {', '.join(missing[:8])}" + (
                 f" and {len(missing) - 8} more" if len(missing) > 8 else ""
             )
