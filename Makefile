@@ -35,7 +35,8 @@ lint: install  ## ruff, mypy, and this branch's commit subjects (CONTRIBUTING.md
 	$(RUN) mypy shared/manigraph_shared tools/manigraph_tools lab/manigraph_lab \
 		services/sim/manigraph_sim services/planner/manigraph_planner \
 		services/skills/manigraph_skills services/perception/manigraph_perception \
-		testkit/manigraph_testkit
+		testkit/manigraph_testkit families/blocks/manigraph_blocks \
+		families/dishwasher/manigraph_dishwasher
 
 format: install
 	$(RUN) ruff format .

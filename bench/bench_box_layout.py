@@ -1,6 +1,6 @@
 """Does the physics world's box layout alone cost a policy episodes? The same seeds of a box
 task in the geometric world (no physics), once in the demonstrations' box layout and once in
-the physics world's (``manigraph_sim.families.blocks.physics_boxes.PHYSICS_BOXES``), in process.
+the physics world's (``manigraph_blocks.sim.physics_boxes.PHYSICS_BOXES``), in process.
 
     python bench/bench_box_layout.py --policy checkpoints/sage.pt --episodes 20
 """

@@ -58,7 +58,7 @@ def reset_seconds(bus: Bus, text: str, run: int) -> tuple[float, str]:
 
 
 def in_process_seconds(text: str, run: int) -> float:
-    from manigraph_sim.families.blocks.task_file import parse_task_file
+    from manigraph_blocks.sim.task_file import parse_task_file
 
     started = time.perf_counter()
     with contextlib.suppress(TaskError):

@@ -21,14 +21,14 @@ from pathlib import Path
 from typing import TextIO
 
 from manigraph_lab.episode_loop import run_episode
-from manigraph_planner.families import FAMILIES as PLANNER_FAMILIES
+from manigraph_planner.family import FAMILIES as PLANNER_FAMILIES
 from manigraph_planner.policies.base import Policy
 from manigraph_planner.policies.teacher_rules import with_rules
 from manigraph_shared.demonstrations import DemonstrationLog
 from manigraph_shared.errors import DrawRefused
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.progress import Progress
-from manigraph_sim.families import family_of
+from manigraph_sim.family import family_of
 
 
 @dataclass(frozen=True)

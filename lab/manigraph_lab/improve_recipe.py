@@ -13,6 +13,7 @@ import typing
 from pathlib import Path
 from typing import Any
 
+from manigraph_planner.training.recipes import augmentation_for
 from manigraph_planner.training.trainer import TrainConfig
 from manigraph_shared.errors import ConfigError, PolicyError
 
@@ -24,6 +25,10 @@ def recipe_of(training_config: dict[str, Any], source: str, device: str = "cpu")
     values = {key: value for key, value in training_config.items() if key != "demos"}
     values["device"] = device
     try:
+        augmentation = values.get("augmentation")
+        if isinstance(augmentation, dict):  # of the type its architecture's recipe draws with
+            kind = type(augmentation_for(str(values.get("architecture", TrainConfig.architecture))))
+            values["augmentation"] = _build(kind, augmentation, "training_config.augmentation")
         return typing.cast(TrainConfig, _build(TrainConfig, values, "training_config"))
     except (ConfigError, ValueError, TypeError) as exc:
         raise PolicyError(f"{source}: its training recipe cannot be repeated: {exc}") from None

@@ -17,10 +17,9 @@ def checked_files(episodes: EpisodeOptions) -> tuple[str | None, int, str | None
     rules = episodes.rules_text()
     if task_file is None:
         return None, episodes.blocks, None
-    from manigraph_sim.families.blocks.rules_file import parse_rules_file
-    from manigraph_sim.families.blocks.task_file import parse_task_file
+    from manigraph_sim.family import task_file_family
 
-    blocks = parse_task_file(task_file, str(episodes.task_file)).blocks
-    if rules is not None:
-        parse_rules_file(rules, task_file, str(episodes.rules))
+    blocks = task_file_family().check_task_file(
+        task_file, str(episodes.task_file), rules, str(episodes.rules)
+    )
     return task_file, blocks, rules

@@ -82,9 +82,32 @@ class Entry(Generic[T]):
 class Registry(Generic[T]):
     """Named parts of one kind (``kind`` names them in errors: ``backend``, ``driver``)."""
 
-    def __init__(self, kind: str) -> None:
+    def __init__(self, kind: str, *, fill: Callable[[], None] | None = None) -> None:
+        """``fill``: called once, before the registry is first read, to register what others
+        declare (a service's task families: ``manigraph_shared.family_packages``)."""
         self.kind = kind
         self._entries: dict[str, Entry[T]] = {}
+        self._fill = fill
+
+    def fill_with(self, fill: Callable[[], None]) -> None:
+        """Call ``fill`` once, before the registry is next read (after any fill set before):
+        a module that fills this registry from another declares so where it is imported."""
+        before = self._fill
+
+        def both() -> None:
+            if before is not None:
+                before()
+            fill()
+
+        self._fill = both
+
+    def _filled(self) -> dict[str, Entry[T]]:
+        """The entries, after the one call of ``fill`` (registering during it reads what is
+        there so far)."""
+        fill, self._fill = self._fill, None
+        if fill is not None:
+            fill()
+        return self._entries
 
     # --- registering ----------------------------------------------------------------------------
     def add(
@@ -124,7 +147,7 @@ class Registry(Generic[T]):
 
     # --- looking up -------------------------------------------------------------------------------
     def entry(self, name: str) -> Entry[T]:
-        entry = self._entries.get(name)
+        entry = self._filled().get(name)
         if entry is None:
             known = ", ".join(self._entries) or "nothing registered"
             raise ConfigError(self.kind, f"'{name}' is not one of: {known}")
@@ -138,22 +161,22 @@ class Registry(Generic[T]):
         return self.entry(name).name
 
     def get(self, name: str) -> T | None:
-        return self[name] if name in self._entries else None
+        return self[name] if name in self._filled() else None
 
     def __contains__(self, name: object) -> bool:
-        return name in self._entries
+        return name in self._filled()
 
     def __iter__(self) -> Iterator[str]:
-        return iter(self._entries)
+        return iter(self._filled())
 
     def __len__(self) -> int:
-        return len(self._entries)
+        return len(self._filled())
 
     def names(self) -> list[str]:
-        return list(self._entries)
+        return list(self._filled())
 
     def items(self) -> Iterator[tuple[str, T]]:
-        for name, entry in self._entries.items():
+        for name, entry in list(self._filled().items()):
             yield name, entry.load()
 
     # --- options ----------------------------------------------------------------------------------
@@ -177,7 +200,8 @@ class Registry(Generic[T]):
         return build_options(entry.options, values, self.kind)
 
     def _all_option_names(self) -> set[str]:
-        return {item.name for entry in self._entries.values() for item in entry.option_fields()}
+        entries = self._filled().values()
+        return {item.name for entry in entries for item in entry.option_fields()}
 
     def add_arguments(
         self, parser: argparse.ArgumentParser | argparse._ArgumentGroup, *, only: str = ""
@@ -185,7 +209,7 @@ class Registry(Generic[T]):
         """One flag per option of every entry (or of entry ``only``). A flag that is not
         given stays out of the namespace, so the chosen entry's own default applies."""
         flags: dict[str, tuple[OptionField, list[tuple[str, Any]]]] = {}
-        for entry in self._entries.values():
+        for entry in self._filled().values():
             if only and entry.name != only:
                 continue
             for item in entry.option_fields():
@@ -243,5 +267,5 @@ class Registry(Generic[T]):
     def describe(self) -> str:
         """``name: help`` per entry, for a flag's help."""
         return "; ".join(
-            f"{e.name}: {e.help}" if e.help else e.name for e in self._entries.values()
+            f"{e.name}: {e.help}" if e.help else e.name for e in self._filled().values()
         )

@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import pytest
 
-from manigraph_planner.families.blocks.expert import ExpertPolicy
+from manigraph_blocks.planner.expert import ExpertPolicy
 from manigraph_planner.policies.base import Decision, Policy
 from manigraph_planner.service import PlannerService
 from manigraph_shared.bus import Bus

@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_blocks.planner.augment import Augmentation
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_lab.episode_loop import run_episode
-from manigraph_planner.families.blocks.augment import Augmentation
 from manigraph_planner.gnn import save_checkpoint
 from manigraph_planner.policies import load_policy
 from manigraph_planner.training.dataset import load_demonstrations

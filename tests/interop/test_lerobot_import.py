@@ -20,9 +20,9 @@ import pyarrow.parquet as pq
 import pytest
 import torch
 
+from manigraph_dishwasher.planner.expert import dishwasher_expert
+from manigraph_dishwasher.planner.training import load_dish_demonstrations
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
-from manigraph_planner.families.dishwasher.expert import dishwasher_expert
-from manigraph_planner.families.dishwasher.training import load_dish_demonstrations
 from manigraph_planner.policies import load_policy
 from manigraph_planner.policies.gnn import GNNPolicy
 from manigraph_planner.training.dataset import count_heads, load_demonstrations

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_planner.families.dishwasher.expert import LeftRightExpert, TopBottomExpert
+from manigraph_dishwasher.planner.expert import LeftRightExpert, TopBottomExpert
 from manigraph_planner.policies import Policy
 from manigraph_shared.cli import main
 from manigraph_shared.errors import CONFIG_EXIT_CODE

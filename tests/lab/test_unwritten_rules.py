@@ -8,14 +8,14 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_blocks.sim.rules_file import parse_rules_file
+from manigraph_blocks.sim.task_file import parse_task_file
 from manigraph_lab.demo_recording import DemoProtocol
 from manigraph_lab.episode_loop import run_episode
 from manigraph_lab.evaluate import EvalSpec, evaluate
 from manigraph_planner.policies import POLICIES
 from manigraph_planner.policies.teacher_rules import with_rules
 from manigraph_shared.errors import PolicyError
-from manigraph_sim.families.blocks.rules_file import parse_rules_file
-from manigraph_sim.families.blocks.task_file import parse_task_file
 
 UNWRITTEN = Path(__file__).resolve().parents[2] / "examples" / "tasks" / "unwritten"
 KINDS = {

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from manigraph_blocks.sim.task_file import parse_task_file
 from manigraph_shared.markers import load_marker_map, sim_marker_map
-from manigraph_sim.families.blocks.task_file import parse_task_file
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import sapien
 
-from manigraph_sim.families.blocks.options import BlockOptions
+from manigraph_blocks.sim.options import BlockOptions
 from manigraph_sim.physics.video import vulkan_available
 from manigraph_sim.tasks import get_task
 
@@ -18,7 +18,7 @@ pytestmark = pytest.mark.slow
 def test_gym_make_lays_out_the_seeded_task_and_judges_success() -> None:
     import gymnasium as gym
 
-    import manigraph_sim.physics.maniskill_env  # noqa: F401  (registers the environments)
+    import manigraph_blocks.sim.maniskill_env  # noqa: F401  (registers the environments)
 
     env = gym.make("Manigraph-Stack-v0", blocks=2, obs_mode="state")
     try:
@@ -41,8 +41,8 @@ def test_gym_make_lays_out_the_seeded_task_and_judges_success() -> None:
 def test_box_packing_as_a_maniskill_env_without_a_render_device() -> None:
     import gymnasium as gym
 
-    import manigraph_sim.physics.maniskill_env  # noqa: F401  (registers the environments)
-    from manigraph_sim.families.blocks.physics_boxes import PHYSICS_BOXES
+    import manigraph_blocks.sim.maniskill_env  # noqa: F401  (registers the environments)
+    from manigraph_blocks.sim.physics_boxes import PHYSICS_BOXES
 
     env = gym.make("Manigraph-BoxPack-v0", blocks=2, obs_mode="state", render_backend="none")
     try:

@@ -9,12 +9,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from manigraph_planner.families.blocks.expert import ExpertPolicy
+from manigraph_blocks.planner.expert import ExpertPolicy
+from manigraph_blocks.sim.options import BlockOptions
+from manigraph_blocks.sim.physics_boxes import PHYSICS_BOXES
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest, SkillState
 from manigraph_sim.backends import create_backend
-from manigraph_sim.families.blocks.options import BlockOptions
-from manigraph_sim.families.blocks.physics_boxes import PHYSICS_BOXES
 from manigraph_sim.tasks import get_task
 
 Loop = Any  # tests/physics/conftest.py: InProcessLoop

@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 import sapien
 
+from manigraph_dishwasher.sim.physics import PHYSICAL_DISH_SIZE, RAIL, physical_counter_x
+from manigraph_dishwasher.skills.turn_over import quaternion_of
 from manigraph_lab.episode_loop import panda_driver, run_episode
 from manigraph_planner.policies.base import load_policy
 from manigraph_shared.messages import (
@@ -23,10 +25,8 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.orientations import ORIENTATIONS, UPSIDE_DOWN, up_axis_orientation
 from manigraph_shared.rotations import rotation_matrix
-from manigraph_sim.families.dishwasher.physics import PHYSICAL_DISH_SIZE, RAIL, physical_counter_x
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.physics.backend import PhysicsBackend
-from manigraph_skills.families.dishwasher.turn_over import quaternion_of
 
 #: Seed 8, 10 dishes: bowl_3 lies upside down and plate_3 stands on its rim (x >= 0.3 m), so
 #: both can be loaded by top-down grasps. (Found by listing layouts; no outcome is tuned.)

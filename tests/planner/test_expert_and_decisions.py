@@ -1,7 +1,7 @@
 from __future__ import annotations
 
+from manigraph_blocks.planner.expert import ExpertPolicy
 from manigraph_planner.decisions import DecisionMaker
-from manigraph_planner.families.blocks.expert import ExpertPolicy
 from manigraph_planner.policies import load_policy
 from manigraph_shared.messages import (
     EpisodeEvent,

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_blocks.sim.task_file import parse_task_file
 from manigraph_shared.errors import ConfigError, TaskError
-from manigraph_sim.families.blocks.task_file import parse_task_file
 from manigraph_tools.episode_plan import read_task_file
 
 

@@ -6,12 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from manigraph_blocks.sim.box_geometry import BoxGeometry
+from manigraph_blocks.sim.options import BlockOptions
+from manigraph_blocks.sim.physics_boxes import PHYSICS_BOXES
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_sim.backends import create_backend
-from manigraph_sim.families.blocks.box_geometry import BoxGeometry
-from manigraph_sim.families.blocks.options import BlockOptions
-from manigraph_sim.families.blocks.physics_boxes import PHYSICS_BOXES
 from manigraph_sim.tasks import get_task
 
 

@@ -5,15 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from manigraph_dishwasher.sim.dishwasher_world import DishwasherWorld
+from manigraph_dishwasher.sim.model import BOTTOM, TOP, Preference
+from manigraph_dishwasher.sim.options import DishwasherOptions
+from manigraph_dishwasher.sim.scene import dishwasher_scene
 from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.policies import load_policy
 from manigraph_shared.errors import SkillError, TaskError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN
-from manigraph_sim.families.dishwasher.dishwasher_world import DishwasherWorld
-from manigraph_sim.families.dishwasher.model import BOTTOM, TOP, Preference
-from manigraph_sim.families.dishwasher.options import DishwasherOptions
-from manigraph_sim.families.dishwasher.scene import dishwasher_scene
 from manigraph_sim.tasks import get_task
 
 

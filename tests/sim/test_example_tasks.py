@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from manigraph_blocks.sim.task_file import FileTask, parse_task_file
 from manigraph_shared.goal_matching import maximum_matching
 from manigraph_shared.messages import EpisodeRequest, GripperOp, RobotCommand
-from manigraph_sim.families.blocks.task_file import FileTask, parse_task_file
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.world_model import Layout
 

@@ -3,9 +3,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from manigraph_blocks.sim.geometric_world import GeometricWorld
+from manigraph_blocks.sim.options import BlockOptions
 from manigraph_shared.errors import ConfigError, SkillError, TaskError
-from manigraph_sim.families.blocks.geometric_world import GeometricWorld
-from manigraph_sim.families.blocks.options import BlockOptions
 from manigraph_sim.tasks import get_task
 from manigraph_sim.world_model import BLOCK_SIZE, Body, Goal
 
@@ -62,7 +62,7 @@ def test_a_block_dropped_beside_a_stack_rests_on_the_table() -> None:
 def pyramid_missing_one() -> GeometricWorld:
     """A 6-pyramid with its bottom row and the middle row's left block in place, and a
     spare block on the table."""
-    from manigraph_sim.families.blocks.pyramid import pyramid_goals
+    from manigraph_blocks.sim.pyramid import pyramid_goals
 
     goals = pyramid_goals(np.array([0.5, 0.0, 0.0]), 6)
     present = [goals[i] for i in (0, 1, 2, 3)]  # bottom row and the middle row's left block
@@ -108,7 +108,7 @@ def test_a_block_at_a_top_goal_on_a_stray_block_does_not_fill_it() -> None:
     neither): a block set on the top goal stands there, centred on that stray block, but the
     goals under it are free, so the top goal is not filled (and the pyramid cannot be
     finished until both blocks are moved)."""
-    from manigraph_sim.families.blocks.pyramid import pyramid_goals
+    from manigraph_blocks.sim.pyramid import pyramid_goals
 
     goals = pyramid_goals(np.array([0.5, 0.0, 0.0]), 3)
     top = goals[2]

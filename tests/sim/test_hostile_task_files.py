@@ -8,11 +8,11 @@ import time
 
 import pytest
 
+from manigraph_blocks.sim import fillable
+from manigraph_blocks.sim.task_attributes import Candidate, Wanted
+from manigraph_blocks.sim.task_file import parse_task_file
 from manigraph_shared.acceptance import admits
 from manigraph_shared.errors import TaskError
-from manigraph_sim.families.blocks import fillable
-from manigraph_sim.families.blocks.task_attributes import Candidate, Wanted
-from manigraph_sim.families.blocks.task_file import parse_task_file
 from manigraph_testkit.hostile_task_files import matching_bomb, reference_file
 
 #: Far above what the refusal takes (0.16 s on the 2-core machine), far below the minutes the

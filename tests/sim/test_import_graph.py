@@ -1,5 +1,5 @@
-"""The sim package's import graph: a ground floor that imports nothing above it, no cycles,
-and every module importable on its own in a fresh interpreter."""
+"""The sim package's import graph, with the families' sim parts: a ground floor that imports
+nothing above it, no cycles, and every module importable on its own in a fresh interpreter."""
 
 from __future__ import annotations
 
@@ -10,23 +10,33 @@ from pathlib import Path
 
 import pytest
 
+import manigraph_blocks.sim
+import manigraph_dishwasher.sim
 import manigraph_sim
 
 PACKAGE = Path(manigraph_sim.__file__).parent
+#: The sim and the families' sim parts, each with the folder its dotted names start from.
+ROOTS = [
+    (PACKAGE, PACKAGE.parent),
+    *(
+        (Path(part.__file__).parent, Path(part.__file__).parents[2])
+        for part in (manigraph_blocks.sim, manigraph_dishwasher.sim)
+    ),
+]
 #: Modules that need SAPIEN or a renderer to import; still checked by the static graph.
-HEAVY = {"manigraph_sim.physics.video", "manigraph_sim.physics.maniskill_env"}
+HEAVY = {"manigraph_sim.physics.video", "manigraph_blocks.sim.maniskill_env"}
 
 
-def module_name(path: Path) -> str:
-    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+def module_name(path: Path, top: Path) -> str:
+    parts = path.relative_to(top).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-MODULES = {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+MODULES = {module_name(p, top): p for root, top in ROOTS for p in sorted(root.rglob("*.py"))}
 
 
 def sim_imports(path: Path) -> set[str]:
-    """The manigraph_sim modules ``path`` imports (at any depth, type-checking ones too)."""
+    """The sim modules ``path`` imports (at any depth, type-checking ones too)."""
     found = set()
     for node in ast.walk(ast.parse(path.read_text())):
         names: list[str] = []
@@ -64,12 +74,13 @@ def test_no_import_cycle_in_the_sim_package() -> None:
             visit(name, [name])
 
 
-#: In one child process: forget every manigraph_sim module, import one, repeat; so each is
-#: imported first, as in a fresh interpreter (third-party imports stay cached: fast).
+#: In one child process: forget every sim module, import one, repeat; so each is imported
+#: first, as in a fresh interpreter (third-party imports stay cached: fast).
 FIRST_IMPORT_OF_EACH = """
 import importlib, sys
+ours = {"manigraph_sim", "manigraph_blocks", "manigraph_dishwasher"}
 for module in sys.argv[1:]:
-    for name in [n for n in sys.modules if n.split(".")[0] == "manigraph_sim"]:
+    for name in [n for n in sys.modules if n.split(".")[0] in ours]:
         del sys.modules[name]
     importlib.import_module(module)
 """

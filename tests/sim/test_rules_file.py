@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import pytest
 
+from manigraph_blocks.sim.rules_file import parse_rules_file
 from manigraph_shared.errors import ConfigError, DrawRefused, TaskError
 from manigraph_shared.messages import EpisodeRequest, GripperOp, RobotCommand, Vector3
-from manigraph_sim.families.blocks.rules_file import parse_rules_file
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.layout_message import layout_message
 from manigraph_sim.tasks.from_request import episode_layout

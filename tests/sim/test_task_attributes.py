@@ -9,9 +9,9 @@ from collections import Counter
 import numpy as np
 import pytest
 
+from manigraph_blocks.sim.task_file import FileTask, parse_task_file
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest, GripperOp, RobotCommand, Scene, Vector3
-from manigraph_sim.families.blocks.task_file import FileTask, parse_task_file
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.layout_message import layout_message
 

@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from manigraph_blocks.sim.task_file import FileTask, parse_task_file
 from manigraph_lab.evaluate import EvalSpec, evaluate
 from manigraph_planner.policies import load_policy
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest
-from manigraph_sim.families.blocks.task_file import FileTask, parse_task_file
 from manigraph_sim.geometric.backend import GeometricBackend
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "two-towers.toml"

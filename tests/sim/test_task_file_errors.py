@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
+from manigraph_blocks.sim.task_file import parse_task_file
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeRequest
-from manigraph_sim.families.blocks.task_file import parse_task_file
 from manigraph_sim.geometric.backend import GeometricBackend
 
 VALID = """name = "one block"

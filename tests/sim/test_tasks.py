@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from manigraph_planner.families.blocks.expert import ExpertPolicy
+from manigraph_blocks.planner.expert import ExpertPolicy
+from manigraph_blocks.sim.options import BlockOptions
 from manigraph_shared.errors import TaskError
 from manigraph_shared.messages import EpisodeEvent, EpisodeRequest, GripperOp, RobotCommand
-from manigraph_sim.families import family_of
-from manigraph_sim.families.blocks.options import BlockOptions
+from manigraph_sim.family import family_of
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_sim.tasks import TASKS, get_task
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from arm_helpers import PerfectArm, block, trajectory_of
 
+from manigraph_blocks.skills.obstacles import box_walls
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import (
     GoalCategory,
@@ -21,7 +22,6 @@ from manigraph_shared.messages import (
 )
 from manigraph_skills.drivers.base import Motion
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
-from manigraph_skills.families.blocks.obstacles import box_walls
 from manigraph_skills.grasp_choice import choose_grasps
 from manigraph_skills.motion import HOME_Q, GraspPlanner, IKSolver, JointTrajectory, PandaModel
 from manigraph_skills.motion.collision import ESCAPE_TIME, ArmCollisionModel, LinkSpheres

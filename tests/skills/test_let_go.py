@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from arm_helpers import PerfectArm
 
+from manigraph_dishwasher.skills.panda_turn_over import _clear_let_go
 from manigraph_shared.errors import SkillError
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
-from manigraph_skills.families.dishwasher.panda_turn_over import _clear_let_go
 from manigraph_skills.motion import HOME_Q
 from manigraph_skills.motion.model import top_down
 from manigraph_skills.motion.plan import UP

@@ -7,18 +7,18 @@ import numpy as np
 import pytest
 from arm_helpers import PerfectArm, trajectory_of
 
-from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, SceneRack, Vector3
-from manigraph_shared.orientations import ORIENTATIONS
-from manigraph_shared.rotations import rotation_matrix
-from manigraph_skills.drivers.panda_motion import PandaMotionDriver
-from manigraph_skills.families.dishwasher.panda_turn_over import (
+from manigraph_dishwasher.skills.panda_turn_over import (
     SPARE_Y,
     SPOT_FREE,
     free_cells,
     move_dish,
     set_down_spots,
 )
-from manigraph_skills.families.dishwasher.turn_over import up_index
+from manigraph_dishwasher.skills.turn_over import up_index
+from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, SceneRack, Vector3
+from manigraph_shared.orientations import ORIENTATIONS
+from manigraph_shared.rotations import rotation_matrix
+from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 
 #: A bowl (5 cm across, 3.5 cm deep) lying upside down.
 SIZE = Vector3(x=0.05, y=0.05, z=0.035)

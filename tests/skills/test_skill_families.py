@@ -1,19 +1,19 @@
-"""Each task family registers its skill extensions in one place (``families/<name>/``), and
+"""Each task family declares its skill extensions in one place (its package's ``skills``), and
 the skill runner reaches them only through the registry."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from manigraph_blocks.skills.obstacles import box_walls
+from manigraph_dishwasher.skills.obstacles import rack_obstacles
+from manigraph_dishwasher.skills.panda_turn_over import turn_dish
+from manigraph_dishwasher.skills.slot_room import set_down_point
+from manigraph_dishwasher.skills.trays import toggle_tray
 from manigraph_shared.dishwasher_rules import check_dish_move
 from manigraph_shared.messages import Action, EpisodeRequest, Scene, TrayAction
 from manigraph_sim.geometric.backend import GeometricBackend
-from manigraph_skills.families import FAMILIES, family_of, family_taking
-from manigraph_skills.families.blocks.obstacles import box_walls
-from manigraph_skills.families.dishwasher.obstacles import rack_obstacles
-from manigraph_skills.families.dishwasher.panda_turn_over import turn_dish
-from manigraph_skills.families.dishwasher.slot_room import set_down_point
-from manigraph_skills.families.dishwasher.trays import toggle_tray
+from manigraph_skills.family import FAMILIES, family_of, family_taking
 from manigraph_skills.obstacles import scene_obstacles
 
 

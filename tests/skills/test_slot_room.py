@@ -5,6 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from manigraph_dishwasher.skills.slot_room import (
+    CLEARANCE,
+    MAX_SHIFT,
+    half_across,
+    set_down_point,
+)
+from manigraph_dishwasher.skills.turn_over import quaternion_of
 from manigraph_shared.messages import (
     GoalCategory,
     ObjectCategory,
@@ -15,13 +22,6 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.orientations import ORIENTATIONS, UPSIDE_DOWN
 from manigraph_shared.rotations import rotation_matrix
-from manigraph_skills.families.dishwasher.slot_room import (
-    CLEARANCE,
-    MAX_SHIFT,
-    half_across,
-    set_down_point,
-)
-from manigraph_skills.families.dishwasher.turn_over import quaternion_of
 
 PITCH = 0.055
 SLOT_Z = 0.325

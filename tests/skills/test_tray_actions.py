@@ -125,8 +125,8 @@ def test_an_open_rack_floor_supports_a_dish_set_into_its_slot_and_nothing_else()
 def test_a_pushed_in_racks_floor_is_an_obstacle_where_the_rack_stands() -> None:
     """The wrist reaching into the pulled-out bottom rack's far slots met the pushed-in top
     rack's front edge, which the arm check did not know of, and stopped 5 cm short."""
+    from manigraph_dishwasher.skills.obstacles import rack_obstacles
     from manigraph_shared.grasp_points import RACK_FLOOR_X, RACK_HANDLE_X
-    from manigraph_skills.families.dishwasher.obstacles import rack_obstacles
 
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)
@@ -174,8 +174,8 @@ def test_a_plate_on_its_rim_on_the_far_row_is_taken_under_a_pulled_out_bottom_ra
     re-plan (three of ten validation episodes); the physics world's racks slide 11 cm."""
     from arm_helpers import PerfectArm, trajectory_of
 
+    from manigraph_dishwasher.sim.physics import COUNTER_ROWS, PHYSICAL_DISH_SIZE, RAIL
     from manigraph_shared.orientations import ORIENTATIONS
-    from manigraph_sim.families.dishwasher.physics import COUNTER_ROWS, PHYSICAL_DISH_SIZE, RAIL
     from manigraph_skills.drivers.panda_motion import PandaMotionDriver
     from manigraph_skills.grasp_choice import choose_grasps
     from manigraph_skills.motion import PandaModel

@@ -6,6 +6,13 @@ import numpy as np
 import pytest
 from arm_helpers import PerfectArm
 
+from manigraph_dishwasher.skills.turn_over import (
+    next_tilts,
+    quaternion_of,
+    set_down_hands,
+    top_down_rotation,
+    up_index,
+)
 from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, Vector3
 from manigraph_shared.orientations import (
     ORIENTATIONS,
@@ -16,13 +23,6 @@ from manigraph_shared.orientations import (
 )
 from manigraph_shared.rotations import rotation_matrix
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
-from manigraph_skills.families.dishwasher.turn_over import (
-    next_tilts,
-    quaternion_of,
-    set_down_hands,
-    top_down_rotation,
-    up_index,
-)
 
 BOWL = np.array([0.05, 0.05, 0.035])
 PLATE = np.array([0.064, 0.064, 0.015])

@@ -2,8 +2,10 @@
 
 Each swappable part is an entry of one :class:`~manigraph_shared.registry.Registry`; this
 module imports the packages that fill each registry (a registry fills as its package's modules
-register their entries) and lists what is there, so the page cannot drift from the code
-(``tests/test_readme.py`` checks every generated block).
+register their entries, or the installed task families' when it is first read) and lists what
+is there, so the page cannot drift from the code (``tests/test_readme.py`` checks every
+generated block). A family's own registries (the generic trainer's recipes) are found through
+the planner's family registry, never by the family's name.
 """
 
 from __future__ import annotations
@@ -18,9 +20,9 @@ from manigraph_shared.registry import Registry
 REGISTRIES: tuple[tuple[str, str, str], ...] = (
     ("BACKENDS", "manigraph_sim.backends", "manigraph_sim.backends"),
     ("TASKS", "manigraph_sim.tasks.base", "manigraph_sim.tasks"),
-    ("FAMILIES", "manigraph_sim.families.base", "manigraph_sim.families"),
+    ("FAMILIES", "manigraph_sim.family", "manigraph_sim.family"),
     ("DRIVERS", "manigraph_skills.drivers.registry", "manigraph_skills.drivers"),
-    ("FAMILIES", "manigraph_skills.families.family", "manigraph_skills.families"),
+    ("FAMILIES", "manigraph_skills.family", "manigraph_skills.family"),
     ("PIPELINES", "manigraph_perception.registry", "manigraph_perception.registry"),
     ("POLICIES", "manigraph_planner.policies.base", "manigraph_planner.policies"),
     ("POLICY_FILE_LOADERS", "manigraph_planner.policies.base", "manigraph_planner.policies"),
@@ -28,8 +30,7 @@ REGISTRIES: tuple[tuple[str, str, str], ...] = (
     ("ARCHITECTURES", "manigraph_planner.gnn.models.backbone", "manigraph_planner.gnn.models"),
     ("SOURCES", "manigraph_planner.training.sources", "manigraph_planner.training.sources"),
     ("BATCH_LAYOUTS", "manigraph_planner.training.batch_layouts", "manigraph_planner.training"),
-    ("FAMILIES", "manigraph_planner.families.family", "manigraph_planner.families"),
-    ("RECIPES", "manigraph_planner.families.blocks.recipes", "manigraph_planner.families"),
+    ("FAMILIES", "manigraph_planner.family", "manigraph_planner.family"),
     ("FORMATS", "manigraph_tools.interop.formats", "manigraph_tools.interop.formats"),
     ("BASELINES", "manigraph_lab.rl.baselines", "manigraph_lab.rl.baselines"),
 )
@@ -39,7 +40,7 @@ def _where(module_name: str) -> str:
     """The module's file, from the repository root (``services/sim/...``)."""
     path = Path(importlib.import_module(module_name).__file__ or module_name)
     parts = path.parts
-    for root in ("services", "shared", "tools", "lab"):
+    for root in ("services", "shared", "tools", "lab", "families"):
         if root in parts:
             index = len(parts) - 1 - parts[::-1].index(root)
             return "/".join(parts[index:])
@@ -59,7 +60,7 @@ def _options(registry: Registry[object]) -> str:
 def registry_table() -> str:
     """One row per registry: where it is declared, its entries and their options classes."""
     rows = ["| registry | where | entries | options |", "|---|---|---|---|"]
-    for attribute, module_name, filler in REGISTRIES:
+    for attribute, module_name, filler in _rows():
         importlib.import_module(filler)
         registry: Registry[object] = getattr(importlib.import_module(module_name), attribute)
         entries = ", ".join(registry.names()) or "(none)"
@@ -67,3 +68,19 @@ def registry_table() -> str:
             f"| `{attribute}` | `{_where(module_name)}` | {entries} | {_options(registry)} |"
         )
     return "\n".join(rows)
+
+
+def _rows() -> list[tuple[str, str, str]]:
+    """:data:`REGISTRIES`, with the registries the planner's families name as their recipes
+    after the planner's family registry."""
+    from manigraph_planner.family import FAMILIES
+
+    rows = []
+    for row in REGISTRIES:
+        rows.append(row)
+        if row[1] == "manigraph_planner.family":
+            for _, family in FAMILIES.items():
+                if family.recipe is not None:
+                    module_name, _, attribute = family.recipe.partition(":")
+                    rows.append((attribute, module_name, module_name))
+    return rows

@@ -42,7 +42,7 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--epochs", type=int, help="full passes (default: 150; dishwasher heads: 300)"
     )
-    from manigraph_planner.families import FAMILIES
+    from manigraph_planner.family import FAMILIES
 
     heads = {family.heads: name for name, family in FAMILIES.items()}
     parser.add_argument(
@@ -105,19 +105,19 @@ def _heads(args: argparse.Namespace) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from manigraph_planner.families import family_for_heads
+    from manigraph_planner.family import family_for_heads
 
     use_threads(args.threads)
     own_command = family_for_heads(_heads(args)).part("train_command")
     if own_command is not None:  # a family with a training loop of its own (the dishwasher)
         return int(own_command(args))
-    from manigraph_planner.families.blocks.recipes import augmentation_for
     from manigraph_planner.gnn import save_checkpoint
     from manigraph_planner.training.dataset import load_demonstrations
+    from manigraph_planner.training.recipes import augmentation_for
     from manigraph_planner.training.trainer import TrainConfig, train
 
     # TrainConfig checks the architecture (ModelConfig) and takes the defaults of its recipe
-    # (training.recipes); each raises a ConfigError naming the field.
+    # (training.recipes, the block family's); each raises a ConfigError naming the field.
     config = TrainConfig(
         architecture=args.arch,
         seed=args.seed,
@@ -131,12 +131,7 @@ def _run(args: argparse.Namespace) -> int:
     demos = load_demonstrations(args.demos)
     config = config.for_task(demos.feature_spec)  # a task's columns, generic augmentation
     if args.grow is not None and config.augmentation is not None:
-        config = replace(
-            config,
-            augmentation=replace(
-                config.augmentation, grow_pairs=args.grow, grow_finished=args.grow
-            ),
-        )
+        config = replace(config, augmentation=config.augmentation.grown(args.grow))
     net, metrics = train(demos, config, progress=sys.stderr)  # a bar on a terminal only
     output = args.output or RUNS / f"{args.arch}-seed{args.seed}.pt"
     output.parent.mkdir(parents=True, exist_ok=True)

@@ -18,7 +18,7 @@ from manigraph_shared.messages import (
     Scene,
     SkillStatus,
 )
-from manigraph_sim.families.base import Evaluation
+from manigraph_sim.family import Evaluation
 
 
 class SimBackend(ABC):

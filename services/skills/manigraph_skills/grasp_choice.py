@@ -38,11 +38,12 @@ from manigraph_shared.panda import (
 )
 from manigraph_shared.rotations import rotation_matrix
 from manigraph_skills.drivers.base import Grasp
-from manigraph_skills.families.dishwasher.turn_over import HORIZONTAL
 from manigraph_skills.obstacles import scene_obstacles
 
 #: Added to the fingers' reach before an axis counts as free, metres.
 MARGIN = 0.005
+#: A horizontal axis has at most this vertical component.
+HORIZONTAL = 0.5
 #: Between a carried object's underside and what it passes over, metres.
 CARRY_CLEARANCE = 0.02
 #: Hand yaw that turns the closing axis from x to y.

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from manigraph_shared.messages import Scene, SceneObject
-from manigraph_skills.families import families
+from manigraph_skills.family import families
 
 #: An object counts as a support when its top is within this of the underside above it.
 SUPPORT_GAP = 0.01

@@ -14,7 +14,7 @@ from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus
 from manigraph_shared.orientations import orientation
 from manigraph_shared.workspace import Workspace
 from manigraph_skills.drivers.base import Motion, RobotDriver
-from manigraph_skills.families import family_of, family_taking
+from manigraph_skills.family import family_of, family_taking
 from manigraph_skills.grasp_choice import choose_grasps
 
 SKILL = "pick_and_place"

@@ -1,4 +1,4 @@
-"""Each task family registers its planner parts in one place (``families/<name>/``), and the
+"""Each task family declares its planner part in one place (its package's ``planner``), and the
 generic layers reach them only through the registries: heads, networks, policies, experts."""
 
 from __future__ import annotations
@@ -7,12 +7,13 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_planner.families import FAMILIES, family_for_heads, family_of
-from manigraph_planner.families.blocks.expert import ExpertPolicy
-from manigraph_planner.families.dishwasher.expert import LeftRightExpert, TopBottomExpert
-from manigraph_planner.families.dishwasher.features import DISH_FEATURE_SPEC
-from manigraph_planner.families.dishwasher.gnn_policy import DishwasherGNNPolicy
-from manigraph_planner.families.dishwasher.net import DishPolicyNet
+from manigraph_blocks.planner.expert import ExpertPolicy
+from manigraph_dishwasher.planner.expert import LeftRightExpert, TopBottomExpert
+from manigraph_dishwasher.planner.features import DISH_FEATURE_SPEC
+from manigraph_dishwasher.planner.gnn_policy import DishwasherGNNPolicy
+from manigraph_dishwasher.planner.net import DishPolicyNet
+from manigraph_dishwasher.planner.train_command import train_from_args
+from manigraph_planner.family import FAMILIES, family_for_heads, family_of
 from manigraph_planner.gnn.features import FEATURE_SPEC
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_planner.gnn.models.build import policy_net_for
@@ -41,8 +42,10 @@ def test_each_family_registers_its_heads_feature_spec_and_experts() -> None:
     assert feature_spec_for("dishwasher") is DISH_FEATURE_SPEC
     assert POLICIES["expert"] is ExpertPolicy and blocks.experts == ("expert",)
     assert [POLICIES[name] for name in dishwasher.experts] == [TopBottomExpert, LeftRightExpert]
-    assert dishwasher.part("recipe").__name__ == "DishTrainConfig"
-    assert "sage" in blocks.part("recipe")
+    # the dishwasher trains by its own command; blocks by the generic trainer, with its recipes
+    assert dishwasher.part("recipe") is None
+    assert dishwasher.part("train_command") is train_from_args
+    assert "sage" in blocks.part("recipe") and blocks.part("train_command") is None
 
 
 def test_the_scene_says_its_family_and_the_heads_say_the_network() -> None:

@@ -7,14 +7,14 @@ from pathlib import Path
 import pytest
 import torch
 
-from manigraph_planner.families.dishwasher.ensemble import DishEnsembleNet
-from manigraph_planner.families.dishwasher.features import dish_scene_to_graph
-from manigraph_planner.families.dishwasher.gnn_policy import (
+from manigraph_dishwasher.planner.ensemble import DishEnsembleNet
+from manigraph_dishwasher.planner.features import dish_scene_to_graph
+from manigraph_dishwasher.planner.gnn_policy import (
     DishwasherGNNPolicy,
     decision_from_heads,
 )
-from manigraph_planner.families.dishwasher.net import DishHeads, DishPolicyNet
-from manigraph_planner.families.dishwasher.training import DishTrainConfig, member_seed
+from manigraph_dishwasher.planner.net import DishHeads, DishPolicyNet
+from manigraph_dishwasher.planner.training import DishTrainConfig, member_seed
 from manigraph_planner.gnn.checkpoint import load_checkpoint, save_checkpoint
 from manigraph_planner.gnn.models import ModelConfig
 from manigraph_planner.policies import load_policy
@@ -102,9 +102,9 @@ def test_members_have_their_own_seeds_and_the_first_is_the_training_seed() -> No
 def test_training_several_members_makes_an_ensemble_whose_first_is_the_single_net(
     tmp_path: Path,
 ) -> None:
+    from manigraph_dishwasher.planner.expert import dishwasher_expert
+    from manigraph_dishwasher.planner.training import load_dish_demonstrations, train_dish
     from manigraph_lab.demo_recording import DemoProtocol, record_demos
-    from manigraph_planner.families.dishwasher.expert import dishwasher_expert
-    from manigraph_planner.families.dishwasher.training import load_dish_demonstrations, train_dish
 
     path = tmp_path / "demos.mcap"
     record_demos(

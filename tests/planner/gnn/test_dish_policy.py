@@ -7,19 +7,19 @@ from pathlib import Path
 import pytest
 import torch
 
-from manigraph_lab.demo_recording import DemoProtocol, record_demos
-from manigraph_planner.families.dishwasher.expert import dishwasher_expert
-from manigraph_planner.families.dishwasher.features import DISH_FEATURE_SPEC, dish_scene_to_graph
-from manigraph_planner.families.dishwasher.gnn_policy import (
+from manigraph_dishwasher.planner.expert import dishwasher_expert
+from manigraph_dishwasher.planner.features import DISH_FEATURE_SPEC, dish_scene_to_graph
+from manigraph_dishwasher.planner.gnn_policy import (
     DishwasherGNNPolicy,
     decision_from_heads,
 )
-from manigraph_planner.families.dishwasher.net import DishHeads, DishPolicyNet
-from manigraph_planner.families.dishwasher.training import (
+from manigraph_dishwasher.planner.net import DishHeads, DishPolicyNet
+from manigraph_dishwasher.planner.training import (
     DishTrainConfig,
     dish_loss,
     load_dish_demonstrations,
 )
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.gnn.checkpoint import load_checkpoint, save_checkpoint
 from manigraph_planner.policies import load_policy
 from manigraph_planner.recovery import ProgressMonitor
@@ -401,7 +401,7 @@ def test_the_shipped_dishwasher_checkpoints_load_and_act(preference: str) -> Non
 def test_dropping_dishes_keeps_the_demonstrated_decision(demos) -> None:  # type: ignore[no-untyped-def]
     import random
 
-    from manigraph_planner.families.dishwasher.augment import drop_dishes
+    from manigraph_dishwasher.planner.augment import drop_dishes
 
     rng = random.Random(0)
     shrunk = 0

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from manigraph_planner.families.blocks.expert import ExpertPolicy
+from manigraph_blocks.planner.expert import ExpertPolicy
 from manigraph_planner.policies.base import Decision
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from manigraph_planner.families import FAMILIES
-from manigraph_planner.families.blocks.expert import ExpertPolicy
-from manigraph_planner.families.dishwasher.expert import LeftRightExpert, TopBottomExpert
+from manigraph_blocks.planner.expert import ExpertPolicy
+from manigraph_dishwasher.planner.expert import LeftRightExpert, TopBottomExpert
+from manigraph_planner.family import FAMILIES
 from manigraph_planner.policies import POLICIES
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import EpisodeRequest

@@ -7,9 +7,8 @@ from dataclasses import replace
 import pytest
 import torch
 
+from manigraph_blocks.planner.augment import Augmentation
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
-from manigraph_planner.families.blocks.augment import Augmentation
-from manigraph_planner.families.blocks.recipes import augmentation_for
 from manigraph_planner.policies import load_policy
 from manigraph_planner.training.augmented_draws import (
     AugmentedDraws,
@@ -18,6 +17,7 @@ from manigraph_planner.training.augmented_draws import (
     draw_epochs,
 )
 from manigraph_planner.training.dataset import Demonstrations, Sample, load_demonstrations
+from manigraph_planner.training.recipes import augmentation_for
 from manigraph_planner.training.trainer import TrainConfig, train
 
 

@@ -9,12 +9,12 @@ import pytest
 import torch
 
 from manigraph_planner.explain import SceneExplainer
-from manigraph_planner.families.blocks.recipes import augmentation_for
 from manigraph_planner.gnn.checkpoint import load_checkpoint
 from manigraph_planner.gnn.features import FeatureSpec, scene_to_graph
 from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_planner.policies.gnn import GNNPolicy
 from manigraph_planner.training.dataset import Demonstrations, Sample
+from manigraph_planner.training.recipes import augmentation_for
 from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
 

@@ -4,19 +4,19 @@ from __future__ import annotations
 
 import pytest
 
-from manigraph_planner.families.blocks.recipes import (
-    GATED_MAX_LEVELS,
-    RECIPES,
-    augmentation_for,
-    resample_every_for,
-)
+from manigraph_blocks.planner.recipes import GATED_MAX_LEVELS, RECIPES
 from manigraph_planner.gnn.models import ARCHITECTURES
+from manigraph_planner.training.recipes import augmentation_for, recipes, resample_every_for
 from manigraph_planner.training.trainer import TrainConfig
 from manigraph_shared.errors import ConfigError
 
 
 def test_every_architecture_has_a_recipe() -> None:
     assert list(RECIPES) and set(RECIPES) == set(ARCHITECTURES)
+
+
+def test_the_generic_trainer_draws_with_the_recipes_the_block_family_names() -> None:
+    assert recipes() is RECIPES
 
 
 def test_each_recipe_is_its_architectures() -> None:

@@ -5,10 +5,9 @@ from __future__ import annotations
 import pytest
 import torch
 
-from manigraph_lab.demo_recording import DemoProtocol, record_demos
-from manigraph_planner.families.blocks.augment import Augmentation
-from manigraph_planner.families.blocks.expert import ExpertPolicy
-from manigraph_planner.families.blocks.structure import (
+from manigraph_blocks.planner.augment import Augmentation
+from manigraph_blocks.planner.expert import ExpertPolicy
+from manigraph_blocks.planner.structure import (
     BLOCK,
     COVER,
     Graph,
@@ -23,6 +22,7 @@ from manigraph_planner.families.blocks.structure import (
     is_closing,
     open_box_contents,
 )
+from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
 from manigraph_planner.training.dataset import Sample, load_demonstrations
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3

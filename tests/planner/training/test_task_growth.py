@@ -6,8 +6,8 @@ from dataclasses import replace
 
 import torch
 
-from manigraph_planner.families.blocks.augment import Augmentation
-from manigraph_planner.families.blocks.task_growth import grow_task_graph
+from manigraph_blocks.planner.augment import Augmentation
+from manigraph_blocks.planner.task_growth import grow_task_graph
 from manigraph_planner.gnn.features import FeatureSpec, scene_to_graph
 from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_planner.training.dataset import Sample

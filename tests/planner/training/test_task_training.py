@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import torch
 
-from manigraph_planner.families.blocks.augment import Augmentation
-from manigraph_planner.families.blocks.recipes import augmentation_for
+from manigraph_blocks.planner.augment import Augmentation
 from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec, scene_to_graph
 from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_planner.training.dataset import Demonstrations, Sample
+from manigraph_planner.training.recipes import augmentation_for
 from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
 

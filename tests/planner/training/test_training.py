@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 import torch
 
+from manigraph_blocks.planner.augment import Augmentation
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_lab.evaluate import EvalSpec, evaluate
-from manigraph_planner.families.blocks.augment import Augmentation
 from manigraph_planner.gnn import load_checkpoint, save_checkpoint
 from manigraph_planner.policies import load_policy
 from manigraph_planner.policies.gnn import GNNPolicy

@@ -1,7 +1,6 @@
 """Task policies: registered, swappable parts the planner serves. Each task family registers
-its experts (``families/<name>/``); importing this package imports them all."""
+its experts (its package's ``planner`` part), when ``POLICIES`` is first read."""
 
-from manigraph_planner import families  # noqa: F401  (registers each family's experts)
 from manigraph_planner.policies.base import (
     POLICIES,
     POLICY_FILE_LOADERS,

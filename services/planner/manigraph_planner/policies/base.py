@@ -76,8 +76,16 @@ class Policy(ABC):
         return [] if decision is None else [decision]
 
 
+def _register_families() -> None:
+    """Each family registers its experts as it is registered (``manigraph_planner.family``)."""
+    from manigraph_planner.family import FAMILIES
+
+    FAMILIES.names()
+
+
 #: Policies by name; a policy takes no options (a learned one comes from its checkpoint).
-POLICIES: Registry[type[Policy]] = Registry("policy")
+#: The installed families' experts are registered when it is first read.
+POLICIES: Registry[type[Policy]] = Registry("policy", fill=_register_families)
 register_policy = POLICIES.register
 #: Loaders of policy files, by suffix; ``.pt`` checkpoints load a GNN policy (torch is
 #: imported only then).

@@ -8,7 +8,7 @@ from pathlib import Path
 import torch
 from torch import Tensor
 
-from manigraph_planner.families import family_for_heads
+from manigraph_planner.family import family_for_heads
 from manigraph_planner.gnn.checkpoint import CheckpointInfo, load_checkpoint
 from manigraph_planner.gnn.features import GraphState, scene_to_graph
 from manigraph_planner.gnn.models import PolicyNet

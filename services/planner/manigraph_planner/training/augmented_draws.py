@@ -1,7 +1,7 @@
 """The augmented training sets of one run, each drawn while the network trains on the one before.
 
 A recipe that resamples (``resample_every``) draws a fresh augmented set every few epochs; the
-structural steps of :mod:`~manigraph_planner.families.blocks.structure` are Python, about 1.3 s a
+structural steps of the block family's recipes are Python, about 1.3 s a
 draw on this machine, 15 draws in a 150-epoch run. A thread would not help (the training loop
 and the draws both need the GIL), so after the first draw, taken in line, the others run in
 one :class:`torch.utils.data.DataLoader` worker process, one draw ahead of the trainer, which
@@ -23,8 +23,8 @@ import torch
 from torch import Tensor
 from torch.utils.data import DataLoader, IterableDataset
 
-from manigraph_planner.families.blocks.augment import Augmentation
 from manigraph_planner.training.dataset import Sample
+from manigraph_planner.training.recipes import Augmenter
 
 __all__ = ["AugmentedDraws", "Draws", "InlineDraws", "PackedDraw", "draw_epochs"]
 
@@ -71,7 +71,7 @@ class _Draws(IterableDataset[PackedDraw]):
     """``count`` draws, continuing from a generator state (the draws taken in line before)."""
 
     def __init__(
-        self, augmentation: Augmentation, demos: list[Sample], generator_state: Tensor, count: int
+        self, augmentation: Augmenter, demos: list[Sample], generator_state: Tensor, count: int
     ):
         self._augmentation, self._demos = augmentation, demos
         self._generator_state, self._count = generator_state, count
@@ -93,7 +93,7 @@ class Draws(Protocol):
 class InlineDraws:
     """Draws in the trainer's own thread, for a run that draws once (nothing to overlap)."""
 
-    def __init__(self, augmentation: Augmentation, demos: list[Sample], seed: int):
+    def __init__(self, augmentation: Augmenter, demos: list[Sample], seed: int):
         self._augmentation, self._demos = augmentation, demos
         self.generator = torch.Generator().manual_seed(seed)
 
@@ -112,7 +112,7 @@ class AugmentedDraws:
     on one thread (DataLoader sets it). Where ``fork`` is missing, use :class:`InlineDraws`.
     """
 
-    def __init__(self, augmentation: Augmentation, demos: list[Sample], seed: int, count: int):
+    def __init__(self, augmentation: Augmenter, demos: list[Sample], seed: int, count: int):
         inline = InlineDraws(augmentation, demos, seed)
         self._first: list[Sample] | None = inline.take()
         self._iterator: Iterator[PackedDraw] | None = None

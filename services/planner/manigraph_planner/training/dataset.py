@@ -24,7 +24,7 @@ from pathlib import Path
 import torch
 from torch import Tensor
 
-from manigraph_planner.families import family_of
+from manigraph_planner.family import family_of
 from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec, GraphState, scene_to_graph
 from manigraph_planner.gnn.models.config import HEADS
 from manigraph_planner.gnn.task_features import TaskFeatures

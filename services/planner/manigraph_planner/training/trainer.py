@@ -8,13 +8,10 @@ import re
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
-from pathlib import Path
 from typing import TextIO
 
 import torch
 
-from manigraph_planner.families.blocks.augment import Augmentation
-from manigraph_planner.families.blocks.recipes import augmentation_for, resample_every_for
 from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_planner.training.augmented_draws import (
@@ -27,6 +24,7 @@ from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
 from manigraph_planner.training.dataset import Demonstrations, Sample
 from manigraph_planner.training.flat_adam import FlatAdam
 from manigraph_planner.training.padded_batch import PackedSamples, PaddedBatch
+from manigraph_planner.training.recipes import Augmenter, augmentation_for, resample_every_for
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.progress import Progress
 
@@ -47,7 +45,7 @@ class TrainConfig:
     #: Fixed input multipliers (category, x, y, z, filled); see ModelConfig.feature_scale.
     feature_scale: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0, 1.0)
     #: None: the architecture's default (:func:`augmentation_for`).
-    augmentation: Augmentation | None = None
+    augmentation: Augmenter | None = None
     #: Draw fresh augmented copies every this many epochs (0: draw them once; None: the
     #: architecture's default, :func:`resample_every_for`).
     resample_every: int | None = None
@@ -98,7 +96,7 @@ class TrainConfig:
 
     def for_task(self, spec: FeatureSpec) -> TrainConfig:
         """This config for demonstrations of ``spec``: a task's spec trains with its columns
-        and the generic augmentation (:meth:`Augmentation.for_task`); the paper's, as is."""
+        and the generic augmentation (:meth:`Augmenter.for_task`); the paper's, as is."""
         if spec.task is None:
             return self
         assert self.augmentation is not None  # set in __post_init__
@@ -261,7 +259,3 @@ def _fit(
         "device": config.device,
     }
     return net.cpu(), metrics
-
-
-def default_output(architecture: str, seed: int) -> Path:
-    return Path("checkpoints") / f"{architecture}-seed{seed}.pt"

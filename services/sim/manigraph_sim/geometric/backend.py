@@ -18,7 +18,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.workspace import Workspace
 from manigraph_sim.backend_base import EpisodeBackend
-from manigraph_sim.families.base import Evaluation, GeometricTaskWorld
+from manigraph_sim.family import Evaluation, GeometricTaskWorld
 from manigraph_sim.manifest import GRIPPER
 from manigraph_sim.tasks.from_request import episode_layout
 

@@ -39,7 +39,7 @@ from manigraph_shared.messages import (
 )
 from manigraph_shared.preflight import INSTALL_VULKAN
 from manigraph_sim.backend_base import EpisodeBackend, JointedArmBackend
-from manigraph_sim.families.base import Evaluation, PhysicsTaskWorld
+from manigraph_sim.family import Evaluation, PhysicsTaskWorld
 from manigraph_sim.manifest import CAMERA, JOINTS
 from manigraph_sim.physics.physics_world import ARM_JOINTS, PhysicsConfig, PhysicsWorld
 from manigraph_sim.physics.video import EpisodeVideo, VideoConfig, vulkan_available

@@ -1,9 +1,9 @@
 """Registered tasks: seeded initial layouts, goals and a success check.
 
-Each task belongs to a task family (``manigraph_sim.families``), which registers it; importing
-this package registers every family's tasks."""
+Each task belongs to a task family (``manigraph_sim.family``), which registers it; the
+installed families' tasks are registered when ``TASKS`` is first read."""
 
-from manigraph_sim import families as _families  # noqa: F401  (registers every family's tasks)
+from manigraph_sim import family as _family  # noqa: F401  (fills TASKS with the families')
 from manigraph_sim.tasks.base import TASKS, Task, get_task, register_task
 from manigraph_sim.world_model import Layout
 

@@ -10,13 +10,13 @@ import numpy as np
 from manigraph_shared.registry import Registry
 from manigraph_sim.world_model import Layout
 
-#: A task's parameters: its family's options (``manigraph_sim.families``).
+#: A task's parameters: its family's options (``manigraph_sim.family``).
 P = TypeVar("P")
 
 
 class Task(ABC, Generic[P]):
     """Subclasses document Task Description / Randomizations / Success Conditions. A task
-    belongs to a family (``manigraph_sim.families``), whose options are its ``params``."""
+    belongs to a family (``manigraph_sim.family``), whose options are its ``params``."""
 
     name: str
 
@@ -36,6 +36,8 @@ class Task(ABC, Generic[P]):
 
 #: Tasks by name. A task takes no options of its own: its parameters are its family's options
 #: (``FAMILIES``), built from each episode request, and :meth:`Task.validate` checks them.
+#: Each installed family registers its tasks when this is first read (``manigraph_sim.family``
+#: says so where it is imported; ``manigraph_sim.tasks`` imports it).
 TASKS: Registry[type[Task[Any]]] = Registry("task")
 register_task = TASKS.register
 

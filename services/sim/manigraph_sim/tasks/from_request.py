@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from manigraph_shared.messages import EpisodeRequest
-from manigraph_sim.families import SimFamily, family_of
+from manigraph_sim.family import SimFamily, family_of
 from manigraph_sim.world_model import Layout
 
 

@@ -54,7 +54,7 @@ from manigraph_skills.drivers.base import (
 from manigraph_skills.drivers.joint_transport import JointTransport
 from manigraph_skills.drivers.registry import MotionOptions
 from manigraph_skills.drivers.replanning import Replanner
-from manigraph_skills.families import family_of
+from manigraph_skills.family import family_of
 from manigraph_skills.motion import (
     HOME_Q,
     GraspPlanner,

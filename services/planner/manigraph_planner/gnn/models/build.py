@@ -4,7 +4,7 @@ dishwasher's four heads, an ensemble of them)."""
 
 from __future__ import annotations
 
-from manigraph_planner.families import family_for_heads
+from manigraph_planner.family import family_for_heads
 from manigraph_planner.gnn.models.config import ModelConfig
 from manigraph_planner.gnn.models.policy_net import PolicyNet
 

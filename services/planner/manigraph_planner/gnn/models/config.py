@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from manigraph_planner.families import FAMILIES, family_for_heads
+from manigraph_planner.family import FAMILIES, family_for_heads
 from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec
 from manigraph_planner.gnn.models.backbone import ARCHITECTURES
 from manigraph_shared.errors import ConfigError
@@ -24,13 +24,19 @@ DECODERS = ("nodes", "pairs")
 #: The policy's output heads -> the feature spec its graph states are built with.
 #: ``object-goal``: the paper's node logits (object and goal), over the paper's five columns
 #: (or a task file's, stamped in the checkpoint). A task family with heads of its own
-#: (``PlannerFamily.heads``, e.g. the dishwasher's four) points at its folder's spec,
+#: (``PlannerFamily.heads``, e.g. the dishwasher's four) points at its package's spec,
 #: imported when first used.
-HEADS: Registry[FeatureSpec] = Registry("heads")
+#: The families' heads are added when it is first read.
+
+
+def _add_family_heads() -> None:
+    for name, family in FAMILIES.items():
+        if family.heads not in HEADS.names() and family.feature_spec is not None:
+            HEADS.add_lazy(family.heads, family.feature_spec, help=f"the {name} family's")
+
+
+HEADS: Registry[FeatureSpec] = Registry("heads", fill=_add_family_heads)
 HEADS.add("object-goal", FEATURE_SPEC)
-for _name, _family in FAMILIES.items():
-    if _family.heads not in HEADS and _family.feature_spec is not None:
-        HEADS.add_lazy(_family.heads, _family.feature_spec, help=f"the {_name} family's")
 
 
 def feature_spec_for(heads: str) -> FeatureSpec:

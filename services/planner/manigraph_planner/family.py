@@ -1,0 +1,148 @@
+"""A task family's part of the planner, as one registered unit (docs/architecture.md).
+
+A family owns what the planner does differently for its scenes: which scenes are its
+(:attr:`PlannerFamily.matches`), the network heads its policies are trained with and the
+feature spec of their graph states, the network and policy a checkpoint with those heads
+loads as, its experts (and which one demonstrates an episode), the augmentation recipes the
+generic trainer draws with for its heads, or its own ``manigraph train``. Its package
+(``families/<name>/``, docs/families.md) holds that code in its ``planner`` part, which
+names its :class:`PlannerFamily` in the package's ``manigraph.families`` entry point
+(:mod:`manigraph_shared.family_packages`); :data:`FAMILIES` registers every installed one,
+by name, when it is first read. The generic layers (``gnn/``, ``policies/``, ``training/``,
+``explain/``) ask the registry, never which family a scene is:
+
+    family_of(scene).heads                 # what a decision on this scene trains
+    family_for_heads(config.heads).network # what a checkpoint with these heads builds
+
+The heavy parts (networks, policies, training, anything importing torch) are named as
+``"module:attribute"`` and imported when first used (:meth:`PlannerFamily.part`), so
+registering a family and listing the policies stays torch-free.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.family_packages import family_parts
+from manigraph_shared.messages import EpisodeRequest, Scene
+from manigraph_shared.registry import Registry, import_target
+
+if TYPE_CHECKING:
+    from manigraph_planner.policies.base import Policy
+
+__all__ = ["FAMILIES", "PlannerFamily", "family_for_heads", "family_of", "register_family"]
+
+
+def _any_scene(scene: Scene) -> bool:
+    return True
+
+
+@dataclass(frozen=True)
+class PlannerFamily:
+    """One task family's planner parts.
+
+    Args:
+        name: the family (``blocks``, ``dishwasher``), as in the sim's and skills' registries.
+        heads: the network heads its learned policies have (``ModelConfig.heads``, a
+            :data:`~manigraph_planner.gnn.models.config.HEADS` entry).
+        experts: the policy names of its experts (registered in ``POLICIES`` by its expert
+            module, which its part imports); :meth:`expert` picks the one that demonstrates
+            an episode (``manigraph demos``).
+        expert_of: which of ``experts`` demonstrates an episode request (the dishwasher's:
+            the request's preference); None: the first.
+        matches: whether a scene is this family's (what the scene itself shows).
+        fallback: the family of every scene no other family matches (one family: blocks, whose
+            object-goal heads are the paper's and any task file's).
+        feature_spec: ``"module:attribute"`` of its heads' feature spec; None: the paper's
+            (already registered under ``object-goal``).
+        network: ``"module:attribute"`` of ``(ModelConfig, message_passing) -> PolicyNet``
+            for its heads; None: the paper's :class:`PolicyNet`.
+        policy: ``"module:attribute"`` of ``(net, CheckpointInfo) -> Policy`` for a loaded
+            checkpoint; None: :class:`~manigraph_planner.policies.gnn.GNNPolicy`.
+        recipe: ``"module:attribute"`` of the :class:`~manigraph_shared.registry.Registry`
+            of augmentation recipes by architecture that the generic trainer draws with for
+            its heads (``training.recipes``); None for a family with its own
+            ``train_command``.
+        train_command: ``"module:attribute"`` of ``(args) -> exit code``: what ``manigraph
+            train`` runs for demonstrations of this family; None: the generic command.
+        ensembles: whether its networks may be ensembles (``ModelConfig.ensemble`` > 1).
+    """
+
+    name: str
+    heads: str
+    experts: tuple[str, ...]
+    expert_of: Callable[[EpisodeRequest], str] | None = None
+    matches: Callable[[Scene], bool] = _any_scene
+    fallback: bool = False
+    feature_spec: str | None = None
+    network: str | None = None
+    policy: str | None = None
+    recipe: str | None = None
+    train_command: str | None = None
+    ensembles: bool = False
+    help: str = ""
+
+    def part(self, name: str) -> Any:
+        """The part ``name`` (``network``, ``policy``, ``recipe``, ...) imported, or None."""
+        path = getattr(self, name)
+        return None if path is None else import_target(path)
+
+    def expert(self, request: EpisodeRequest) -> Policy:
+        """A fresh expert that demonstrates ``request``: the one :attr:`expert_of` names, else
+        the first of :attr:`experts`."""
+        from manigraph_planner.policies.base import POLICIES  # it imports the families
+
+        name = self.experts[0] if self.expert_of is None else self.expert_of(request)
+        if name not in self.experts:
+            raise ConfigError("expert", f"'{name}' is not one of the {self.name} experts")
+        return POLICIES[name]()
+
+
+def _register_installed() -> None:
+    """Register the ``planner`` part of every installed family package, by family name."""
+    for part in family_parts("planner"):
+        family = import_target(part.target)
+        if not isinstance(family, PlannerFamily) or family.name != part.family:
+            raise ConfigError(f"family.{part.family}", f"{part.target} is not its PlannerFamily")
+        register_family(family)
+
+
+#: Every task family the planner knows, by name: the installed family packages' are
+#: registered when it is first read.
+FAMILIES: Registry[PlannerFamily] = Registry("family", fill=_register_installed)
+
+
+def register_family(family: PlannerFamily) -> PlannerFamily:
+    """Add ``family`` to :data:`FAMILIES`; a second fallback family is refused (which
+    family a scene falls back to must not depend on the order families come in)."""
+    if family.fallback:
+        taken = [name for name, known in FAMILIES.items() if known.fallback]
+        if taken:
+            raise ConfigError("family", f"'{family.name}': '{taken[0]}' is the fallback already")
+    FAMILIES.add(family.name, family, help=family.help)
+    return family
+
+
+def family_of(scene: Scene) -> PlannerFamily:
+    """The family ``scene`` belongs to: the first that matches it, else the fallback."""
+    fallback = None
+    for _, family in FAMILIES.items():
+        if family.fallback:
+            fallback = family
+        elif family.matches(scene):
+            return family
+    if fallback is None:
+        raise ConfigError("family", "no family takes this scene and none is the fallback")
+    return fallback
+
+
+def family_for_heads(heads: str) -> PlannerFamily:
+    """The family whose policies have ``heads`` (``ConfigError`` naming the known heads)."""
+    for _, family in FAMILIES.items():
+        if family.heads == heads:
+            return family
+    known = ", ".join(family.heads for _, family in FAMILIES.items())
+    raise ConfigError("heads", f"'{heads}' is not one of {known}")
