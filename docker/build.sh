@@ -11,7 +11,7 @@
 # (e.g. DOCKER_BUILD_FLAGS="--no-cache").
 #
 # The build context is a temporary copy holding only what the images need
-# (pyproject.toml, uv.lock, shared/, tools/, services/, docker/), so a large .venv or
+# (pyproject.toml, uv.lock, shared/, tools/, services/, families/, docker/), so a large .venv or
 # .git in the work tree is never sent to the engine, with or without a
 # .dockerignore; the work tree is not written to. If the base image (python:3.11-slim-bookworm by default) is
 # not present and cannot be pulled, it is built from Debian packages with
@@ -52,7 +52,7 @@ tar -C "$REPO" -c \
     --exclude='.venv' --exclude='.pytest_cache' --exclude='.mypy_cache' \
     --exclude='.ruff_cache' \
     --exclude='docker/extra-ca/*.crt' \
-    pyproject.toml uv.lock shared tools services docker | tar -C "$CTX" -x
+    pyproject.toml uv.lock shared tools services families docker | tar -C "$CTX" -x
 if [ "$HOST_CA" -eq 1 ] && ls /usr/local/share/ca-certificates/*.crt >/dev/null 2>&1; then
     cp -p /usr/local/share/ca-certificates/*.crt "$CTX/docker/extra-ca/"
     echo "[build.sh] adding this host's extra CA certificates to the build context"
