@@ -5,9 +5,9 @@ named after the family, whose target is a dict: for each service the family exte
 ``"module:attribute"`` of its part there::
 
     [project.entry-points."manigraph.families"]
-    dishwasher = "manigraph_dishwasher:PARTS"
+    blocks = "manigraph_blocks:PARTS"
 
-    PARTS = {"sim": "manigraph_dishwasher.sim.family:DishwasherFamily", ...}
+    PARTS = {"sim": "manigraph_blocks.sim.family:BlocksFamily", ...}
 
 Each service's family registry (``manigraph_sim.family``, ``manigraph_planner.family``,
 ``manigraph_skills.family``) reads its parts from :func:`family_parts` when it is first read,

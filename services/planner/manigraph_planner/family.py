@@ -45,14 +45,14 @@ class PlannerFamily:
     """One task family's planner parts.
 
     Args:
-        name: the family (``blocks``, ``dishwasher``), as in the sim's and skills' registries.
+        name: the family (its entry point's name), as in the sim's and skills' registries.
         heads: the network heads its learned policies have (``ModelConfig.heads``, a
             :data:`~manigraph_planner.gnn.models.config.HEADS` entry).
         experts: the policy names of its experts (registered in ``POLICIES`` by its expert
             module, which its part imports); :meth:`expert` picks the one that demonstrates
             an episode (``manigraph demos``).
-        expert_of: which of ``experts`` demonstrates an episode request (the dishwasher's:
-            the request's preference); None: the first.
+        expert_of: which of ``experts`` demonstrates an episode request (e.g. by an option
+            of the request); None: the first.
         matches: whether a scene is this family's (what the scene itself shows).
         fallback: the family of every scene no other family matches (one family: blocks, whose
             object-goal heads are the paper's and any task file's).

@@ -7,7 +7,7 @@ package's ``manigraph.families`` entry point (:mod:`manigraph_shared.family_pack
 :data:`FAMILIES` registers every installed one, by name, when it is first read. The runner
 asks the registry rather than which family a scene is:
 
-* **actions** of its own, beside PickAndPlace (the dishwasher's tray actions):
+* **actions** of its own, beside PickAndPlace (a fixture it opens or closes):
   :meth:`SkillFamily.takes` says whether an action is one, ``run_action`` runs it;
 * **rules** a robot whose world refuses nothing checks before moving
   (``check_move``, for a driver with ``checks_dish_rules``);
@@ -48,7 +48,7 @@ class SkillFamily:
     """One task family's skill extensions.
 
     Args:
-        name: the family (``blocks``, ``dishwasher``), as in the sim's and planner's.
+        name: the family (its entry point's name), as in the sim's and planner's.
         matches: whether a scene is this family's (what the scene itself shows).
         fallback: the family of every scene no other matches (blocks).
         takes: whether an action is one of this family's own (not a PickAndPlace).
@@ -123,6 +123,6 @@ def family_of(scene: Scene) -> SkillFamily:
 
 
 def family_taking(action: Action) -> SkillFamily | None:
-    """The family whose own action ``action`` is (a tray action: the dishwasher's), or None:
+    """The family whose own action ``action`` is (an action of its own), or None:
     a PickAndPlace."""
     return next((family for family in families() if family.takes(action)), None)

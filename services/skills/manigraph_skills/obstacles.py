@@ -4,7 +4,7 @@ Every visible object is a box of its size at its pose, except the one being move
 between the fingers). Objects that *support* the grasp or the goal (directly under the moved
 object, or under the goal it is set down on) are marked: the hand and fingers may come close
 to them, the arm links may not. A task family's fixtures that are not scene objects
-(a box's walls under its lid goal, a dishwasher rack's floor and handle) are the family's own
+(a box's walls under its lid goal, a rack's floor and handle) are the family's own
 obstacles (``SkillFamily.obstacles``). The table is the collision model's own
 (``motion.collision``).
 """

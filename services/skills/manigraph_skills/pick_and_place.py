@@ -1,6 +1,6 @@
 """PickAndPlace(object, goal): the primitive the policy's decisions are executed with. An
-action a task family owns (the dishwasher's tray actions) is run by that family's extension
-(``families``: ``SkillFamily.run_action``), and an ``orientation_index`` turns the object to
+action a task family owns (one that is not a pick and place) is run by that family's extension
+(``family``: ``SkillFamily.run_action``), and an ``orientation_index`` turns the object to
 that orientation as it is placed. Where the object is set down, and which rules a robot
 whose world refuses nothing checks first, are the scene's family's."""
 

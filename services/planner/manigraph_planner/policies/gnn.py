@@ -250,7 +250,7 @@ def _compatible(object_codes: Tensor, goal_codes: Tensor, admitted: Tensor | Non
 def load_gnn_policy(path: Path) -> Policy:
     """The ``.pt`` policy file loader (registered in ``policies.base.POLICY_FILE_LOADERS``):
     a :class:`GNNPolicy`, or the policy of the family whose heads the checkpoint has
-    (``PlannerFamily.policy``: the dishwasher's for ``dishwasher`` heads).
+    (``PlannerFamily.policy``).
     Its network holds the weights for the dense path only: serving never imports PyG (the
     explainer rebuilds the message-passing network it needs)."""
     net, info = load_checkpoint(path, message_passing=False)

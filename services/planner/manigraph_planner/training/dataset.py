@@ -5,7 +5,7 @@ data: ``manigraph demos`` output, the demonstration page's (``manigraph demo-ui`
 recorded with ``manigraph up --record``; so is a LeRobot dataset that ``manigraph export``
 wrote (``training.sources`` says which reader takes a path). An action is paired with the
 scene whose ``episode_id`` and ``sequence`` it names (``scene_sequence``). Decisions on a
-scene of a family with heads of its own (``families.family_of``: the dishwasher's four) are
+scene of a family with heads of its own (``family.family_of``) are
 its trainer's and are skipped here; :func:`count_heads` says which kind a log holds.
 
 What a node's features are is learned from the paired scenes too

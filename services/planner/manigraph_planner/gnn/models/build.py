@@ -1,6 +1,6 @@
 """The network a :class:`ModelConfig` asks for, by its heads: the block policy's
-:class:`PolicyNet`, or the network its task family registers for its heads (the
-dishwasher's four heads, an ensemble of them)."""
+:class:`PolicyNet`, or the network its task family registers for its heads (heads of its
+own, an ensemble of them)."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ __all__ = ["policy_net_for", "with_message_passing"]
 
 def policy_net_for(config: ModelConfig, message_passing: bool = True) -> PolicyNet:
     """The network class ``config`` asks for: the paper's :class:`PolicyNet`, or the network
-    of the family whose heads ``config`` has (``PlannerFamily.network``: the dishwasher's
-    four-headed network or an ensemble of them). ``message_passing``: see :class:`PolicyNet`."""
+    of the family whose heads ``config`` has (``PlannerFamily.network``: a network with heads
+    of its own, or an ensemble of them). ``message_passing``: see :class:`PolicyNet`."""
     network = family_for_heads(config.heads).part("network")
     if network is None:
         return PolicyNet(config, message_passing)

@@ -24,7 +24,7 @@ DECODERS = ("nodes", "pairs")
 #: The policy's output heads -> the feature spec its graph states are built with.
 #: ``object-goal``: the paper's node logits (object and goal), over the paper's five columns
 #: (or a task file's, stamped in the checkpoint). A task family with heads of its own
-#: (``PlannerFamily.heads``, e.g. the dishwasher's four) points at its package's spec,
+#: (``PlannerFamily.heads``) points at its package's spec,
 #: imported when first used.
 #: The families' heads are added when it is first read.
 
@@ -59,11 +59,10 @@ class ModelConfig:
             layer. All ones (the default) feeds the paper's raw features; e.g.
             ``(1, 10, 10, 10, 1)`` would express positions in decimetres. Recorded in the
             checkpoint so inference scales exactly like training. Default: all ones.
-        heads: ``object-goal`` (the block tasks) or a family's own (``dishwasher``;
-            :data:`HEADS`).
+        heads: ``object-goal`` (the block tasks) or a family's own (:data:`HEADS`).
         ensemble: independently trained members whose logits are averaged (heads of a
-            family whose networks may be ensembles: ``dishwasher``; 1, the default, is one
-            plain network).
+            family whose networks may be ensembles, ``PlannerFamily.ensembles``; 1, the
+            default, is one plain network).
         features: a task's feature spec (:meth:`FeatureSpec.for_task`, ``object-goal`` heads
             only); None, the heads' own. Not in :meth:`to_dict`: the checkpoint stamps it as
             its ``feature_spec`` and :meth:`from_dict` takes it back from there.
