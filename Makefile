@@ -34,6 +34,7 @@ lint: install  ## ruff, mypy, and this branch's commit subjects (CONTRIBUTING.md
 	$(RUN) ruff format --check .
 	$(RUN) mypy shared/manigraph_shared tools/manigraph_tools lab/manigraph_lab \
 		services/sim/manigraph_sim services/planner/manigraph_planner \
+		training/manigraph_training \
 		services/skills/manigraph_skills services/perception/manigraph_perception \
 		testkit/manigraph_testkit families/blocks/manigraph_blocks \
 		families/dishwasher/manigraph_dishwasher

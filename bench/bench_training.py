@@ -23,9 +23,9 @@ import torch
 
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
-from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
-from manigraph_planner.training.dataset import load_demonstrations
-from manigraph_planner.training.trainer import TrainConfig, train
+from manigraph_training.batch_layouts import BATCH_LAYOUTS
+from manigraph_training.dataset import load_demonstrations
+from manigraph_training.trainer import TrainConfig, train
 
 LIMIT_SECONDS = 60.0
 #: docs/benchmarks.md of the last release (2026-11-24, 2 threads, quiet machine).

@@ -150,8 +150,8 @@ def run_study(spec: StudySpec, out: Path, progress: TextIO | None = None) -> str
     per cell."""
     from manigraph_planner.policies import load_policy
     from manigraph_planner.policies.gnn import GNNPolicy
-    from manigraph_planner.training.dataset import load_demonstrations
-    from manigraph_planner.training.trainer import TrainConfig, train
+    from manigraph_training.dataset import load_demonstrations
+    from manigraph_training.trainer import TrainConfig, train
 
     out.mkdir(parents=True, exist_ok=True)
     cells: dict[str, dict[str, object]] = {}

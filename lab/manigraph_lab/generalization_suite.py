@@ -74,8 +74,8 @@ def train_cell(demos: bytes, arch: str, seed: int, epochs: int) -> bytes:
     """One (architecture, seed) policy trained on ``demos`` (an MCAP file's bytes); the
     checkpoint file's bytes. Seeded by ``seed`` alone, wherever it runs."""
     from manigraph_planner.gnn import save_checkpoint
-    from manigraph_planner.training.dataset import load_demonstrations
-    from manigraph_planner.training.trainer import TrainConfig, train
+    from manigraph_training.dataset import load_demonstrations
+    from manigraph_training.trainer import TrainConfig, train
 
     with tempfile.TemporaryDirectory(prefix="manigraph-train-") as tmp:
         demo_path = Path(tmp) / "demos.mcap"

@@ -13,9 +13,9 @@ import typing
 from pathlib import Path
 from typing import Any
 
-from manigraph_planner.training.recipes import augmentation_for
-from manigraph_planner.training.trainer import TrainConfig
 from manigraph_shared.errors import ConfigError, PolicyError
+from manigraph_training.recipes import augmentation_for
+from manigraph_training.trainer import TrainConfig
 
 
 def recipe_of(training_config: dict[str, Any], source: str, device: str = "cpu") -> TrainConfig:

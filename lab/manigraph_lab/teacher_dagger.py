@@ -32,12 +32,12 @@ from manigraph_planner.policies import Decision, Policy, load_policy
 from manigraph_planner.policies.gnn import GNNPolicy
 from manigraph_planner.policies.teacher_rules import with_rules
 from manigraph_planner.threads import use_threads
-from manigraph_planner.training.dataset import load_demonstrations, read_decisions
-from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.demonstrations import DemonstrationLog
 from manigraph_shared.errors import ConfigError, DrawRefused, LogError, ManigraphError, PolicyError
 from manigraph_shared.messages import Action, EpisodeRequest, Scene
 from manigraph_sim.geometric.backend import GeometricBackend
+from manigraph_training.dataset import load_demonstrations, read_decisions
+from manigraph_training.trainer import TrainConfig, train
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,7 @@
 A demonstration is one episode: its start event, then for every step the ``Scene`` the
 decision was made on and the ``Action`` (whose ``scene_sequence`` names that scene), then its
 end event. ``manigraph train`` pairs each action with its scene
-(``manigraph_planner.training.dataset``), so a log written here, a log of ``manigraph demos``
+(``manigraph_training.dataset``), so a log written here, a log of ``manigraph demos``
 and a run recorded with ``manigraph up --record`` are all training data.
 
 Each demonstration is flushed to disk as a whole once written, so a process killed later

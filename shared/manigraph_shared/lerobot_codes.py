@@ -1,7 +1,7 @@
 """The codes of a manigraph LeRobot dataset, stated once for its writer and its reader.
 
 ``manigraph export --format lerobot`` (``manigraph_tools.interop``) writes them and
-``manigraph train DIR`` (``manigraph_planner.training.lerobot_source``) reads them back; tools
+``manigraph train DIR`` (``manigraph_training.lerobot_source``) reads them back; tools
 and services do not import each other, so what both must agree on lives here
 (docs/interop.md, "LeRobot datasets").
 """

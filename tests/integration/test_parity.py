@@ -11,11 +11,11 @@ from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.gnn import save_checkpoint
 from manigraph_planner.policies import load_policy
-from manigraph_planner.training.dataset import load_demonstrations
-from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Action, EpisodeEvent, EpisodeRequest
 from manigraph_testkit.testing import run_up
+from manigraph_training.dataset import load_demonstrations
+from manigraph_training.trainer import TrainConfig, train
 
 pytestmark = pytest.mark.integration
 

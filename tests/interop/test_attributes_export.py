@@ -3,11 +3,11 @@ scene markers draw an object in its named colour and label goals with what they 
 
 from __future__ import annotations
 
-from manigraph_planner.training.lerobot_source import frame_scene
 from manigraph_shared.colours import PALETTE
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
 from manigraph_tools.interop.lerobot_export import scene_nodes
 from manigraph_tools.interop.ros2_messages import scene_markers
+from manigraph_training.lerobot_source import frame_scene
 
 BLOCK = Vector3(x=0.04, y=0.04, z=0.04)
 

@@ -25,11 +25,11 @@ from manigraph_dishwasher.planner.training import load_dish_demonstrations
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
 from manigraph_planner.policies.gnn import GNNPolicy
-from manigraph_planner.training.dataset import count_heads, load_demonstrations
 from manigraph_shared.errors import CONFIG_EXIT_CODE, ConfigError
 from manigraph_shared.mcap_log import read_log
 from manigraph_shared.messages import Scene
 from manigraph_tools.interop.lerobot_export import export_lerobot
+from manigraph_training.dataset import count_heads, load_demonstrations
 
 
 @pytest.fixture(scope="module")

@@ -315,7 +315,7 @@ def test_clicks_from_the_page_are_checked_field_by_field() -> None:
 
 
 def test_a_demonstration_log_is_training_data(tmp_path: Path) -> None:
-    from manigraph_planner.training.dataset import load_demonstrations  # imports torch
+    from manigraph_training.dataset import load_demonstrations  # imports torch
 
     world = stack_world()
     session, _ = session_on(world)

@@ -10,15 +10,15 @@ import torch
 from manigraph_blocks.planner.augment import Augmentation
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
-from manigraph_planner.training.augmented_draws import (
+from manigraph_training.augmented_draws import (
     AugmentedDraws,
     InlineDraws,
     PackedDraw,
     draw_epochs,
 )
-from manigraph_planner.training.dataset import Demonstrations, Sample, load_demonstrations
-from manigraph_planner.training.recipes import augmentation_for
-from manigraph_planner.training.trainer import TrainConfig, train
+from manigraph_training.dataset import Demonstrations, Sample, load_demonstrations
+from manigraph_training.recipes import augmentation_for
+from manigraph_training.trainer import TrainConfig, train
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +58,7 @@ def test_a_packed_draw_unpacks_to_the_same_samples(demos: Demonstrations) -> Non
 def test_training_with_background_draws_equals_training_with_inline_draws(
     demos: Demonstrations, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from manigraph_planner.training import trainer
+    from manigraph_training import trainer
 
     config = TrainConfig(
         architecture="sage",

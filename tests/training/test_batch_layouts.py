@@ -10,11 +10,11 @@ import torch
 from manigraph_blocks.planner.augment import Augmentation
 from manigraph_planner.gnn.features import scene_to_graph
 from manigraph_planner.gnn.models import ARCHITECTURES, ModelConfig, PolicyNet
-from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
-from manigraph_planner.training.dataset import Demonstrations, Sample
-from manigraph_planner.training.padded_batch import PackedSamples, PaddedBatch, size_groups
-from manigraph_planner.training.trainer import TrainConfig, accuracy, train
 from manigraph_shared.messages import Scene
+from manigraph_training.batch_layouts import BATCH_LAYOUTS
+from manigraph_training.dataset import Demonstrations, Sample
+from manigraph_training.padded_batch import PackedSamples, PaddedBatch, size_groups
+from manigraph_training.trainer import TrainConfig, accuracy, train
 
 ARCHS = sorted(ARCHITECTURES)
 

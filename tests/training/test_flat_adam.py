@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from manigraph_planner.gnn.models import ARCHITECTURES, ModelConfig, PolicyNet
-from manigraph_planner.training.flat_adam import FlatAdam
+from manigraph_training.flat_adam import FlatAdam
 
 
 def twin_nets(arch: str) -> tuple[PolicyNet, PolicyNet]:

@@ -13,10 +13,10 @@ from manigraph_planner.gnn.checkpoint import load_checkpoint
 from manigraph_planner.gnn.features import FeatureSpec, scene_to_graph
 from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_planner.policies.gnn import GNNPolicy
-from manigraph_planner.training.dataset import Demonstrations, Sample
-from manigraph_planner.training.recipes import augmentation_for
-from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
+from manigraph_training.dataset import Demonstrations, Sample
+from manigraph_training.recipes import augmentation_for
+from manigraph_training.trainer import TrainConfig, train
 
 SIZE = Vector3(x=0.04, y=0.04, z=0.04)
 CHECKPOINTS = Path(__file__).resolve().parents[3] / "checkpoints"

@@ -6,9 +6,9 @@ import pytest
 
 from manigraph_blocks.planner.recipes import GATED_MAX_LEVELS, RECIPES
 from manigraph_planner.gnn.models import ARCHITECTURES
-from manigraph_planner.training.recipes import augmentation_for, recipes, resample_every_for
-from manigraph_planner.training.trainer import TrainConfig
 from manigraph_shared.errors import ConfigError
+from manigraph_training.recipes import augmentation_for, recipes, resample_every_for
+from manigraph_training.trainer import TrainConfig
 
 
 def test_every_architecture_has_a_recipe() -> None:

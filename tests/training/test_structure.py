@@ -24,8 +24,8 @@ from manigraph_blocks.planner.structure import (
 )
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
-from manigraph_planner.training.dataset import Sample, load_demonstrations
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
+from manigraph_training.dataset import Sample, load_demonstrations
 
 GEOMETRY = SceneGeometry()
 SIZES = {COVER: (0.16, 0.16, 0.01), BLOCK: (0.04, 0.04, 0.04)}

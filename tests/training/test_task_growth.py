@@ -10,8 +10,8 @@ from manigraph_blocks.planner.augment import Augmentation
 from manigraph_blocks.planner.task_growth import grow_task_graph
 from manigraph_planner.gnn.features import FeatureSpec, scene_to_graph
 from manigraph_planner.gnn.task_features import TaskFeatures
-from manigraph_planner.training.dataset import Sample
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
+from manigraph_training.dataset import Sample
 
 
 def bins_scene() -> Scene:

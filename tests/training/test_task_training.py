@@ -7,10 +7,10 @@ import torch
 from manigraph_blocks.planner.augment import Augmentation
 from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec, scene_to_graph
 from manigraph_planner.gnn.task_features import TaskFeatures
-from manigraph_planner.training.dataset import Demonstrations, Sample
-from manigraph_planner.training.recipes import augmentation_for
-from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
+from manigraph_training.dataset import Demonstrations, Sample
+from manigraph_training.recipes import augmentation_for
+from manigraph_training.trainer import TrainConfig, train
 
 
 def colour_scene() -> Scene:

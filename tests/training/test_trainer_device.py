@@ -9,9 +9,9 @@ import torch
 
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
-from manigraph_planner.training.dataset import load_demonstrations
-from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.errors import ConfigError
+from manigraph_training.dataset import load_demonstrations
+from manigraph_training.trainer import TrainConfig, train
 
 
 @pytest.mark.parametrize("device", ["gpu", "cuda:x", "cpu:0"])

@@ -13,11 +13,11 @@ from manigraph_lab.evaluate import EvalSpec, evaluate
 from manigraph_planner.gnn import load_checkpoint, save_checkpoint
 from manigraph_planner.policies import load_policy
 from manigraph_planner.policies.gnn import GNNPolicy
-from manigraph_planner.training.dataset import load_demonstrations
-from manigraph_planner.training.trainer import TrainConfig, train
 from manigraph_shared.errors import LogError
 from manigraph_shared.mcap_log import McapLogWriter
 from manigraph_shared.messages import Action
+from manigraph_training.dataset import load_demonstrations
+from manigraph_training.trainer import TrainConfig, train
 
 
 @pytest.fixture(scope="module")

@@ -23,8 +23,8 @@ import torch
 from torch import Tensor
 from torch.utils.data import DataLoader, IterableDataset
 
-from manigraph_planner.training.dataset import Sample
-from manigraph_planner.training.recipes import Augmenter
+from manigraph_training.dataset import Sample
+from manigraph_training.recipes import Augmenter
 
 __all__ = ["AugmentedDraws", "Draws", "InlineDraws", "PackedDraw", "draw_epochs"]
 

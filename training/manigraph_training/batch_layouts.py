@@ -34,9 +34,9 @@ from manigraph_planner.gnn.selection import (
     select,
     selection_loss,
 )
-from manigraph_planner.training.dataset import Sample
-from manigraph_planner.training.padded_batch import PackedSamples, PaddedBatch, size_groups
 from manigraph_shared.registry import Registry
+from manigraph_training.dataset import Sample
+from manigraph_training.padded_batch import PackedSamples, PaddedBatch, size_groups
 
 __all__ = ["BATCH_LAYOUTS", "BatchLayout", "PaddedLayout", "PygLayout", "pyg_batch"]
 
@@ -194,7 +194,7 @@ def pyg_batch(samples: list[Sample]) -> Batch:
     )
 
 
-#: Batch layouts by name; :class:`~manigraph_planner.training.trainer.TrainConfig` names one.
+#: Batch layouts by name; :class:`~manigraph_training.trainer.TrainConfig` names one.
 BATCH_LAYOUTS: Registry[BatchLayout] = Registry("batch_layout")
 for _layout in (PaddedLayout(), PygLayout()):
     BATCH_LAYOUTS.add(_layout.name, _layout)

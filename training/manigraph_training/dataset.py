@@ -28,9 +28,9 @@ from manigraph_planner.family import family_of
 from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec, GraphState, scene_to_graph
 from manigraph_planner.gnn.models.config import HEADS
 from manigraph_planner.gnn.task_features import TaskFeatures
-from manigraph_planner.training.sources import read_source
 from manigraph_shared.errors import LogError
 from manigraph_shared.messages import Action, Scene
+from manigraph_training.sources import read_source
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ import torch
 from torch import Tensor
 from torch.nn.utils.rnn import pad_sequence
 
-from manigraph_planner.training.dataset import Sample, stack_targets
+from manigraph_training.dataset import Sample, stack_targets
 
 __all__ = ["PackedSamples", "PaddedBatch", "size_groups"]
 

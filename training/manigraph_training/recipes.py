@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     import torch
 
     from manigraph_planner.gnn.features import FeatureSpec
-    from manigraph_planner.training.dataset import Sample
+    from manigraph_training.dataset import Sample
 
 __all__ = ["GENERIC_HEADS", "Augmenter", "augmentation_for", "recipes", "resample_every_for"]
 

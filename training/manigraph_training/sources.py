@@ -52,12 +52,12 @@ def _is_lerobot(path: Path) -> bool:
 SOURCES: Registry[DemoSource] = Registry("demonstration source")
 SOURCES.add(
     "lerobot",
-    DemoSource(_is_lerobot, "manigraph_planner.training.lerobot_source:read_lerobot"),
+    DemoSource(_is_lerobot, "manigraph_training.lerobot_source:read_lerobot"),
     help="a LeRobot v3 dataset written by manigraph export --format lerobot",
 )
 SOURCES.add(
     "mcap",
-    DemoSource(lambda _path: True, "manigraph_planner.training.sources:read_mcap"),
+    DemoSource(lambda _path: True, "manigraph_training.sources:read_mcap"),
     help="an MCAP log with scenes and actions",
 )
 

@@ -14,19 +14,19 @@ import torch
 
 from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
-from manigraph_planner.training.augmented_draws import (
+from manigraph_shared.errors import ConfigError
+from manigraph_shared.progress import Progress
+from manigraph_training.augmented_draws import (
     AugmentedDraws,
     Draws,
     InlineDraws,
     draw_epochs,
 )
-from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
-from manigraph_planner.training.dataset import Demonstrations, Sample
-from manigraph_planner.training.flat_adam import FlatAdam
-from manigraph_planner.training.padded_batch import PackedSamples, PaddedBatch
-from manigraph_planner.training.recipes import Augmenter, augmentation_for, resample_every_for
-from manigraph_shared.errors import ConfigError
-from manigraph_shared.progress import Progress
+from manigraph_training.batch_layouts import BATCH_LAYOUTS
+from manigraph_training.dataset import Demonstrations, Sample
+from manigraph_training.flat_adam import FlatAdam
+from manigraph_training.padded_batch import PackedSamples, PaddedBatch
+from manigraph_training.recipes import Augmenter, augmentation_for, resample_every_for
 
 #: Called after every epoch with the epoch (from 1) and its mean training loss.
 EpochCallback = Callable[[int, float], None]

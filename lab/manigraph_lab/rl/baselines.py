@@ -40,9 +40,9 @@ from manigraph_lab.rl.policies import (
 )
 from manigraph_planner.gnn.models import ARCHITECTURES
 from manigraph_planner.policies.base import Policy
-from manigraph_planner.training.dataset import Sample
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.registry import Registry
+from manigraph_training.dataset import Sample
 
 __all__ = ["BASELINES", "Baseline", "PPOSettings", "Stage", "register_baseline", "train_stage"]
 

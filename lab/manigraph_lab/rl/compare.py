@@ -29,8 +29,8 @@ from tqdm import tqdm
 from manigraph_lab.evaluate import EvalSpec, evaluate
 from manigraph_lab.rl.baselines import BASELINES, Baseline, PPOSettings, Stage, train_stage
 from manigraph_planner.policies.base import Policy
-from manigraph_planner.training.dataset import Sample
 from manigraph_shared.errors import ConfigError
+from manigraph_training.dataset import Sample
 
 __all__ = ["CompareSpec", "RunStore", "run_comparison"]
 
@@ -208,7 +208,7 @@ def demo_source(out: Path) -> Callable[[], Sequence[Sample]]:
     def load() -> tuple[Sample, ...]:
         from manigraph_lab.demo_recording import DemoProtocol, record_demos
         from manigraph_planner.policies import load_policy
-        from manigraph_planner.training.dataset import load_demonstrations
+        from manigraph_training.dataset import load_demonstrations
 
         path = out / "demos.mcap"
         if not path.is_file():

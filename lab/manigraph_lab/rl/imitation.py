@@ -24,9 +24,9 @@ from torch import Tensor
 
 from manigraph_planner.gnn.models import PolicyNet
 from manigraph_planner.gnn.selection import padded_selection_loss
-from manigraph_planner.training.dataset import Sample
-from manigraph_planner.training.padded_batch import PaddedBatch
 from manigraph_shared.errors import ConfigError
+from manigraph_training.dataset import Sample
+from manigraph_training.padded_batch import PaddedBatch
 
 __all__ = ["ImitationAdam", "ImitationTerm"]
 
@@ -36,7 +36,7 @@ class ImitationTerm:
 
     Args:
         net: the policy's GNN (its parameters receive the gradient).
-        samples: expert decisions (:func:`~manigraph_planner.training.dataset.load_demonstrations`).
+        samples: expert decisions (:func:`~manigraph_training.dataset.load_demonstrations`).
         weight: :math:`\lambda_{IL}`, >= 0.
         batch_size: samples per gradient step.
         seed: seed of the minibatch draws.

@@ -12,8 +12,8 @@ from manigraph_lab.rl.baselines import BASELINES, PPOSettings, Stage, load_model
 from manigraph_lab.rl.imitation import ImitationAdam, ImitationTerm
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet
 from manigraph_planner.policies import load_policy
-from manigraph_planner.training.dataset import Sample, load_demonstrations
 from manigraph_shared.errors import ConfigError
+from manigraph_training.dataset import Sample, load_demonstrations
 
 TINY = PPOSettings(
     steps_per_stage=16, n_steps=16, batch_size=8, n_epochs=1, blocks=(2, 3), hidden_channels=8

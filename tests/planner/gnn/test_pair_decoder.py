@@ -17,9 +17,9 @@ from manigraph_planner.gnn.pair_decoder import (
     padded_pair_select,
     padded_valid_pairs,
 )
-from manigraph_planner.training.batch_layouts import BATCH_LAYOUTS
-from manigraph_planner.training.dataset import Sample
 from manigraph_shared.errors import ConfigError
+from manigraph_training.batch_layouts import BATCH_LAYOUTS
+from manigraph_training.dataset import Sample
 
 BLOCK, BLOCK_GOAL, COVER, COVER_GOAL = 1.0, 2.0, 0.0, 3.0
 

@@ -89,8 +89,8 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _heads(args: argparse.Namespace) -> str:
-    from manigraph_planner.training.dataset import count_heads
     from manigraph_shared.errors import ConfigError
+    from manigraph_training.dataset import count_heads
 
     if args.heads != "auto":
         return str(args.heads)
@@ -112,9 +112,9 @@ def _run(args: argparse.Namespace) -> int:
     if own_command is not None:  # a family with a training loop of its own (the dishwasher)
         return int(own_command(args))
     from manigraph_planner.gnn import save_checkpoint
-    from manigraph_planner.training.dataset import load_demonstrations
-    from manigraph_planner.training.recipes import augmentation_for
-    from manigraph_planner.training.trainer import TrainConfig, train
+    from manigraph_training.dataset import load_demonstrations
+    from manigraph_training.recipes import augmentation_for
+    from manigraph_training.trainer import TrainConfig, train
 
     # TrainConfig checks the architecture (ModelConfig) and takes the defaults of its recipe
     # (training.recipes, the block family's); each raises a ConfigError naming the field.

@@ -86,7 +86,7 @@ twice the objects (docs/training.md).
 
 Node order is not augmented: every architecture is permutation-equivariant (tested).
 Why each step keeps the label is argued in :mod:`~manigraph_blocks.planner.structure` and
-checked against the expert in ``tests/planner/training/test_structure.py``.
+checked against the expert in ``tests/training/test_structure.py``.
 """
 
 from __future__ import annotations
@@ -114,7 +114,7 @@ from manigraph_blocks.planner.structure import (
 from manigraph_blocks.planner.task_growth import grow_task_graph
 from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_planner.gnn.goal_support import READY_COLUMN
-from manigraph_planner.training.dataset import Sample
+from manigraph_training.dataset import Sample
 
 #: The probabilities of the structural steps 1-4 (see the module docstring).
 STRUCTURAL_PROBABILITIES = (

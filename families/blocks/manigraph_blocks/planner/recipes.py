@@ -1,7 +1,7 @@
 """The per-architecture training recipes: which augmentation, how many copies, how often drawn.
 
 Registered by architecture name in :data:`RECIPES` (the block family's ``PlannerFamily.recipe``,
-which the generic trainer draws with: ``manigraph_planner.training.recipes``), each with its
+which the generic trainer draws with: ``manigraph_training.recipes``), each with its
 options (copies per sample, epochs between fresh draws) whose defaults are that
 architecture's; ``manigraph train --copies/--resample-every`` override them. Why each
 recipe is what it is: the module docstring of :mod:`~manigraph_blocks.planner.augment`. A new

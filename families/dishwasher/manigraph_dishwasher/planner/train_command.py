@@ -7,9 +7,9 @@ from __future__ import annotations
 import argparse
 import json
 
-from manigraph_planner.train_command import RUNS
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.results import checkpoint_field, rounded
+from manigraph_training.commands.train import RUNS
 
 
 def train_from_args(args: argparse.Namespace) -> int:

@@ -1,7 +1,7 @@
 """Imitation for the dishwasher's four-headed policy: the sum of four cross-entropies.
 
 Samples come from any MCAP log with scenes and actions (``manigraph demos --task dishwasher``
-or a recorded run), paired as in :mod:`~manigraph_planner.training.dataset`. The loss of one
+or a recorded run), paired as in :mod:`~manigraph_training.dataset`. The loss of one
 decision is
 
 .. math::
@@ -39,9 +39,9 @@ from manigraph_dishwasher.planner.features import (
 )
 from manigraph_dishwasher.planner.net import DishPolicyNet
 from manigraph_planner.gnn.models import ModelConfig
-from manigraph_planner.training.dataset import read_decisions
 from manigraph_shared.errors import ConfigError, LogError
 from manigraph_shared.messages import TrayAction
+from manigraph_training.dataset import read_decisions
 
 __all__ = [
     "DishSample",

@@ -34,6 +34,7 @@ from typing import Any
 import torch
 from torch import Tensor
 
+from manigraph_planner.family import family_of
 from manigraph_planner.gnn.goal_support import ready_goals
 from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_shared.errors import PolicyError
@@ -209,7 +210,7 @@ def scene_to_graph(scene: Scene, spec: FeatureSpec | None = None) -> GraphState:
         if entity.category not in _OBJECT_CODE and entity.category not in _GOAL_CODE:
             raise PolicyError(
                 f"scene: '{entity.id}' is a {entity.category}; this policy knows blocks and "
-                "covers (a dishwasher scene needs a checkpoint with dishwasher heads)"
+                f"covers{_needs_heads(scene)}"
             )
     for obj in scene.objects:
         if obj.visible:
@@ -283,3 +284,12 @@ def _ids(given: Sequence[str] | None, prefix: str, count: int, name: str) -> lis
     if len(given) != count:
         raise ValueError(f"{name}: expected {count} ids, got {len(given)}")
     return list(given)
+
+
+def _needs_heads(scene: Scene) -> str:
+    """What a scene of another family needs, by the registry: `` (a <family> scene needs a
+    checkpoint with <heads> heads)``, or nothing for a scene no family claims."""
+    family = family_of(scene)
+    if family.fallback:
+        return ""
+    return f" (a {family.name} scene needs a checkpoint with {family.heads} heads)"

@@ -4,7 +4,7 @@ Twenty box packing/unpacking demonstrations with K = 3, 4 show towers of at most
 one box and one storage place. Two edits of a demonstrated graph show the network scenes
 like the ones it is tested on, and **never change the expert's choice** (each argued below
 from the expert's three rules in :mod:`manigraph_blocks.planner.expert`, and checked by
-``tests/planner/training/test_structure.py`` against the expert itself):
+``tests/training/test_structure.py`` against the expert itself):
 
 * **Tower extension.** Every free-standing source tower (a column of blocks in no goal, away
   from any box) gets the same number :math:`m` of extra blocks slid in at its bottom, and

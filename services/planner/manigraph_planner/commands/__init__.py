@@ -1,0 +1,1 @@
+"""The planner's subcommand (``manigraph.commands`` entry point): ``commands/planner.py``."""

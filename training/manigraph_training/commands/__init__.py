@@ -1,0 +1,1 @@
+"""The training package's subcommand (``manigraph.commands`` entry point): ``commands/train.py``."""
