@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 
 from manigraph_blocks.skills.obstacles import box_walls
+from manigraph_dishwasher.rules import check_dish_move
 from manigraph_dishwasher.skills.obstacles import rack_obstacles
 from manigraph_dishwasher.skills.panda_turn_over import turn_dish
 from manigraph_dishwasher.skills.slot_room import set_down_point
 from manigraph_dishwasher.skills.trays import toggle_tray
-from manigraph_shared.dishwasher_rules import check_dish_move
 from manigraph_shared.messages import Action, EpisodeRequest, Scene, TrayAction
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_skills.family import FAMILIES, family_of, family_taking

@@ -17,7 +17,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
 
-PREFERENCES = ("top-bottom", "left-right")
+from manigraph_dishwasher.preference import Preference
+
+PREFERENCES = tuple(preference.value for preference in Preference)
 #: The paper's protocol: 5 demonstrations of 10 dishes, tested on 6, 8, 10 and 12.
 TRAIN_OBJECTS = 10
 TEST_OBJECTS = (6, 8, 10, 12)

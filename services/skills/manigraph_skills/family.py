@@ -10,7 +10,7 @@ asks the registry rather than which family a scene is:
 * **actions** of its own, beside PickAndPlace (a fixture it opens or closes):
   :meth:`SkillFamily.takes` says whether an action is one, ``run_action`` runs it;
 * **rules** a robot whose world refuses nothing checks before moving
-  (``check_move``, for a driver with ``checks_dish_rules``);
+  (``check_move``, for a driver with ``checks_family_rules``);
 * **where to set an object down** in a goal (``set_down_point``; default: the goal's point);
 * **obstacles** of its fixtures the arm must avoid (box walls, rack floors);
 * **turn-over**: the manoeuvre a driver with a real arm tilts an object over with, composed
@@ -54,7 +54,7 @@ class SkillFamily:
         takes: whether an action is one of this family's own (not a PickAndPlace).
         run_action: ``(runner, action, scene, status) -> None``, runs such an action.
         check_move: ``(scene, item, goal) -> None``, raises ``SkillError`` for a move the
-            family's rules refuse (checked for a driver with ``checks_dish_rules``).
+            family's rules refuse (checked for a driver with ``checks_family_rules``).
         set_down_point: ``(scene, item, goal) -> Vector3``; None: the goal's position.
         obstacles: ``(scene, moving, at) -> list[Obstacle]`` of its fixtures.
         turn_over: ``(driver, decision_id, item, wanted, scene) -> SceneObject``, the

@@ -70,7 +70,7 @@ class PickAndPlace:
                 turn = orientation(action.orientation_index)
             family = family_of(scene)
             rules = family.part("check_move")
-            if rules is not None and self.driver.checks_dish_rules:
+            if rules is not None and self.driver.checks_family_rules:
                 rules(scene, item, goal)
             if action.orientation_index is not None:
                 self.driver.check_orientation(item.id, item.orientation, turn)

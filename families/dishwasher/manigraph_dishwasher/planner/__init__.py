@@ -1,26 +1,24 @@
 """The dishwasher family's planner (docs/dishwasher.md): its expert (:mod:`.expert`,
 registered as ``dishwasher-top-bottom`` and ``dishwasher-left-right``), its graph state
 (:mod:`.features`), its four-headed network and ensemble (:mod:`.net`, :mod:`.ensemble`),
-the policy that decodes them (:mod:`.gnn_policy`) and their training (:mod:`.training`,
-:mod:`.augment`), declared below as one :class:`~manigraph_planner.family.PlannerFamily`.
+the policy that decodes them (:mod:`.gnn_policy`) and their training (the
+training part, ``manigraph_dishwasher.training``), declared below as one
+:class:`~manigraph_planner.family.PlannerFamily`.
 """
 
 from manigraph_dishwasher.planner import expert  # noqa: F401  (registers its experts)
+from manigraph_dishwasher.preference import Preference
+from manigraph_dishwasher.rules import is_dishwasher_scene
 from manigraph_planner.family import PlannerFamily
-from manigraph_shared.messages import EpisodeRequest, Scene
+from manigraph_shared.messages import EpisodeRequest
 
 
 def _expert_of(request: EpisodeRequest) -> str:
     """The expert of the request's preference (unset: top-bottom, as the sim lays it out; an
     unknown one is the sim's to refuse when the episode starts)."""
-    if request.preference == "left-right":
+    if request.preference == Preference.LEFT_RIGHT:
         return "dishwasher-left-right"
     return "dishwasher-top-bottom"
-
-
-def _has_racks(scene: Scene) -> bool:
-    """A dishwasher scene shows its racks (the trays the expert opens and closes)."""
-    return bool(scene.racks)
 
 
 #: This family's planner part (its package's ``manigraph.families`` entry names it).
@@ -29,11 +27,11 @@ FAMILY = PlannerFamily(
     heads="dishwasher",
     experts=("dishwasher-top-bottom", "dishwasher-left-right"),
     expert_of=_expert_of,
-    matches=_has_racks,
+    matches=is_dishwasher_scene,
     feature_spec="manigraph_dishwasher.planner.features:DISH_FEATURE_SPEC",
     network="manigraph_dishwasher.planner.ensemble:dish_network",
     policy="manigraph_dishwasher.planner.gnn_policy:DishwasherGNNPolicy",
-    train_command="manigraph_dishwasher.planner.train_command:train_from_args",
+    train_command="manigraph_dishwasher.training.train_command:train_from_args",
     ensembles=True,
     help="dishes into racks: object, goal, orientation and tray-action heads",
 )

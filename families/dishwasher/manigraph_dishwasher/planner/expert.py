@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import zlib
 
+from manigraph_dishwasher.preference import Preference, allows, preferred_rack
 from manigraph_planner.policies.base import Decision, Policy, register_policy
 from manigraph_shared.messages import (
     TRAY_RACKS,
@@ -26,13 +27,12 @@ _IN_SLOT = 0.02
 
 
 def preferred(preference: str, dish: ObjectCategory, slot: SceneGoal) -> bool:
-    """Whether ``preference`` lets ``dish`` stand in ``slot`` (the sim's rule, read off the
-    scene: a slot's rack, its category, and its side, left being y < 0)."""
-    if slot.category.value != dish.value:
-        return False
-    if preference == "top-bottom":
-        return slot.rack == (TOP if dish is ObjectCategory.BOWL else BOTTOM)
-    return slot.rack == TOP and (slot.position.y < 0) == (dish is ObjectCategory.PLATE)
+    """Whether ``preference`` lets ``dish`` stand in ``slot`` (the sim's rule,
+    :func:`~manigraph_dishwasher.preference.allows`, read off the scene: a slot's rack, its
+    category, and its side, left being y < 0)."""
+    return allows(
+        Preference(preference), dish.value, slot.category.value, slot.rack, slot.position.y < 0
+    )
 
 
 class DishwasherExpert(Policy):
@@ -45,7 +45,7 @@ class DishwasherExpert(Policy):
     3. the same for the bottom rack, then push it in. Then there is nothing left to do.
     """
 
-    preference: str
+    preference: Preference
 
     def decide(self, scene: Scene) -> Decision | None:
         racks = {rack.id: rack for rack in scene.racks}
@@ -71,9 +71,7 @@ class DishwasherExpert(Policy):
         return None
 
     def _rack_for(self, dish: ObjectCategory) -> str:
-        if self.preference == "top-bottom" and dish is ObjectCategory.PLATE:
-            return BOTTOM
-        return TOP
+        return preferred_rack(self.preference, dish.value)
 
     def _loaded(self, scene: Scene, dish: SceneObject) -> bool:
         for slot in scene.goals:
@@ -108,16 +106,16 @@ class DishwasherExpert(Policy):
 class TopBottomExpert(DishwasherExpert):
     """The expert for bowls in the top rack, plates in the bottom rack."""
 
-    preference = "top-bottom"
+    preference = Preference.TOP_BOTTOM
 
 
 @register_policy("dishwasher-left-right")
 class LeftRightExpert(DishwasherExpert):
     """The expert for everything on top: bowls on the right, plates on the left."""
 
-    preference = "left-right"
+    preference = Preference.LEFT_RIGHT
 
 
 def dishwasher_expert(preference: str) -> DishwasherExpert:
     """The expert of ``preference`` (``top-bottom`` or ``left-right``)."""
-    return TopBottomExpert() if preference == "top-bottom" else LeftRightExpert()
+    return TopBottomExpert() if preference == Preference.TOP_BOTTOM else LeftRightExpert()

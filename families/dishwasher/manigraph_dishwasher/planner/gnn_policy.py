@@ -15,6 +15,7 @@ from manigraph_dishwasher.planner.features import (
     dish_scene_to_graph,
 )
 from manigraph_dishwasher.planner.net import DishHeads, DishPolicyNet
+from manigraph_dishwasher.rules import rack_usable
 from manigraph_planner.gnn.checkpoint import CheckpointInfo
 from manigraph_planner.policies.base import Decision, Policy
 from manigraph_shared.messages import TRAY_RACKS, Scene, TrayAction
@@ -295,11 +296,6 @@ def _usable_slots(graph: DishGraph) -> torch.Tensor:
 
 
 def _rack_usable(graph: DishGraph, rack: str | None) -> bool:
-    """A slot of ``rack`` can be loaded now: the rack is out, and for the bottom rack the top
-    one is in (a slot without a rack is always usable)."""
-    if rack is None:
-        return True
-    top = TRAY_RACKS[TrayAction.TOGGLE_TOP]
-    if not graph.rack_open.get(rack, False):
-        return False
-    return rack == top or not graph.rack_open.get(top, False)
+    """A slot of ``rack`` can be loaded now, by the rack rule (``rules.rack_usable``: the rack
+    is out, and for the bottom rack the top one is in); a slot without a rack always."""
+    return rack is None or rack_usable(rack, graph.rack_open)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from manigraph_dishwasher.rules import check_rack_usable, check_slot
 from manigraph_dishwasher.sim.model import (
     Dish,
     DishwasherLayout,
@@ -25,7 +26,6 @@ from manigraph_dishwasher.sim.model import (
     Slot,
     allowed,
 )
-from manigraph_shared.dishwasher_rules import check_rack_usable, check_slot
 from manigraph_shared.errors import SkillError
 
 #: How far (metres) a release may be from a slot's dish position and still go into it.

@@ -8,21 +8,18 @@ the sim's ground floor (``world_model``) and nothing else.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import StrEnum
 from typing import Final
 
 import numpy as np
 
-from manigraph_shared.dishwasher_rules import BOTTOM_RACK, TOP_RACK
+from manigraph_dishwasher.preference import BOWL, PLATE, Preference, allows
+from manigraph_dishwasher.rules import BOTTOM_RACK, TOP_RACK
 from manigraph_shared.errors import TaskError
 from manigraph_shared.grasp_points import RACK_HANDLE_X
 from manigraph_shared.grasp_points import RACK_TRAVEL as RACK_PULL
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN
 from manigraph_sim.world_model import Layout
 
-PLATE: Final = "plate"
-BOWL: Final = "bowl"
-DISH_KINDS: Final = (PLATE, BOWL)
 #: Full extents of each dish in its own frame (x, y, z), metres: a plate is flat, a bowl deep.
 DISH_SIZE: Final = {PLATE: (0.08, 0.08, 0.015), BOWL: (0.06, 0.06, 0.035)}
 #: The orientation a dish must have in its slot (``manigraph_shared.orientations``).
@@ -39,25 +36,6 @@ SLOT_PITCH: Final = 0.055
 HANDLE_X: Final = RACK_HANDLE_X
 #: Most dishes an episode may hold: every preference must have a slot for each.
 MAX_DISHES: Final = SLOTS_PER_ROW
-
-
-class Preference(StrEnum):
-    """How the user wants the dishwasher loaded (what the five demonstrations show)."""
-
-    #: Bowls in the top rack, plates in the bottom rack.
-    TOP_BOTTOM = "top-bottom"
-    #: Everything in the top rack: bowls on the right (y > 0), plates on the left.
-    LEFT_RIGHT = "left-right"
-
-    @classmethod
-    def parse(cls, value: str | None) -> Preference:
-        if value is None:
-            return cls.TOP_BOTTOM
-        try:
-            return cls(value)
-        except ValueError:
-            known = ", ".join(p.value for p in cls)
-            raise TaskError(f"preference: '{value}' is not one of {known}") from None
 
 
 @dataclass
@@ -137,10 +115,7 @@ class DishwasherLayout(Layout):
 
 
 def allowed(preference: Preference, dish_kind: str, slot: Slot) -> bool:
-    """Whether ``preference`` lets a ``dish_kind`` stand in ``slot``."""
-    if slot.kind != dish_kind:
-        return False
-    if preference is Preference.TOP_BOTTOM:
-        return slot.rack == (TOP if dish_kind == BOWL else BOTTOM)
-    left = float(slot.offset[1]) < 0
-    return slot.rack == TOP and left == (dish_kind == PLATE)
+    """Whether ``preference`` lets a ``dish_kind`` stand in ``slot``
+    (:func:`~manigraph_dishwasher.preference.allows`; a slot's side is its offset's, left
+    being y < 0 of its rack's centre)."""
+    return allows(preference, dish_kind, slot.kind, slot.rack, float(slot.offset[1]) < 0)

@@ -32,6 +32,7 @@ import numpy as np
 import sapien
 from sapien import physx
 
+from manigraph_dishwasher.rules import SLOT_FIT
 from manigraph_dishwasher.sim.dishwasher_world import DishwasherWorld
 from manigraph_dishwasher.sim.model import (
     BOWL,
@@ -41,7 +42,6 @@ from manigraph_dishwasher.sim.model import (
     DishwasherLayout,
 )
 from manigraph_dishwasher.sim.scene import dishwasher_scene
-from manigraph_shared.dishwasher_rules import SLOT_FIT
 from manigraph_shared.grasp_points import (
     RACK_FLOOR_HALF_Y,
     RACK_FLOOR_THICKNESS,

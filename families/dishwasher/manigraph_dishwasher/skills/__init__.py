@@ -1,16 +1,13 @@
 """The dishwasher family's skill extensions: its tray actions (:mod:`.trays`, the drivers'
 ``toggle_tray``), its loading rules checked before a dish is moved
-(``manigraph_shared.dishwasher_rules``), where in its slot a bowl is set down
+(``manigraph_dishwasher.rules``), where in its slot a bowl is set down
 (:mod:`.slot_room`), its racks' floors and handles as obstacles (:mod:`.obstacles`) and
 turning a dish over on the counter (which tilts, :mod:`.turn_over`; the Panda drivers'
 manoeuvre from the driver's public pieces, :mod:`.panda_turn_over`)."""
 
-from manigraph_shared.messages import Action, Scene, TrayAction
+from manigraph_dishwasher.rules import is_dishwasher_scene
+from manigraph_shared.messages import Action, TrayAction
 from manigraph_skills.family import SkillFamily
-
-
-def _has_racks(scene: Scene) -> bool:
-    return bool(scene.racks)
 
 
 def _is_tray_action(action: Action) -> bool:
@@ -21,10 +18,10 @@ _HERE = "manigraph_dishwasher.skills"
 #: This family's skills part (its package's ``manigraph.families`` entry names it).
 FAMILY = SkillFamily(
     name="dishwasher",
-    matches=_has_racks,
+    matches=is_dishwasher_scene,
     takes=_is_tray_action,
     run_action=f"{_HERE}.trays:toggle_tray",
-    check_move="manigraph_shared.dishwasher_rules:check_dish_move",
+    check_move="manigraph_dishwasher.rules:check_dish_move",
     set_down_point=f"{_HERE}.slot_room:set_down_point",
     obstacles=f"{_HERE}.obstacles:rack_obstacles",
     turn_over=f"{_HERE}.panda_turn_over:turn_dish",

@@ -59,7 +59,7 @@ class Motion:
 @dataclass(frozen=True)
 class TrayToggle:
     """One rack toggle of decision ``decision_id``: grasp rack ``rack_id``'s handle (at
-    ``handle``) and push the rack in if ``is_open``, else pull it out (dishwasher).
+    ``handle``) and push the rack in if ``is_open``, else pull it out (a family's own action).
     ``travel``: how far it is out now, where the scene measured it (None: all the way if
     open, else not at all); ``rail``: how far it slides out all the way, where the scene says
     (None: ``grasp_points.RACK_TRAVEL``)."""
@@ -81,11 +81,10 @@ class RobotDriver(ABC):
     """
 
     name: str
-    #: Whether the skill checks the dishwasher's loading rules on the scene before moving
-    #: this robot (``manigraph_shared.dishwasher_rules``): a physical dishwasher refuses
-    #: nothing by itself. The geometric world refuses by the same rules, so its driver
-    #: leaves them to it.
-    checks_dish_rules: bool = False
+    #: Whether the skill checks the scene's family's rules (``SkillFamily.check_move``) on the
+    #: scene before moving this robot: a physical fixture refuses nothing by itself. The
+    #: geometric world refuses by the same rules, so its driver leaves them to it.
+    checks_family_rules: bool = False
 
     @classmethod
     def from_options(cls, bus: Any, options: Any) -> RobotDriver:

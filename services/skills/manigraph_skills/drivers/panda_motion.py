@@ -77,7 +77,7 @@ HANDLE_BACK_OFF = 0.1
 
 class PandaMotionDriver(RobotDriver):
     name = "panda-motion"
-    checks_dish_rules = True
+    checks_family_rules = True
 
     def __init__(
         self,

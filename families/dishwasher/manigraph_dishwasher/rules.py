@@ -1,8 +1,9 @@
-"""The dishwasher task's loading rules (docs/dishwasher.md), declared once: the geometric
-world refuses an action with them, and the skills check them on the ``Scene``
-(:func:`check_dish_move`) for a robot whose world does not refuse anything by itself
-(``RobotDriver.checks_dish_rules``: the physics world, a real dishwasher), the state read off
-the scene's racks and slots.
+"""The dishwasher's loading rules (docs/dishwasher.md), written once for its sim, planner and
+skills parts: the geometric world refuses an action with them, the skills check them on the
+``Scene`` (:func:`check_dish_move`) for a robot whose world does not refuse anything by itself
+(``RobotDriver.checks_family_rules``: the physics world, a real dishwasher), the state read off
+the scene's racks and slots, and the learned policy keeps to the racks they let be loaded
+(:func:`rack_usable`). A common module of the package: it imports no service.
 
 Each check raises a ``SkillError`` whose reason names the rule.
 """
@@ -25,14 +26,34 @@ BOTTOM_RACK: Final = "rack_bottom"
 SLOT_FIT: Final = 0.02
 
 
-def check_rack_usable(rack_id: str, open_racks: Mapping[str, bool]) -> None:
-    """A rack is loaded (or unloaded) only when pulled out (``rack_closed``); the bottom one
-    only while the top one is pushed in (``top_rack_open``): the open top rack is in the way.
-    ``open_racks``: every rack's open flag."""
+def is_dishwasher_scene(scene: Scene) -> bool:
+    """A dishwasher scene shows its racks (the trays the expert opens and closes): how the
+    planner and the skills tell this family's scenes from another's."""
+    return bool(scene.racks)
+
+
+def rack_refusal(rack_id: str, open_racks: Mapping[str, bool]) -> SkillError | None:
+    """The rack rule: a rack is loaded (or unloaded) only when pulled out (``rack_closed``);
+    the bottom one only while the top one is pushed in (``top_rack_open``): the open top rack
+    is in the way. ``open_racks``: every rack's open flag (a rack left out: pushed in). The
+    refusal naming the rule, or None: the rack can be loaded now."""
     if not open_racks.get(rack_id, False):
-        raise SkillError("rack_closed", f"{rack_id} is pushed in")
+        return SkillError("rack_closed", f"{rack_id} is pushed in")
     if rack_id == BOTTOM_RACK and open_racks.get(TOP_RACK, False):
-        raise SkillError("top_rack_open", "the bottom rack is loaded only with the top one in")
+        return SkillError("top_rack_open", "the bottom rack is loaded only with the top one in")
+    return None
+
+
+def rack_usable(rack_id: str, open_racks: Mapping[str, bool]) -> bool:
+    """Whether rack ``rack_id`` can be loaded now (:func:`rack_refusal`)."""
+    return rack_refusal(rack_id, open_racks) is None
+
+
+def check_rack_usable(rack_id: str, open_racks: Mapping[str, bool]) -> None:
+    """Raise the rack rule's refusal (:func:`rack_refusal`), if any."""
+    refusal = rack_refusal(rack_id, open_racks)
+    if refusal is not None:
+        raise refusal
 
 
 def check_slot(
