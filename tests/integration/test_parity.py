@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from manigraph_blocks.planner.augment import Augmentation
+from manigraph_blocks.training.augment import Augmentation
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_lab.episode_loop import run_episode
 from manigraph_planner.gnn import save_checkpoint

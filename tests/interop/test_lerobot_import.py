@@ -21,7 +21,7 @@ import pytest
 import torch
 
 from manigraph_dishwasher.planner.expert import dishwasher_expert
-from manigraph_dishwasher.planner.training import load_dish_demonstrations
+from manigraph_dishwasher.training.loop import load_dish_demonstrations
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
 from manigraph_planner.policies.gnn import GNNPolicy

@@ -1,7 +1,8 @@
-"""The family boundary: no module of the services, ``shared/``, ``tools/`` or ``lab/`` imports a
-task-family package or names one of its modules; they reach families only through their
-ground-floor registries (docs/families.md). Read with ``ast``, so an import inside a function
-or under ``TYPE_CHECKING`` counts, and so does a ``"module:attribute"`` string."""
+"""The family boundary: no module of the services, ``shared/``, ``tools/``, ``lab/`` or
+``training/`` imports a task-family package or names one of its modules; they reach families
+only through their ground-floor registries (docs/families.md). Read with ``ast``, so an
+import inside a function or under ``TYPE_CHECKING`` counts, and so does a
+``"module:attribute"`` string."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from manigraph_shared.family_packages import family_entry_points
 
 REPO = Path(__file__).resolve().parents[2]
 #: What must not know a family: every package but the families' own and the tests.
-GENERIC = [REPO / "services", REPO / "shared", REPO / "tools", REPO / "lab"]
+GENERIC = [REPO / "services", REPO / "shared", REPO / "tools", REPO / "lab", REPO / "training"]
 
 
 def family_packages() -> set[str]:
@@ -53,7 +54,7 @@ def test_the_families_are_found_by_their_entry_points() -> None:
     assert {entry.module.split(".")[0] for entry in family_entry_points()} == packages
 
 
-def test_no_service_shared_tools_or_lab_module_imports_or_names_a_family() -> None:
+def test_no_service_shared_tools_lab_or_training_module_imports_or_names_a_family() -> None:
     packages = family_packages()
     modules = sorted(p for root in GENERIC for p in root.rglob("*.py") if ".venv" not in p.parts)
     assert len(modules) > 200  # the walk sees the code
@@ -69,14 +70,14 @@ def test_a_planted_family_import_is_caught_in_every_form(tmp_path: Path) -> None
         "if TYPE_CHECKING:\n"
         "    from manigraph_dishwasher.sim.model import DishwasherLayout\n"
         "def later():\n"
-        "    import manigraph_blocks.planner.recipes as recipes\n"
+        "    import manigraph_blocks.training.recipes as recipes\n"
         "    return 'manigraph_dishwasher.skills:FAMILY'\n"
         "TEXT = 'the manigraph_blocks package, in words, is not an import'\n"
     )
     found = family_references(planted, family_packages())
     assert sorted(line.split(": ", 1)[1] for line in found) == [
         "manigraph_blocks",
-        "manigraph_blocks.planner.recipes",
+        "manigraph_blocks.training.recipes",
         "manigraph_dishwasher.sim.model",
         "manigraph_dishwasher.skills:FAMILY",
     ]

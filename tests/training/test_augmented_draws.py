@@ -7,7 +7,7 @@ from dataclasses import replace
 import pytest
 import torch
 
-from manigraph_blocks.planner.augment import Augmentation
+from manigraph_blocks.training.augment import Augmentation
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_planner.policies import load_policy
 from manigraph_training.augmented_draws import (

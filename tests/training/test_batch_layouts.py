@@ -7,7 +7,7 @@ from collections.abc import Callable, Iterator
 import pytest
 import torch
 
-from manigraph_blocks.planner.augment import Augmentation
+from manigraph_blocks.training.augment import Augmentation
 from manigraph_planner.gnn.features import scene_to_graph
 from manigraph_planner.gnn.models import ARCHITECTURES, ModelConfig, PolicyNet
 from manigraph_shared.messages import Scene

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from manigraph_blocks.planner.recipes import GATED_MAX_LEVELS, RECIPES
+from manigraph_blocks.training.recipes import GATED_MAX_LEVELS, RECIPES
 from manigraph_planner.gnn.models import ARCHITECTURES
 from manigraph_shared.errors import ConfigError
 from manigraph_training.recipes import augmentation_for, recipes, resample_every_for

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 import torch
 
-from manigraph_blocks.planner.augment import Augmentation
 from manigraph_blocks.planner.expert import ExpertPolicy
-from manigraph_blocks.planner.structure import (
+from manigraph_blocks.training.augment import Augmentation
+from manigraph_blocks.training.structure import (
     BLOCK,
     COVER,
     Graph,

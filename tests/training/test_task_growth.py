@@ -6,8 +6,8 @@ from dataclasses import replace
 
 import torch
 
-from manigraph_blocks.planner.augment import Augmentation
-from manigraph_blocks.planner.task_growth import grow_task_graph
+from manigraph_blocks.training.augment import Augmentation
+from manigraph_blocks.training.task_growth import grow_task_graph
 from manigraph_planner.gnn.features import FeatureSpec, scene_to_graph
 from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3

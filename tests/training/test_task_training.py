@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import torch
 
-from manigraph_blocks.planner.augment import Augmentation
+from manigraph_blocks.training.augment import Augmentation
 from manigraph_planner.gnn.features import FEATURE_SPEC, FeatureSpec, scene_to_graph
 from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 import torch
 
-from manigraph_blocks.planner.augment import Augmentation
+from manigraph_blocks.training.augment import Augmentation
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_lab.evaluate import EvalSpec, evaluate
 from manigraph_planner.gnn import load_checkpoint, save_checkpoint

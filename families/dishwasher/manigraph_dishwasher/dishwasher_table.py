@@ -45,7 +45,7 @@ def run_experiment(config: ExperimentConfig, log: TextIO | None = None) -> dict[
     once, each in its own process (the results do not depend on it)."""
     # Imported here: every ``manigraph`` command loads this module to build its parser, and
     # torch with PyG takes seconds (minutes on a loaded machine) to import.
-    from manigraph_dishwasher.planner.training import DishTrainConfig
+    from manigraph_dishwasher.training.loop import DishTrainConfig
     from manigraph_lab.demo_recording import DemoProtocol, record_demos
 
     config.out.mkdir(parents=True, exist_ok=True)
@@ -98,7 +98,7 @@ def _train_and_evaluate(
     import torch
 
     from manigraph_dishwasher.planner.gnn_policy import DishwasherGNNPolicy
-    from manigraph_dishwasher.planner.training import (
+    from manigraph_dishwasher.training.loop import (
         DishTrainConfig,
         load_dish_demonstrations,
         train_dish,

@@ -12,7 +12,7 @@ from manigraph_dishwasher.planner.expert import LeftRightExpert, TopBottomExpert
 from manigraph_dishwasher.planner.features import DISH_FEATURE_SPEC
 from manigraph_dishwasher.planner.gnn_policy import DishwasherGNNPolicy
 from manigraph_dishwasher.planner.net import DishPolicyNet
-from manigraph_dishwasher.planner.train_command import train_from_args
+from manigraph_dishwasher.training.train_command import train_from_args
 from manigraph_planner.family import FAMILIES, family_for_heads, family_of
 from manigraph_planner.gnn.features import FEATURE_SPEC
 from manigraph_planner.gnn.models import ModelConfig, PolicyNet

@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 import torch
 
-from manigraph_dishwasher.planner.augment import DishSample, add_dishes, counter_dishes
 from manigraph_dishwasher.planner.expert import dishwasher_expert, preferred
 from manigraph_dishwasher.planner.features import DISH_FEATURE_SPEC, TRAY_ACTIONS
-from manigraph_dishwasher.planner.training import DishDemos, load_dish_demonstrations
+from manigraph_dishwasher.training.augment import DishSample, add_dishes, counter_dishes
+from manigraph_dishwasher.training.loop import DishDemos, load_dish_demonstrations
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, SceneRack, Vector3
 from manigraph_shared.orientations import ORIENTATIONS

@@ -14,7 +14,7 @@ from manigraph_dishwasher.planner.gnn_policy import (
     decision_from_heads,
 )
 from manigraph_dishwasher.planner.net import DishHeads, DishPolicyNet
-from manigraph_dishwasher.planner.training import DishTrainConfig, member_seed
+from manigraph_dishwasher.training.loop import DishTrainConfig, member_seed
 from manigraph_planner.gnn.checkpoint import load_checkpoint, save_checkpoint
 from manigraph_planner.gnn.models import ModelConfig
 from manigraph_planner.policies import load_policy
@@ -103,7 +103,7 @@ def test_training_several_members_makes_an_ensemble_whose_first_is_the_single_ne
     tmp_path: Path,
 ) -> None:
     from manigraph_dishwasher.planner.expert import dishwasher_expert
-    from manigraph_dishwasher.planner.training import load_dish_demonstrations, train_dish
+    from manigraph_dishwasher.training.loop import load_dish_demonstrations, train_dish
     from manigraph_lab.demo_recording import DemoProtocol, record_demos
 
     path = tmp_path / "demos.mcap"

@@ -14,7 +14,7 @@ from manigraph_dishwasher.planner.gnn_policy import (
     decision_from_heads,
 )
 from manigraph_dishwasher.planner.net import DishHeads, DishPolicyNet
-from manigraph_dishwasher.planner.training import (
+from manigraph_dishwasher.training.loop import (
     DishTrainConfig,
     dish_loss,
     load_dish_demonstrations,
@@ -401,7 +401,7 @@ def test_the_shipped_dishwasher_checkpoints_load_and_act(preference: str) -> Non
 def test_dropping_dishes_keeps_the_demonstrated_decision(demos) -> None:  # type: ignore[no-untyped-def]
     import random
 
-    from manigraph_dishwasher.planner.augment import drop_dishes
+    from manigraph_dishwasher.training.augment import drop_dishes
 
     rng = random.Random(0)
     shrunk = 0

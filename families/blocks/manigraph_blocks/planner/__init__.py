@@ -2,8 +2,8 @@
 
 Its expert (:mod:`.expert`, ``expert``: the paper's three rules, or the generic matching
 rules where goals say what they accept), its training recipe per architecture
-(:mod:`.recipes`) with the structural augmentation it draws on (:mod:`.augment`,
-:mod:`.structure`). Its policies have the paper's ``object-goal`` heads over the paper's
+in its training part (``manigraph_blocks.training``: ``recipes``, with ``augment``,
+``structure``). Its policies have the paper's ``object-goal`` heads over the paper's
 five node features or a task file's (``gnn.task_features``), built, loaded and trained by
 the generic layers, so it names none of those parts. It is the fallback family: a scene
 no other family claims is a block scene.
@@ -18,6 +18,6 @@ FAMILY = PlannerFamily(
     heads="object-goal",
     experts=("expert",),
     fallback=True,
-    recipe="manigraph_blocks.planner.recipes:RECIPES",
+    recipe="manigraph_blocks.training.recipes:RECIPES",
     help="blocks, covers and boxes, and any task file: object and goal heads",
 )

@@ -18,7 +18,7 @@ def train_from_args(args: argparse.Namespace) -> int:
         raise ConfigError("device", "the dishwasher recipe trains on the CPU only")
     from dataclasses import asdict
 
-    from manigraph_dishwasher.planner.training import (
+    from manigraph_dishwasher.training.loop import (
         DishTrainConfig,
         load_dish_demonstrations,
         train_dish,

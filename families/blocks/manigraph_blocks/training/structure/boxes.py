@@ -8,7 +8,7 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
-from manigraph_blocks.planner.structure.graph import (
+from manigraph_blocks.training.structure.graph import (
     BLOCK,
     BLOCK_GOAL,
     COVER,

@@ -25,12 +25,6 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from manigraph_dishwasher.planner.augment import (
-    DishSample,
-    add_dishes,
-    counter_dishes,
-    drop_dishes,
-)
 from manigraph_dishwasher.planner.ensemble import DishEnsembleNet
 from manigraph_dishwasher.planner.features import (
     DISH_FEATURE_SPEC,
@@ -38,6 +32,12 @@ from manigraph_dishwasher.planner.features import (
     dish_scene_to_graph,
 )
 from manigraph_dishwasher.planner.net import DishPolicyNet
+from manigraph_dishwasher.training.augment import (
+    DishSample,
+    add_dishes,
+    counter_dishes,
+    drop_dishes,
+)
 from manigraph_planner.gnn.models import ModelConfig
 from manigraph_shared.errors import ConfigError, LogError
 from manigraph_shared.messages import TrayAction

@@ -32,7 +32,7 @@ The graph and its sizes are in :mod:`.graph`, the tower edits in :mod:`.towers`,
 cover edits in :mod:`.boxes`.
 """
 
-from manigraph_blocks.planner.structure.boxes import (
+from manigraph_blocks.training.structure.boxes import (
     BOX_CELLS,
     add_distractors,
     add_open_box,
@@ -41,7 +41,7 @@ from manigraph_blocks.planner.structure.boxes import (
     is_closing,
     open_box_contents,
 )
-from manigraph_blocks.planner.structure.graph import (
+from manigraph_blocks.training.structure.graph import (
     BLOCK,
     BLOCK_GOAL,
     COLUMN_TOLERANCE,
@@ -50,7 +50,7 @@ from manigraph_blocks.planner.structure.graph import (
     Graph,
     SceneGeometry,
 )
-from manigraph_blocks.planner.structure.towers import (
+from manigraph_blocks.training.structure.towers import (
     add_finished_tower,
     drop_finished_pairs,
     extend_towers,

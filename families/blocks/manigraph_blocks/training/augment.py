@@ -6,38 +6,38 @@ these steps; each keeps what the expert decides (step 3 is the one exception, ar
 
 1. **Tower extension** (probability ``tower_probability``): taller source towers, goal stacks
    with filled goals below and free goals above, up to ``max_levels`` each
-   (:func:`~manigraph_blocks.planner.structure.extend_towers`). The demonstrations never
+   (:func:`~manigraph_blocks.training.structure.extend_towers`). The demonstrations never
    show more than four blocks; the tests go to forty.
 1b. **Finished work dropped** (probability ``drop_finished_probability``, off in every
    recipe; measured for ``gcn``, see below): 1-3 filled goals with their blocks leave the
    bottom of every goal stack, the stacks moving down together, and every filled goal on a
    box floor goes with its block
-   (:func:`~manigraph_blocks.planner.structure.drop_finished_pairs`): graphs as small as a
+   (:func:`~manigraph_blocks.training.structure.drop_finished_pairs`): graphs as small as a
    2-stack's four nodes, which no demonstration (K = 3, 4) shows.
 2. **Idle covers dropped** (probability ``drop_covers_probability``) where the expert moves a
    block and no cover lies over a box
-   (:func:`~manigraph_blocks.planner.structure.drop_idle_covers`): the
+   (:func:`~manigraph_blocks.training.structure.drop_idle_covers`): the
    demonstrations always show a box; the stacking tasks never do.
 3. **Box contents hidden** (probability ``hide_probability``) where the expert takes a cover
    off a box: the blocks and goals inside are removed, as a robot sees a closed box whose
    contents it has not observed (box rearrangement;
-   :func:`~manigraph_blocks.planner.structure.hide_box_contents`). The label is the
+   :func:`~manigraph_blocks.training.structure.hide_box_contents`). The label is the
    expert's choice on the whole scene; the box must still be opened.
 4. **Distractors**: where the expert closes a box, a second closed box (probability
    ``closing_box_probability``), half the time holding blocks in their goals (a box packed
    earlier), and a free storage place (``closing_storage_probability``); elsewhere
    (probability ``distractor_probability``; none where the covers were dropped) a closed box
    and/or a free storage place
-   (:func:`~manigraph_blocks.planner.structure.add_distractors`). Then an open box, its
-   cover stored (:func:`~manigraph_blocks.planner.structure.add_open_box`): where the
+   (:func:`~manigraph_blocks.training.structure.add_distractors`). Then an open box, its
+   cover stored (:func:`~manigraph_blocks.training.structure.add_open_box`): where the
    expert opens a box, with probability ``open_box_contents_probability``, one holding 1-9
    loose blocks or free block goals on its floor, whichever keeps the label
-   (:func:`~manigraph_blocks.planner.structure.open_box_contents`): box rearrangement's
+   (:func:`~manigraph_blocks.training.structure.open_box_contents`): box rearrangement's
    second step, one box open and the other still closed; otherwise an empty one
    (``open_box_probability``). And, where a block is moved,
    a finished goal stack with free goals on top elsewhere (``finished_tower_probability``,
    up to ``max_finished_levels``;
-   :func:`~manigraph_blocks.planner.structure.add_finished_tower`). The demonstrations show
+   :func:`~manigraph_blocks.training.structure.add_finished_tower`). The demonstrations show
    one box; box rearrangement has two, and a K-stack's last blocks stand low beside a tall
    goal stack.
 5. **Rigid translation** of the whole scene, uniform within ±``translate_xy`` in x and y and
@@ -48,13 +48,13 @@ these steps; each keeps what the expert decides (step 3 is the one exception, ar
    footprints still overlap; x/y noise teaches that goals need not stand in exact columns
    (a pyramid's do not).
 
-Each architecture has its recipe (:mod:`~manigraph_blocks.planner.recipes`), chosen on
+Each architecture has its recipe (:mod:`~manigraph_blocks.training.recipes`), chosen on
 validation episodes
 (seeds 1000+, never the reported 0-99):
 
 * ``sage`` (mean over neighbours): every step.
 * ``gat`` (attention): every step but the open box with contents (see
-  :mod:`~manigraph_blocks.planner.recipes`).
+  :mod:`~manigraph_blocks.training.recipes`).
 * ``gated`` (sum over neighbours, GRU update): every step, with towers, finished stacks and
   free goals capped at 6 levels, so graphs stay under about 40 nodes instead of about 90.
   With translation and noise only it fitted every demonstration and generalized to almost
@@ -81,11 +81,11 @@ steps 5 and 6 on the position columns only, which hold for any task (which goal 
 which object is on top, what accepts what: unchanged), and no code of the task's own.
 With ``grow_pairs`` / ``grow_finished`` (``manigraph train --grow N``; 0, off, by default) a
 copy first grows past the demonstrated size: copies of the decided pair and of finished pairs
-(:mod:`~manigraph_blocks.planner.task_growth`), what held a rule nobody wrote at
+(:mod:`~manigraph_blocks.training.task_growth`), what held a rule nobody wrote at
 twice the objects (docs/training.md).
 
 Node order is not augmented: every architecture is permutation-equivariant (tested).
-Why each step keeps the label is argued in :mod:`~manigraph_blocks.planner.structure` and
+Why each step keeps the label is argued in :mod:`~manigraph_blocks.training.structure` and
 checked against the expert in ``tests/training/test_structure.py``.
 """
 
@@ -96,7 +96,7 @@ from typing import Any
 
 import torch
 
-from manigraph_blocks.planner.structure import (
+from manigraph_blocks.training.structure import (
     BLOCK,
     BOX_CELLS,
     Graph,
@@ -111,7 +111,7 @@ from manigraph_blocks.planner.structure import (
     is_closing,
     open_box_contents,
 )
-from manigraph_blocks.planner.task_growth import grow_task_graph
+from manigraph_blocks.training.task_growth import grow_task_graph
 from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_planner.gnn.goal_support import READY_COLUMN
 from manigraph_training.dataset import Sample
@@ -155,7 +155,7 @@ class Augmentation:
     #: Only the steps that hold for any task (:meth:`for_task`).
     generic: bool = False
     #: Task files: up to this many copies of the decided pair, and of finished pairs, per
-    #: copy (:mod:`~manigraph_blocks.planner.task_growth`); 0: none.
+    #: copy (:mod:`~manigraph_blocks.training.task_growth`); 0: none.
     grow_pairs: int = 0
     grow_finished: int = 0
     #: The ``goal:ready`` column of the task's spec (:meth:`for_task`), None without one: a

@@ -4,7 +4,7 @@ Registered by architecture name in :data:`RECIPES` (the block family's ``Planner
 which the generic trainer draws with: ``manigraph_training.recipes``), each with its
 options (copies per sample, epochs between fresh draws) whose defaults are that
 architecture's; ``manigraph train --copies/--resample-every`` override them. Why each
-recipe is what it is: the module docstring of :mod:`~manigraph_blocks.planner.augment`. A new
+recipe is what it is: the module docstring of :mod:`~manigraph_blocks.training.augment`. A new
 architecture registers its recipe here too (``TrainConfig`` refuses an architecture without one)::
 
     @RECIPES.register("mine", options=RecipeOptions, help="every step")
@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-from manigraph_blocks.planner.augment import Augmentation
+from manigraph_blocks.training.augment import Augmentation
 from manigraph_shared.options import Interval, Options, option
 from manigraph_shared.registry import Registry
 
