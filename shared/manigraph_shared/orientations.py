@@ -1,8 +1,9 @@
-"""The six discrete orientations of the dishwasher task (paper, section 'Dishwasher loading').
+"""The six discrete orientations a placed object may be asked to take (the paper's, from its
+dish-loading task).
 
 An action's ``orientation_index`` names one of them; a placed object takes it. Declared once
-here so the sim, the skills and the planner read an index the same way. Index ``i`` says which
-of the object's axes points up (world +z):
+here so the sim, the skills and the planner read an index the same way, whatever the family.
+Index ``i`` says which of the object's axes points up (world +z):
 
 ====  ==================  ======================================================
  i    object axis up      e.g.
@@ -44,7 +45,8 @@ ORIENTATION_NAMES: Final = (
     "side-x",
     "side-x-flipped",
 )
-#: What the dishwasher task asks of each dish type in its slot.
+#: Two postures by name: standing on its rim (a plate in its rack slot) and upside down (a
+#: bowl in its slot).
 UPRIGHT: Final = 2
 UPSIDE_DOWN: Final = 1
 #: The orientations of a plate standing on its rim (its thin axis level): "rim-y" and its

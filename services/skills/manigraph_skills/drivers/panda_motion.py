@@ -205,8 +205,7 @@ class PandaMotionDriver(RobotDriver):
     ) -> SceneObject:
         """Tilt ``item`` on the counter until it stands as ``target`` asks, by the turn-over
         manoeuvre of the scene's family (``SkillFamily.turn_over``, composed of this driver's
-        public pieces; the dishwasher's ``panda_turn_over``):
-        its up axis ``target``'s, or for a plate on its rim any edge down
+        public pieces): its up axis ``target``'s, or for a plate on its rim any edge down
         (``orientations.postures_like``); the object as it then lies."""
         wanted = postures_like(item.category.value, up_axis_orientation(target))
         if up_axis_orientation(item.orientation) in wanted:
@@ -273,7 +272,7 @@ class PandaMotionDriver(RobotDriver):
         if self._decision == decision_id:
             self.transport.abort(reason)
 
-    # --- pieces: what a skill extension composes its motions from (the dishwasher's turn-over)
+    # --- pieces: what a skill extension composes its motions from (a family's turn-over)
     def release(self, decision_id: str, grasp: Grasp) -> JointTrajectoryResult:
         """Open as wide as ``grasp`` says where the hand is and retreat (after a placement,
         or after a lost grasp, so the next attempt starts clean)."""

@@ -1,4 +1,4 @@
-"""The moves of the turn-over manoeuvre (``families.dishwasher.turn_over``) as joint
+"""The moves of a turn-over manoeuvre (a family's ``SkillFamily.turn_over``) as joint
 trajectories: set a held dish down with the hand turned sideways, and let go of it.
 
 *Set down sideways*: from the lifted top-down grasp up to the turning height, across to above
