@@ -11,7 +11,8 @@
 # (e.g. DOCKER_BUILD_FLAGS="--no-cache").
 #
 # The build context is a temporary copy holding only what the images need
-# (pyproject.toml, uv.lock, shared/, tools/, services/, families/, docker/), so a large .venv or
+# (pyproject.toml, uv.lock, shared/, tools/, services/, families/, docker/; not training/,
+# which no image installs), so a large .venv or
 # .git in the work tree is never sent to the engine, with or without a
 # .dockerignore; the work tree is not written to. If the base image (python:3.11-slim-bookworm by default) is
 # not present and cannot be pulled, it is built from Debian packages with
@@ -29,7 +30,7 @@ while [ $# -gt 0 ]; do
         --tag) TAG="$2"; shift ;;
         --prefix) PREFIX="$2"; shift ;;
         --no-host-ca) HOST_CA=0 ;;
-        -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
         -*) echo "unknown option: $1" >&2; exit 2 ;;
         *) TARGETS+=("$1") ;;
     esac

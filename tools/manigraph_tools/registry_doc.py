@@ -40,7 +40,7 @@ def _where(module_name: str) -> str:
     """The module's file, from the repository root (``services/sim/...``)."""
     path = Path(importlib.import_module(module_name).__file__ or module_name)
     parts = path.parts
-    for root in ("services", "shared", "tools", "lab", "families"):
+    for root in ("services", "shared", "tools", "lab", "families", "training"):
         if root in parts:
             index = len(parts) - 1 - parts[::-1].index(root)
             return "/".join(parts[index:])
