@@ -19,6 +19,7 @@ from manigraph_shared.errors import ConfigError
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.options import Interval, Options, option
 from manigraph_shared.printable import printable
+from manigraph_tools.family import family_of_task
 
 AT_LEAST_ONE = Interval(1, None)
 #: An episode's reason when the sim refused its seed's draw (``DrawRefused``): not run.
@@ -44,10 +45,12 @@ class EpisodeOptions(Options):
     blocks: int = option(4, help="blocks per stack K", within=AT_LEAST_ONE)
     stacks: int = option(1, help="number of stacks s", within=AT_LEAST_ONE)
     objects: int | None = option(
-        None, help="dishes (dishwasher: half plates, half bowls; default 10)", within=AT_LEAST_ONE
+        None,
+        help="objects, for a task sized by them (unset: its family's default; docs/families.md)",
+        within=AT_LEAST_ONE,
     )
     preference: str | None = option(
-        None, help="how to load the dishwasher: top-bottom (default) or left-right"
+        None, help="how the objects are to be placed, for a task whose family reads it (its docs)"
     )
     episodes: int | None = option(
         None,
@@ -80,8 +83,10 @@ class EpisodeOptions(Options):
     def label(self) -> str:
         """What episodes are named after: the task file's name (its stem, as an identifier),
         else the task and K."""
-        if self.task_file is None and self.task == "dishwasher":
-            return f"dishwasher-{self.objects}" if self.objects else "dishwasher"
+        family = family_of_task(self.task) if self.task_file is None else None
+        if family is not None:  # sized its own way: named after its count
+            count = getattr(self, family.sized_by[0])
+            return f"{self.task}-{count}" if count else self.task
         if self.task_file is None:
             return f"{self.task}-{self.blocks}"
         return re.sub(r"[^A-Za-z0-9_.\-]+", "-", self.task_file.stem)[:40] or "task-file"
@@ -146,16 +151,18 @@ class EpisodePlan:
     #: Longest wait for every service to be back before an episode.
     recover_timeout: float = 60.0
     services: tuple[str, ...] = RUN_SERVICES
-    objects: int | None = None  # dishwasher
-    preference: str | None = None  # dishwasher
+    objects: int | None = None  # a family's count (manigraph_tools.family)
+    preference: str | None = None  # a family's option
 
     def describe(self) -> str:
-        """What the episodes are, for progress lines: the dishwasher's dishes and
-        preference (each as asked: left out, the sim's default), else the task (or file)
-        and K."""
-        if self.task == "dishwasher":
-            asked = [f"{self.objects} dishes" if self.objects else "", self.preference or ""]
-            return " ".join(["dishwasher", *filter(None, asked)])
+        """What the episodes are, for progress lines: for a family sized its own way, its
+        count and options (each as asked: left out, the sim's default), else the task (or
+        file) and K."""
+        family = family_of_task(self.task)
+        if family is not None:
+            count, *options = (getattr(self, name) for name in family.sized_by)
+            asked = [f"{count} {family.counted}" if count else "", *(o or "" for o in options)]
+            return " ".join([self.task, *filter(None, asked)])
         return f"{self.task_file_name or self.task} K={self.blocks}"
 
     def request(self, index: int) -> EpisodeRequest:
@@ -240,9 +247,11 @@ def _task_file_limit() -> int:
 
 
 def _size(plan: EpisodePlan) -> dict[str, object]:
-    """What the episodes hold: dishes and the preference, or blocks and stacks."""
-    if plan.task == "dishwasher":
-        return {"objects": plan.objects, "preference": plan.preference}
+    """What the episodes hold: a family's own sizes (its count and options), or blocks and
+    stacks."""
+    family = family_of_task(plan.task)
+    if family is not None:
+        return {name: getattr(plan, name) for name in family.sized_by}
     return {"blocks": plan.blocks, "stacks": plan.stacks}
 
 

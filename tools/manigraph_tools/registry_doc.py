@@ -31,6 +31,7 @@ REGISTRIES: tuple[tuple[str, str, str], ...] = (
     ("SOURCES", "manigraph_training.sources", "manigraph_training.sources"),
     ("BATCH_LAYOUTS", "manigraph_training.batch_layouts", "manigraph_training"),
     ("FAMILIES", "manigraph_planner.family", "manigraph_planner.family"),
+    ("FAMILIES", "manigraph_tools.family", "manigraph_tools.family"),
     ("FORMATS", "manigraph_tools.interop.formats", "manigraph_tools.interop.formats"),
     ("BASELINES", "manigraph_lab.rl.baselines", "manigraph_lab.rl.baselines"),
 )

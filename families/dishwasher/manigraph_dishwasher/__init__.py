@@ -3,7 +3,8 @@ preference, as one package (docs/dishwasher.md, docs/families.md).
 
 Its parts: ``sim`` (its task, worlds and success check), ``planner`` (its experts, graph
 state, four-headed network and its own training), ``skills`` (tray actions, loading rules,
-slot room, rack obstacles, turn-over), and ``manigraph dishwasher-experiment``
+slot room, rack obstacles, turn-over), ``tools`` (its episodes sized by their dishes and
+preference), and ``manigraph dishwasher-experiment``
 (:mod:`.commands.dishwasher_experiment`). Each service finds its part through :data:`PARTS`,
 which this package's ``manigraph.families`` entry point names.
 """
@@ -14,4 +15,5 @@ PARTS = {
     "sim": "manigraph_dishwasher.sim.family:DishwasherFamily",
     "planner": "manigraph_dishwasher.planner:FAMILY",
     "skills": "manigraph_dishwasher.skills:FAMILY",
+    "tools": "manigraph_dishwasher.tools:FAMILY",
 }
