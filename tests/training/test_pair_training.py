@@ -19,7 +19,7 @@ from manigraph_training.recipes import augmentation_for
 from manigraph_training.trainer import TrainConfig, train
 
 SIZE = Vector3(x=0.04, y=0.04, z=0.04)
-CHECKPOINTS = Path(__file__).resolve().parents[3] / "checkpoints"
+CHECKPOINTS = Path(__file__).resolve().parents[2] / "checkpoints"
 
 
 def bins_scene(bin_colours: tuple[str, str]) -> Scene:
