@@ -3,7 +3,8 @@
 A block is grasped at its centre. A cover is a plate wider than any gripper opens, so the
 physical cover carries a handle, a small cube fixed at the centre of its top face (the same
 rigid body); the gripper takes the handle. A ``Scene`` still reports a cover's plate: its
-centre and size, as the geometric world and the planner know it.
+centre and size, as the geometric world and the planner know it. A family's fixtures (a rack's
+handle) are grasped where its own package says.
 """
 
 from __future__ import annotations
@@ -29,73 +30,3 @@ def grasp_height(category: str, size: np.ndarray) -> float:
     if category == "cover":
         return handle_offset(size)
     raise ConfigError("category", f"'{category}' is not 'block', 'cover', 'plate' or 'bowl'")
-
-
-#: Racks that slide out (``Scene.racks``, a family's fixtures): where the gripper takes each
-#: rack's handle, relative to the position a ``Scene`` reports for the rack (x, y, z,
-#: metres). The physical handle is a tab, 1.5 cm across y, sticking out of the rack's front
-#: towards the robot, beside the rack (the top rack's at its right side, the bottom rack's
-#: at its left), joined to the floor's front corner by a bar; the fingers close across it
-#: (along y). Beside the racks, a handle is beyond the counter's dishes and the slots: a hand
-#: over either never meets it (in the middle, a pulled-out top rack's tab was over the
-#: counter's far row at the wrist's height, and a dish lying under it could not be taken).
-#: Each sticks out 8 cm in front of the reported handle, so the hand takes the bottom one in
-#: front of the top rack standing above it. Shared so the sim builds the tab where the skills
-#: grasp it (the Panda drivers' ``toggle_tray`` reads it).
-RACK_GRIP_OFFSET: dict[str, tuple[float, float, float]] = {
-    "rack_top": (-0.08, 0.44, 0.015),
-    "rack_bottom": (-0.08, -0.44, 0.015),
-}
-#: How far a rack slides out towards the robot (-x) when pulled, metres.
-RACK_TRAVEL = 0.16
-#: The tab's thickness across y, metres (what the closed fingers hold).
-RACK_TAB_THICKNESS = 0.015
-
-
-def rack_grip(rack_id: str) -> np.ndarray:
-    """The offset of rack ``rack_id``'s grip from its reported position; ``ConfigError``
-    naming the rack if it has no handle."""
-    try:
-        return np.array(RACK_GRIP_OFFSET[rack_id])
-    except KeyError:
-        raise ConfigError("rack_id", f"'{rack_id}' has no handle to grasp") from None
-
-
-#: A rack's floor, relative to the rack's centre (the reported handle is ``RACK_HANDLE_X``
-#: from it along x), metres: x from its front (robot side) to its back, half width along y,
-#: top surface height, thickness. Shared so the skills can keep the arm off a pulled-out
-#: rack's floor (it reaches over the counter's far row).
-RACK_HANDLE_X = -0.09
-RACK_FLOOR_X = (-0.08, 0.075)
-RACK_FLOOR_HALF_Y = 0.34
-RACK_FLOOR_TOP = 0.005
-RACK_FLOOR_THICKNESS = 0.01
-#: A rack's handle tab's height relative to the rack's centre (bottom, top), metres.
-RACK_TAB_Z = (0.0, 0.03)
-
-
-def rack_handle_boxes(rack_id: str) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Rack ``rack_id``'s handle as boxes (low and high corners relative to the rack's
-    centre, metres): its tab, from behind the grip to just short of the floor's front (clear
-    of the cabinet's walls when pushed in), and for a tab beside the floor the bar joining
-    it to the floor's corner. Shared so the sim builds the handle where the skills keep the
-    arm off it (a hand coming down beside a pulled-out top rack met its tab and pushed the
-    rack back in)."""
-    grip_x, grip_y, _ = rack_grip(rack_id)
-    grip_x += RACK_HANDLE_X
-    half = RACK_TAB_THICKNESS / 2
-    front = RACK_FLOOR_X[0] - 0.005
-    low, high = RACK_TAB_Z
-    boxes = [
-        (np.array([grip_x - 0.03, grip_y - half, low]), np.array([front, grip_y + half, high]))
-    ]
-    if abs(grip_y) + half > RACK_FLOOR_HALF_Y:
-        side = float(np.sign(grip_y))
-        inner, outer = side * RACK_FLOOR_HALF_Y, grip_y + side * half
-        boxes.append(
-            (
-                np.array([front - 0.01, min(inner, outer), low]),
-                np.array([front, max(inner, outer), high]),
-            )
-        )
-    return boxes

@@ -18,6 +18,7 @@ from manigraph_shared.messages import (
     JointTrajectoryCommand,
     JointTrajectoryPoint,
     Quaternion,
+    SceneRack,
     Vector3,
 )
 from manigraph_shared.panda import ARM_JOINTS
@@ -255,12 +256,20 @@ def test_configuration_comes_from_the_environment_with_the_variable_named() -> N
     assert caught.value.field == "franka.grasp_force (MANIGRAPH_FRANKA_GRASP_FORCE)"
 
 
+def top_rack(handle: Vector3, is_open: bool, **measured: float | None) -> TrayToggle:
+    """The top rack's toggle as the dishwasher family asks it of a driver (its tab and rail)."""
+    from manigraph_dishwasher.skills.trays import tray_toggle
+
+    rack = SceneRack(id="rack_top", position=handle, open=is_open, **measured)
+    return tray_toggle("e:0", rack)
+
+
 def test_a_rack_toggle_runs_through_franky_grasp_slide_release() -> None:
     from manigraph_skills.motion import PandaModel
 
     franka = driver()
     handle = Vector3(x=0.51, y=0.0, z=0.30)  # the top rack pulled out (docs/dishwasher.md)
-    franka.toggle_tray(TrayToggle("e:0", "rack_top", handle, True))  # push it in
+    franka.toggle_tray(top_rack(handle, True))  # push it in
     robot, gripper = FakeRobot.last, FakeGripper.last
     assert robot is not None and gripper is not None
     # Down to the handle, close, slide along the rail; open, back off: three arm motions.
@@ -274,7 +283,7 @@ def test_a_rack_toggle_runs_through_franky_grasp_slide_release() -> None:
 
     grasped, slid = tcp(robot.motions[0]), tcp(robot.motions[1])
     assert np.allclose(slid - grasped, [0.16, 0.0, 0.0], atol=0.005)  # the rail's length
-    # At the tab (grasp_points.rack_grip): beside the rack's right side, in front of it.
+    # At the tab (rack_geometry.rack_grip): beside the rack's right side, in front of it.
     assert np.allclose(grasped[:2], [0.51 - 0.08, 0.44], atol=0.005)
 
 
@@ -282,7 +291,7 @@ def test_a_rack_part_of_the_way_out_slides_only_as_far_as_it_has_left_to_go() ->
 
     franka = driver()
     handle = Vector3(x=0.57, y=0.0, z=0.30)  # the top rack 10 cm out
-    franka.toggle_tray(TrayToggle("e:0", "rack_top", handle, True, travel=0.10))  # push it in
+    franka.toggle_tray(top_rack(handle, True, travel=0.10))  # push it in
     grasped, slid = _grasped_and_slid()
     assert np.allclose(slid - grasped, [0.10, 0.0, 0.0], atol=0.005)
 
@@ -304,10 +313,10 @@ def _grasped_and_slid() -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize("rail", [None, 0.12])
 def test_a_rack_is_pulled_out_as_far_as_its_rail_goes(rail: float | None) -> None:
     """The scene may say how far a rack's rail lets it out (``SceneRack.rail``: the physics
-    world's racks slide 12 cm); without it, the shared ``RACK_TRAVEL`` (16 cm)."""
+    world's racks slide 12 cm); without it, the family's ``RACK_TRAVEL`` (16 cm)."""
     franka = driver()
     handle = Vector3(x=0.67, y=0.0, z=0.30)  # the top rack pushed in
-    franka.toggle_tray(TrayToggle("e:0", "rack_top", handle, False, rail=rail))  # pull it out
+    franka.toggle_tray(top_rack(handle, False, rail=rail))  # pull it out
     grasped, slid = _grasped_and_slid()
     assert np.allclose(slid - grasped, [-(rail or 0.16), 0.0, 0.0], atol=0.005)
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from manigraph_dishwasher.rack_geometry import RACK_TRAVEL
 from manigraph_lab.episode_loop import StepClock, gripper_driver
 from manigraph_shared.errors import SkillError
-from manigraph_shared.grasp_points import RACK_TRAVEL
 from manigraph_shared.messages import (
     Action,
     EpisodeRequest,
@@ -83,7 +83,7 @@ class ArmWithoutTrays(RobotDriver):
 def test_a_driver_without_tray_support_refuses_as_unsupported() -> None:
     with pytest.raises(SkillError) as refused:
         ArmWithoutTrays().toggle_tray(
-            TrayToggle("e:0", "rack_top", Vector3(x=0.5, y=0.0, z=0.3), False)
+            TrayToggle("e:0", "rack_top", Vector3(x=0.5, y=0.0, z=0.3), False, 0.16, (0, 0, 0))
         )
     assert refused.value.reason == "unsupported"
 
@@ -125,8 +125,8 @@ def test_an_open_rack_floor_supports_a_dish_set_into_its_slot_and_nothing_else()
 def test_a_pushed_in_racks_floor_is_an_obstacle_where_the_rack_stands() -> None:
     """The wrist reaching into the pulled-out bottom rack's far slots met the pushed-in top
     rack's front edge, which the arm check did not know of, and stopped 5 cm short."""
+    from manigraph_dishwasher.rack_geometry import RACK_FLOOR_X, RACK_HANDLE_X
     from manigraph_dishwasher.skills.obstacles import rack_obstacles
-    from manigraph_shared.grasp_points import RACK_FLOOR_X, RACK_HANDLE_X
 
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="dishwasher", objects=2), 0.0)

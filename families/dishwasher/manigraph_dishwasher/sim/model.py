@@ -13,10 +13,10 @@ from typing import Final
 import numpy as np
 
 from manigraph_dishwasher.preference import BOWL, PLATE, Preference, allows
+from manigraph_dishwasher.rack_geometry import RACK_HANDLE_X
+from manigraph_dishwasher.rack_geometry import RACK_TRAVEL as RACK_PULL
 from manigraph_dishwasher.rules import BOTTOM_RACK, TOP_RACK
 from manigraph_shared.errors import TaskError
-from manigraph_shared.grasp_points import RACK_HANDLE_X
-from manigraph_shared.grasp_points import RACK_TRAVEL as RACK_PULL
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN
 from manigraph_sim.world_model import Layout
 

@@ -8,7 +8,7 @@ bodies, all built from boxes (nothing downloaded).
   reported so: ``SceneRack.rail``), with joint damping so a rack stays where it is left. A
   rack is a floor whose top is 5 mm above its centre, a pair of 1.5 cm ribs around every plate
   slot (plates stand between them), and a handle: a tab at one side of its front, sticking
-  out towards the robot, grasped where ``manigraph_shared.grasp_points.RACK_GRIP_OFFSET``
+  out towards the robot, grasped where ``manigraph_dishwasher.rack_geometry.RACK_GRIP_OFFSET``
   says (the top rack's beside its right side, the bottom rack's beside its left).
 * **Dishes**: a plate is a thin box, 6.4 x 6.4 x 1.5 cm (the geometric world's is 8 cm across,
   as wide as the fingers open: the skills could not tilt it); a bowl is an open box (a base
@@ -32,6 +32,13 @@ import numpy as np
 import sapien
 from sapien import physx
 
+from manigraph_dishwasher.rack_geometry import (
+    RACK_FLOOR_HALF_Y,
+    RACK_FLOOR_THICKNESS,
+    RACK_FLOOR_TOP,
+    RACK_FLOOR_X,
+    rack_handle_boxes,
+)
 from manigraph_dishwasher.rules import SLOT_FIT
 from manigraph_dishwasher.sim.dishwasher_world import DishwasherWorld
 from manigraph_dishwasher.sim.model import (
@@ -42,13 +49,6 @@ from manigraph_dishwasher.sim.model import (
     DishwasherLayout,
 )
 from manigraph_dishwasher.sim.scene import dishwasher_scene
-from manigraph_shared.grasp_points import (
-    RACK_FLOOR_HALF_Y,
-    RACK_FLOOR_THICKNESS,
-    RACK_FLOOR_TOP,
-    RACK_FLOOR_X,
-    rack_handle_boxes,
-)
 from manigraph_shared.messages import Quaternion, Scene
 from manigraph_shared.orientations import ORIENTATIONS, postures_like, up_axis_orientation
 from manigraph_shared.rotations import rotation_matrix

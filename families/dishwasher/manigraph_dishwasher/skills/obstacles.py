@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from manigraph_shared.grasp_points import (
+from manigraph_dishwasher.rack_geometry import (
     RACK_FLOOR_HALF_Y,
     RACK_FLOOR_THICKNESS,
     RACK_FLOOR_TOP,
@@ -19,7 +19,7 @@ from manigraph_skills.obstacles import SUPPORT_GAP, Obstacle
 def rack_obstacles(
     scene: Scene, moving: SceneObject | None = None, at: np.ndarray | None = None
 ) -> list[Obstacle]:
-    """The floor and the handle (``grasp_points.rack_handle_boxes``) of every dishwasher
+    """The floor and the handle (``rack_geometry.rack_handle_boxes``) of every dishwasher
     rack, where it is. The floor: pulled out, it reaches over the
     counter's far row, where a hand lifting a dish would meet it; pushed in, the top rack's
     front edge is over the pulled-out bottom rack's far slots, where the wrist reaching into

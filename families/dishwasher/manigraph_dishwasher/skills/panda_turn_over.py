@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from manigraph_dishwasher.rack_geometry import RACK_GRIP_OFFSET
 from manigraph_dishwasher.skills.turn_over import (
     next_tilts,
     quaternion_of,
@@ -29,7 +30,6 @@ from manigraph_dishwasher.skills.turn_over import (
     up_index,
 )
 from manigraph_shared.errors import SkillError
-from manigraph_shared.grasp_points import RACK_GRIP_OFFSET
 from manigraph_shared.messages import Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATION_NAMES
 from manigraph_shared.panda import FINGER_BELOW_TCP
@@ -82,7 +82,7 @@ def set_down_spots(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np
     others = _counter_dishes(scene, item)
     # Beyond the counter's side columns (|y| <= 0.31 m) nothing ever lies: the spare spots,
     # on the dish's side first. A side's only while the rack whose handle is on that side
-    # (``grasp_points.RACK_GRIP_OFFSET``: the top rack's right, the bottom rack's left) is
+    # (``rack_geometry.RACK_GRIP_OFFSET``: the top rack's right, the bottom rack's left) is
     # pushed in: pulled out, its handle is over them, and a dish turned there could not be
     # taken again. (The racks are never both out: one side is always free.)
     sides = [1.0, -1.0] if here[1] >= 0 else [-1.0, 1.0]

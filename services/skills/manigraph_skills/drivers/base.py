@@ -58,18 +58,20 @@ class Motion:
 
 @dataclass(frozen=True)
 class TrayToggle:
-    """One rack toggle of decision ``decision_id``: grasp rack ``rack_id``'s handle (at
-    ``handle``) and push the rack in if ``is_open``, else pull it out (a family's own action).
-    ``travel``: how far it is out now, where the scene measured it (None: all the way if
-    open, else not at all); ``rail``: how far it slides out all the way, where the scene says
-    (None: ``grasp_points.RACK_TRAVEL``)."""
+    """One rack toggle of decision ``decision_id``: grasp rack ``rack_id``'s handle (reported
+    at ``handle``) by its tab, ``grip`` from there (x, y, z, metres), and push the rack in if
+    ``is_open``, else pull it out (a family's own action). ``rail``: how far it slides out all
+    the way, metres; ``travel``: how far it is out now, where the scene measured it (None: all
+    the way if open, else not at all). The family that owns the rack says where its tab is and
+    how long its rail (what the scene leaves unsaid)."""
 
     decision_id: str
     rack_id: str
     handle: Vector3
     is_open: bool
+    rail: float
+    grip: tuple[float, float, float]
     travel: float | None = None
-    rail: float | None = None
 
 
 class RobotDriver(ABC):

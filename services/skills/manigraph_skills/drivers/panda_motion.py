@@ -32,7 +32,6 @@ from collections.abc import Callable
 import numpy as np
 
 from manigraph_shared.errors import SkillError
-from manigraph_shared.grasp_points import RACK_TRAVEL, rack_grip
 from manigraph_shared.ids import derived_id
 from manigraph_shared.messages import (
     GripperTarget,
@@ -220,13 +219,13 @@ class PandaMotionDriver(RobotDriver):
         return turned
 
     def toggle_tray(self, toggle: TrayToggle) -> None:
-        """Down onto the rack's handle tab (``grasp_points.rack_grip``), close across it,
+        """Down onto the rack's handle tab (``toggle.grip`` from its handle), close across it,
         pull the rack out along -x (or push it in) as far as it has left to go, release and
         rise."""
         decision_id, rack_id, is_open = toggle.decision_id, toggle.rack_id, toggle.is_open
         start = np.array(toggle.handle.as_tuple())
-        grip = start + rack_grip(rack_id)
-        rail = RACK_TRAVEL if toggle.rail is None else toggle.rail
+        grip = start + np.array(toggle.grip)
+        rail = toggle.rail
         out = (rail if is_open else 0.0) if toggle.travel is None else toggle.travel
         distance = out if is_open else rail - out
         shift = np.array([distance if is_open else -distance, 0.0, 0.0])
