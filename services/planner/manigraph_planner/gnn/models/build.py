@@ -1,14 +1,19 @@
 """The network a :class:`ModelConfig` asks for, by its heads: the block policy's
 :class:`PolicyNet`, or the network its task family registers for its heads (heads of its
-own, an ensemble of them)."""
+own, an ensemble of them).
+
+A network with message passing is built from PyG's layers, which the serving planner does not
+install (it serves with the layers' weights alone, by dense algebra); training installs PyG
+(``manigraph-training``)."""
 
 from __future__ import annotations
 
 from manigraph_planner.family import family_for_heads
 from manigraph_planner.gnn.models.config import ModelConfig
 from manigraph_planner.gnn.models.policy_net import PolicyNet
+from manigraph_shared.errors import PolicyError
 
-__all__ = ["policy_net_for", "with_message_passing"]
+__all__ = ["policy_net_for", "require_message_passing", "with_message_passing"]
 
 
 def policy_net_for(config: ModelConfig, message_passing: bool = True) -> PolicyNet:
@@ -27,6 +32,19 @@ def with_message_passing(net: PolicyNet) -> PolicyNet:
     a copy of its weights (what the explainer's edge masks need)."""
     if net.message_passing:
         return net
+    require_message_passing()
     twin = policy_net_for(net.config, message_passing=True)
     twin.load_state_dict(net.state_dict(), strict=True)
     return twin.train(net.training)
+
+
+def require_message_passing() -> None:
+    """Raises ``PolicyError`` naming what is missing where PyG (the layers that pass messages)
+    is not installed: the serving planner does not carry it."""
+    try:
+        import torch_geometric  # noqa: F401
+    except ImportError:
+        raise PolicyError(
+            "message passing: this network needs PyG's layers (torch-geometric), which the "
+            "serving planner does not install; install manigraph-training, which brings them"
+        ) from None
