@@ -8,15 +8,17 @@ generic trainer draws with for its heads, or its own ``manigraph train``. Its pa
 (``families/<name>/``, docs/families.md) holds that code in its ``planner`` part, which
 names its :class:`PlannerFamily` in the package's ``manigraph.families`` entry point
 (:mod:`manigraph_shared.family_packages`); :data:`FAMILIES` registers every installed one,
-by name, when it is first read. The generic layers (``gnn/``, ``policies/``, ``training/``,
-``explain/``) ask the registry, never which family a scene is:
+by name, when it is first read. The generic layers (``gnn/``, ``policies/``, ``explain/``, and
+the training package, ``manigraph_training``) ask the registry, never which family a scene is:
 
     family_of(scene).heads                 # what a decision on this scene trains
     family_for_heads(config.heads).network # what a checkpoint with these heads builds
 
 The heavy parts (networks, policies, training, anything importing torch) are named as
 ``"module:attribute"`` and imported when first used (:meth:`PlannerFamily.part`), so
-registering a family and listing the policies stays torch-free.
+registering a family and listing the policies stays torch-free. ``recipe`` and
+``train_command`` name the family's training part (``manigraph_<name>.training``), which only
+the training package imports: the serving planner never loads it.
 """
 
 from __future__ import annotations
@@ -64,7 +66,7 @@ class PlannerFamily:
             checkpoint; None: :class:`~manigraph_planner.policies.gnn.GNNPolicy`.
         recipe: ``"module:attribute"`` of the :class:`~manigraph_shared.registry.Registry`
             of augmentation recipes by architecture that the generic trainer draws with for
-            its heads (``training.recipes``); None for a family with its own
+            its heads (``manigraph_training.recipes``); None for a family with its own
             ``train_command``.
         train_command: ``"module:attribute"`` of ``(args) -> exit code``: what ``manigraph
             train`` runs for demonstrations of this family; None: the generic command.
