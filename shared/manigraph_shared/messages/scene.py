@@ -135,7 +135,7 @@ class SceneRack(Struct, frozen=True, kw_only=True):
         Annotated[float, Meta(gt=0.0, le=1.0)] | None,
         Meta(
             description="how far it slides out all the way, metres, where the world says so "
-            "(None: grasp_points.RACK_TRAVEL)"
+            "(None: the family's own default)"
         ),
     ] = None
 
