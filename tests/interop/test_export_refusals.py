@@ -118,3 +118,32 @@ def test_an_unknown_format_is_refused_naming_the_formats(robot_log: Path, tmp_pa
 def _write(path: Path, data: bytes) -> Path:
     path.write_bytes(data)
     return path
+
+
+# An install without the `lerobot` extra (a service image): pyarrow cannot be imported.
+WITHOUT_PYARROW = """
+import sys
+sys.modules["pyarrow"] = None  # what an install without it gives: ImportError
+from manigraph_shared.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_a_lerobot_export_without_pyarrow_says_what_to_install(
+    robot_log: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "out"
+    argv = ["export", str(robot_log), "--format", "lerobot", "-o", str(out)]
+    result = subprocess.run(
+        [sys.executable, "-c", WITHOUT_PYARROW, *argv],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert result.returncode == CONFIG_EXIT_CODE, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        "manigraph export: format: a LeRobot export needs pyarrow, which this install lacks "
+        "(pip install 'manigraph-tools[lerobot]')"
+    ]
+    assert not out.exists()

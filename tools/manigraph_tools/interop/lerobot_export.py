@@ -23,15 +23,22 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
 
-import pyarrow as pa
-import pyarrow.parquet as pq
-
 from manigraph_shared import lerobot_codes as codes
-from manigraph_shared.errors import LogError
+from manigraph_shared.errors import ConfigError, LogError
 from manigraph_shared.messages import Action, CompressedImage, EpisodeEvent, EpisodePhase, Scene
 from manigraph_tools.interop import lerobot_layout as layout
 from manigraph_tools.interop.lerobot_frames import LatestFrames
 from manigraph_tools.interop.source import SourceLog, check_paths, choose_cell
+
+try:  # the `lerobot` extra: the service images install the tools without it
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+except ImportError as missing:
+    raise ConfigError(
+        "format",
+        "a LeRobot export needs pyarrow, which this install lacks "
+        "(pip install 'manigraph-tools[lerobot]')",
+    ) from missing
 
 #: A task name for episodes whose start event is not in the log.
 UNKNOWN_TASK = "unknown"
