@@ -452,8 +452,16 @@ def _load_libc() -> ctypes.CDLL | None:
 _LIBC = _load_libc()
 
 
+#: Seconds from a service's stop request to the kernel ending it (SIGALRM's default action),
+#: whatever the interpreter is doing then. A stop normally takes well under a second; this
+#: bounds one stuck where no Python thread can run (a close blocked in native code holding the
+#: GIL, say, when the router went down with ``up``), so that no service outlives its stack.
+HARD_STOP_S = 30
+
+
 def run_service(factory: Callable[[Bus], Service], bus_config: BusConfig) -> int:
-    """Open the bus, run the service until SIGINT/SIGTERM, then close everything."""
+    """Open the bus, run the service until SIGINT/SIGTERM, then close everything; a stop
+    that is not done :data:`HARD_STOP_S` seconds after it was asked for ends the process."""
     limit_malloc_arenas()
     # A file left by a killed predecessor (a container's /tmp survives its restart) must not
     # report this process healthy while it is still looking for its router.
@@ -462,9 +470,12 @@ def run_service(factory: Callable[[Bus], Service], bus_config: BusConfig) -> int
     service = factory(bus)
 
     def stop(signum: int, _frame: object) -> None:
+        if not service.stop_event.is_set():
+            signal.alarm(HARD_STOP_S)
         service.log.info("received %s, stopping", signal.Signals(signum).name)
         service.stop_event.set()
 
+    signal.signal(signal.SIGALRM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, stop)
     signal.signal(signal.SIGTERM, stop)
     try:

@@ -108,6 +108,21 @@ def _up(port: int, log: Path) -> Iterator[tuple[subprocess.Popen[bytes], set[int
         up.wait()
 
 
+def _where(pid: int) -> str:
+    """What a process left behind is doing: its state, signal masks and each thread's kernel
+    wait (for the failure message: a stop that hangs says where)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text().splitlines()
+        wanted = ("State", "PPid", "SigPnd", "ShdPnd", "SigBlk", "SigIgn", "SigCgt")
+        lines = [line for line in status if line.split(":")[0] in wanted]
+        for task in sorted(Path(f"/proc/{pid}/task").iterdir()):
+            name = (task / "comm").read_text().strip()
+            lines.append(f"thread {task.name} {name}: {(task / 'wchan').read_text()}")
+    except OSError as gone:
+        return f"{pid}: {gone}\n"
+    return f"{pid}:\n  " + "\n  ".join(lines) + "\n"
+
+
 def _assert_nothing_left(port: int, children: set[int], log: Path, within: float) -> None:
     deadline = time.monotonic() + within
     while True:
@@ -118,6 +133,7 @@ def _assert_nothing_left(port: int, children: set[int], log: Path, within: float
             commands = {pid: Path(f"/proc/{pid}/cmdline").read_bytes() for pid in left}
             raise AssertionError(
                 f"left behind: {commands}; port {port} free: {_port_is_free(port)}\n"
+                + "".join(_where(pid) for pid in left)
                 + log.read_text(errors="replace")[-3000:]
             )
         time.sleep(0.05)
