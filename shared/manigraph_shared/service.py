@@ -459,6 +459,15 @@ _LIBC = _load_libc()
 HARD_STOP_S = 30
 
 
+def request_stop(stop: threading.Event, within_s: int) -> None:
+    """Set ``stop``; the first request also arms SIGALRM ``within_s`` seconds out, whose
+    default action (set it so) ends a stop that hangs whatever the interpreter is doing. Any
+    thread may call it: a signal handler, a watcher."""
+    if not stop.is_set():
+        signal.alarm(within_s)
+    stop.set()
+
+
 def run_service(factory: Callable[[Bus], Service], bus_config: BusConfig) -> int:
     """Open the bus, run the service until SIGINT/SIGTERM, then close everything; a stop
     that is not done :data:`HARD_STOP_S` seconds after it was asked for ends the process."""
@@ -470,10 +479,8 @@ def run_service(factory: Callable[[Bus], Service], bus_config: BusConfig) -> int
     service = factory(bus)
 
     def stop(signum: int, _frame: object) -> None:
-        if not service.stop_event.is_set():
-            signal.alarm(HARD_STOP_S)
+        request_stop(service.stop_event, HARD_STOP_S)
         service.log.info("received %s, stopping", signal.Signals(signum).name)
-        service.stop_event.set()
 
     signal.signal(signal.SIGALRM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, stop)

@@ -19,6 +19,7 @@ from pathlib import Path
 from manigraph_shared.bus import Bus
 from manigraph_shared.bus_config import BusConfig
 from manigraph_shared.health import HealthFile
+from manigraph_shared.service import request_stop
 from manigraph_tools.access import access_control, read_cell_identities
 from manigraph_tools.estop_keeper import EstopKeeper, state_dir
 
@@ -36,13 +37,6 @@ STOP_GRACE = 5.0
 HARD_STOP_S = 10
 
 
-def _request_stop(stop: threading.Event) -> None:
-    """Ask the router to stop, and arm the deadline no hang outlives (any thread may call)."""
-    if not stop.is_set():
-        signal.alarm(HARD_STOP_S)
-    stop.set()
-
-
 def _watch_supervisor(stop: threading.Event) -> None:
     supervisor = os.environ.get(SUPERVISOR_ENV, "")
     if not supervisor.isdigit():
@@ -52,7 +46,7 @@ def _watch_supervisor(stop: threading.Event) -> None:
         while not stop.is_set():
             if os.getppid() != int(supervisor):
                 log.info("the supervisor went away: stopping")
-                _request_stop(stop)
+                request_stop(stop, HARD_STOP_S)
             time.sleep(0.5)
 
     threading.Thread(target=watch, name="supervisor-watch", daemon=True).start()
@@ -62,9 +56,9 @@ def run_router(config: BusConfig, state: Path | None = None) -> int:
     """Route until SIGINT/SIGTERM, keeping the stack's emergency-stop latch in ``state`` (the
     state directory; default: :func:`~manigraph_tools.estop_keeper.state_dir`)."""
     stop = threading.Event()
-    signal.signal(signal.SIGALRM, signal.SIG_DFL)  # the hard deadline of _request_stop
-    signal.signal(signal.SIGINT, lambda *_: _request_stop(stop))
-    signal.signal(signal.SIGTERM, lambda *_: _request_stop(stop))
+    signal.signal(signal.SIGALRM, signal.SIG_DFL)  # the hard deadline of request_stop
+    signal.signal(signal.SIGINT, lambda *_: request_stop(stop, HARD_STOP_S))
+    signal.signal(signal.SIGTERM, lambda *_: request_stop(stop, HARD_STOP_S))
     _watch_supervisor(stop)
     # The certificate set's cells.json (if any) names each cell identity's cells.
     cells = read_cell_identities(config.tls_dir) if config.tls else {}
