@@ -23,6 +23,8 @@ ProtobufDecoder = Callable[[str, bytes, bytes], dict[str, Any]]
 #: frames are those of foxglove.websocket.v1.
 SUBPROTOCOL = "foxglove.sdk.v1"
 MESSAGE_DATA = 0x01
+#: The status foxglove-sdk sends for a subscription to a channel it does not (yet) know.
+UNKNOWN_CHANNEL = "Unknown channel ID: "
 
 pytestmark = pytest.mark.integration
 
@@ -54,6 +56,8 @@ class FoxgloveClient:
         self.deadline = time.monotonic() + timeout
         self.channels: dict[str, dict[str, Any]] = {}
         self.data: dict[int, list[bytes]] = {}
+        #: Subscription id -> channel id, as sent.
+        self.subscribed: dict[int, int] = {}
 
     def _read(self, until: float | None = None) -> None:
         """One frame, waiting until ``until`` (at most the deadline; TimeoutError after)."""
@@ -63,6 +67,8 @@ class FoxgloveClient:
             message = json.loads(frame)
             if message["op"] == "advertise":
                 self.channels.update({c["topic"]: c for c in message["channels"]})
+            elif message["op"] == "status" and message["message"].startswith(UNKNOWN_CHANNEL):
+                self._subscribe_again(int(message["message"].removeprefix(UNKNOWN_CHANNEL)))
         elif frame[0] == MESSAGE_DATA:
             subscription, _log_time = struct.unpack_from("<IQ", frame, 1)
             self.data.setdefault(subscription, []).append(frame[13:])
@@ -74,8 +80,19 @@ class FoxgloveClient:
 
     def subscribe(self, subscription: int, topic: str) -> None:
         channel_id = self.channel(topic)["id"]
+        self.subscribed[subscription] = channel_id
         subscriptions = [{"id": subscription, "channelId": channel_id}]
         self.ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
+
+    def _subscribe_again(self, channel_id: int) -> None:
+        """foxglove-sdk 0.30 advertises a channel made while a client is connected a moment
+        before it can be subscribed to: a subscription sent at once can be refused with
+        "Unknown channel ID" (seen under load, for a cell's channel made at its first scene).
+        The client then sends it again."""
+        for subscription, channel in self.subscribed.items():
+            if channel == channel_id:
+                subscriptions = [{"id": subscription, "channelId": channel_id}]
+                self.ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
 
     def data_of(self, subscription: int, publish: Callable[[], None], every: float = 0.5) -> bytes:
         """The first frame of ``subscription``, calling ``publish`` again every ``every``
