@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -14,6 +15,13 @@ def pytest_configure(config: pytest.Config) -> None:
     """Every stack a test starts keeps its emergency-stop latch under this run's own state
     home (one directory per port), never the user's ``~/.local/state``."""
     os.environ["XDG_STATE_HOME"] = tempfile.mkdtemp(prefix="manigraph-test-state-")
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """The run's state home goes with it: a test run leaves nothing behind in /tmp."""
+    state = os.environ.get("XDG_STATE_HOME", "")
+    if Path(state).name.startswith("manigraph-test-state-"):
+        shutil.rmtree(state, ignore_errors=True)
 
 
 @pytest.fixture
