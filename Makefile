@@ -37,7 +37,7 @@ lint: install  ## ruff, mypy, and this branch's commit subjects (CONTRIBUTING.md
 		training/manigraph_training \
 		services/skills/manigraph_skills services/perception/manigraph_perception \
 		testkit/manigraph_testkit families/blocks/manigraph_blocks \
-		families/dishwasher/manigraph_dishwasher
+		families/dishwasher/manigraph_dishwasher families/shelf/manigraph_shelf
 
 format: install
 	$(RUN) ruff format .
