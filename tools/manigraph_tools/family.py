@@ -15,8 +15,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.family_packages import family_parts
-from manigraph_shared.registry import Registry, import_target
+from manigraph_shared.family_packages import register_parts
+from manigraph_shared.registry import Registry
 
 __all__ = ["FAMILIES", "ToolsFamily", "family_of_task", "register_family"]
 
@@ -43,11 +43,7 @@ class ToolsFamily:
 
 def _register_installed() -> None:
     """Register the ``tools`` part of every installed family package, by family name."""
-    for part in family_parts("tools"):
-        family = import_target(part.target)
-        if not isinstance(family, ToolsFamily) or family.name != part.family:
-            raise ConfigError(f"family.{part.family}", f"{part.target} is not its ToolsFamily")
-        register_family(family)
+    register_parts("tools", ToolsFamily, register_family)
 
 
 #: Every task family whose episodes the episode commands size its own way, by name: the

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.family_packages import family_parts
+from manigraph_shared.family_packages import check_one_fallback, family_of_scene, register_parts
 from manigraph_shared.messages import EpisodeRequest, Scene
 from manigraph_shared.registry import Registry, import_target
 
@@ -105,11 +105,7 @@ class PlannerFamily:
 
 def _register_installed() -> None:
     """Register the ``planner`` part of every installed family package, by family name."""
-    for part in family_parts("planner"):
-        family = import_target(part.target)
-        if not isinstance(family, PlannerFamily) or family.name != part.family:
-            raise ConfigError(f"family.{part.family}", f"{part.target} is not its PlannerFamily")
-        register_family(family)
+    register_parts("planner", PlannerFamily, register_family)
 
 
 #: Every task family the planner knows, by name: the installed family packages' are
@@ -118,27 +114,15 @@ FAMILIES: Registry[PlannerFamily] = Registry("family", fill=_register_installed)
 
 
 def register_family(family: PlannerFamily) -> PlannerFamily:
-    """Add ``family`` to :data:`FAMILIES`; a second fallback family is refused (which
-    family a scene falls back to must not depend on the order families come in)."""
-    if family.fallback:
-        taken = [name for name, known in FAMILIES.items() if known.fallback]
-        if taken:
-            raise ConfigError("family", f"'{family.name}': '{taken[0]}' is the fallback already")
+    """Add ``family`` to :data:`FAMILIES`; a second fallback family is refused."""
+    check_one_fallback(family, (known for _, known in FAMILIES.items()))
     FAMILIES.add(family.name, family, help=family.help)
     return family
 
 
 def family_of(scene: Scene) -> PlannerFamily:
     """The family ``scene`` belongs to: the first that matches it, else the fallback."""
-    fallback = None
-    for _, family in FAMILIES.items():
-        if family.fallback:
-            fallback = family
-        elif family.matches(scene):
-            return family
-    if fallback is None:
-        raise ConfigError("family", "no family takes this scene and none is the fallback")
-    return fallback
+    return family_of_scene((family for _, family in FAMILIES.items()), scene)
 
 
 def family_for_heads(heads: str) -> PlannerFamily:

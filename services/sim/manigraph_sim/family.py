@@ -30,9 +30,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.family_packages import family_parts
+from manigraph_shared.family_packages import register_parts
 from manigraph_shared.messages import EpisodeRequest, RobotCommand, Scene
-from manigraph_shared.registry import Registry, import_target
+from manigraph_shared.registry import Registry
 from manigraph_sim.tasks.base import TASKS, Task
 from manigraph_sim.world_model import Body, Layout
 
@@ -201,11 +201,7 @@ class SimFamily(ABC):
 
 def _register_installed() -> None:
     """Register the ``sim`` part of every installed family package, by family name."""
-    for part in family_parts("sim"):
-        family = import_target(part.target)
-        if getattr(family, "name", None) != part.family:
-            raise ConfigError(f"family.{part.family}", f"{part.target} is not named so")
-        register_family(family)
+    register_parts("sim", SimFamily, register_family)
 
 
 #: Task families by name, each with its options (built from the episode request); the

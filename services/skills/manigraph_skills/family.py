@@ -27,8 +27,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from manigraph_shared.errors import ConfigError
-from manigraph_shared.family_packages import family_parts
+from manigraph_shared.family_packages import check_one_fallback, family_of_scene, register_parts
 from manigraph_shared.messages import Action, Scene
 from manigraph_shared.registry import Registry, import_target
 
@@ -80,11 +79,7 @@ class SkillFamily:
 
 def _register_installed() -> None:
     """Register the ``skills`` part of every installed family package, by family name."""
-    for part in family_parts("skills"):
-        family = import_target(part.target)
-        if not isinstance(family, SkillFamily) or family.name != part.family:
-            raise ConfigError(f"family.{part.family}", f"{part.target} is not its SkillFamily")
-        register_family(family)
+    register_parts("skills", SkillFamily, register_family)
 
 
 #: Every task family the skill runner knows, by name: the installed family packages' are
@@ -93,12 +88,8 @@ FAMILIES: Registry[SkillFamily] = Registry("family", fill=_register_installed)
 
 
 def register_family(family: SkillFamily) -> SkillFamily:
-    """Add ``family`` to :data:`FAMILIES`; a second fallback family is refused (which
-    family a scene falls back to must not depend on the order families come in)."""
-    if family.fallback:
-        taken = [known.name for known in families() if known.fallback]
-        if taken:
-            raise ConfigError("family", f"'{family.name}': '{taken[0]}' is the fallback already")
+    """Add ``family`` to :data:`FAMILIES`; a second fallback family is refused."""
+    check_one_fallback(family, families())
     FAMILIES.add(family.name, family, help=family.help)
     return family
 
@@ -112,14 +103,7 @@ def families() -> Iterator[SkillFamily]:
 
 def family_of(scene: Scene) -> SkillFamily:
     """The family ``scene`` belongs to: the first that matches it, else the fallback."""
-    fallback = None
-    for family in families():
-        if family.fallback:
-            fallback = family
-        elif family.matches(scene):
-            return family
-    assert fallback is not None, "the blocks family is the fallback"
-    return fallback
+    return family_of_scene(families(), scene)
 
 
 def family_taking(action: Action) -> SkillFamily | None:
