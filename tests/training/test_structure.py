@@ -10,8 +10,8 @@ from manigraph_blocks.training.augment import Augmentation
 from manigraph_blocks.training.structure import (
     BLOCK,
     COVER,
+    DemoWorldSizes,
     Graph,
-    SceneGeometry,
     add_distractors,
     add_finished_tower,
     add_open_box,
@@ -27,7 +27,7 @@ from manigraph_planner.policies import load_policy
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
 from manigraph_training.dataset import Sample, load_demonstrations
 
-GEOMETRY = SceneGeometry()
+GEOMETRY = DemoWorldSizes()
 SIZES = {COVER: (0.16, 0.16, 0.01), BLOCK: (0.04, 0.04, 0.04)}
 
 

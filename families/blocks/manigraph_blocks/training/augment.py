@@ -99,8 +99,8 @@ import torch
 from manigraph_blocks.training.structure import (
     BLOCK,
     BOX_CELLS,
+    DemoWorldSizes,
     Graph,
-    SceneGeometry,
     add_distractors,
     add_finished_tower,
     add_open_box,
@@ -151,7 +151,7 @@ class Augmentation:
     finished_tower_probability: float = 0.5
     max_finished_levels: int = 40
     drop_finished_probability: float = 0.0
-    geometry: SceneGeometry = field(default_factory=SceneGeometry)
+    geometry: DemoWorldSizes = field(default_factory=DemoWorldSizes)
     #: Only the steps that hold for any task (:meth:`for_task`).
     generic: bool = False
     #: Task files: up to this many copies of the decided pair, and of finished pairs, per

@@ -47,8 +47,8 @@ from manigraph_blocks.training.structure.graph import (
     COLUMN_TOLERANCE,
     COVER,
     COVER_GOAL,
+    DemoWorldSizes,
     Graph,
-    SceneGeometry,
 )
 from manigraph_blocks.training.structure.towers import (
     add_finished_tower,
@@ -63,8 +63,8 @@ __all__ = [
     "COLUMN_TOLERANCE",
     "COVER",
     "COVER_GOAL",
+    "DemoWorldSizes",
     "Graph",
-    "SceneGeometry",
     "add_distractors",
     "add_finished_tower",
     "add_open_box",

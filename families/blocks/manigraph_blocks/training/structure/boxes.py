@@ -13,8 +13,8 @@ from manigraph_blocks.training.structure.graph import (
     BLOCK_GOAL,
     COVER,
     COVER_GOAL,
+    DemoWorldSizes,
     Graph,
-    SceneGeometry,
     free_site,
     rebuild,
     remove,
@@ -26,7 +26,7 @@ BOX_CELLS = sorted(
 )
 
 
-def _lid_and_storage_heights(x: Tensor, geometry: SceneGeometry) -> tuple[float, float] | None:
+def _lid_and_storage_heights(x: Tensor, geometry: DemoWorldSizes) -> tuple[float, float] | None:
     """Heights of a demonstrated box's lid and storage place (the highest and lowest cover
     goal), or None where the graph shows no box with both."""
     heights = x[x[:, 0] == COVER_GOAL, 3]
@@ -43,7 +43,7 @@ def add_distractors(
     closed_box: bool,
     storage: bool,
     generator: torch.Generator,
-    geometry: SceneGeometry,
+    geometry: DemoWorldSizes,
     packed: int = 0,
 ) -> Graph:
     """Add a closed box (cover on its lid goal) and/or a free storage place, each at a free
@@ -85,7 +85,7 @@ def add_distractors(
 
 
 def _floor_cells(
-    site: Tensor, count: int, storage_z: float, geometry: SceneGeometry
+    site: Tensor, count: int, storage_z: float, geometry: DemoWorldSizes
 ) -> list[list[float]]:
     """Centres ``[x, y, z]`` of the first ``count`` cells of the block grid on the floor of a
     box at ``site`` (the table is a stored cover's half thickness below ``storage_z``)."""
@@ -95,7 +95,7 @@ def _floor_cells(
     return [[sx + dx * pitch, sy + dy * pitch, floor] for dx, dy in BOX_CELLS[:count]]
 
 
-def drop_idle_covers(graph: Graph, geometry: SceneGeometry) -> Graph:
+def drop_idle_covers(graph: Graph, geometry: DemoWorldSizes) -> Graph:
     """Remove every cover and cover goal when the expert's object is a block and every cover
     lies on the table (none on a box). Returns ``graph`` itself otherwise."""
     x = graph.x
@@ -107,7 +107,7 @@ def drop_idle_covers(graph: Graph, geometry: SceneGeometry) -> Graph:
     return remove(graph, covers | (x[:, 0] == COVER_GOAL))
 
 
-def _opened_cover(graph: Graph, geometry: SceneGeometry) -> Tensor | None:
+def _opened_cover(graph: Graph, geometry: DemoWorldSizes) -> Tensor | None:
     """The expert's cover row when it is taking a cover off a box, else None."""
     chosen = graph.x[graph.object_index]
     if int(chosen[0]) == COVER and float(chosen[3]) > geometry.block_size:
@@ -115,13 +115,13 @@ def _opened_cover(graph: Graph, geometry: SceneGeometry) -> Tensor | None:
     return None
 
 
-def _under(cover: Tensor, x: Tensor, geometry: SceneGeometry) -> Tensor:
+def _under(cover: Tensor, x: Tensor, geometry: DemoWorldSizes) -> Tensor:
     """Which nodes lie inside the box that ``cover`` (a node row) closes."""
     beside = (x[:, 1:3] - cover[1:3]).abs().amax(dim=1) <= geometry.box_half_width
     return beside & (x[:, 3] < cover[3])
 
 
-def hide_box_contents(graph: Graph, geometry: SceneGeometry) -> Graph:
+def hide_box_contents(graph: Graph, geometry: DemoWorldSizes) -> Graph:
     """When the expert takes a cover off a box, remove the blocks and block goals inside that
     box: the scene as a robot sees it when what a closed box holds is not observed (box
     rearrangement). The box still has to be opened for the task to go on, so the label is
@@ -139,7 +139,7 @@ def hide_box_contents(graph: Graph, geometry: SceneGeometry) -> Graph:
 def add_open_box(
     graph: Graph,
     generator: torch.Generator,
-    geometry: SceneGeometry,
+    geometry: DemoWorldSizes,
     loose_blocks: int = 0,
     free_goals: int = 0,
 ) -> Graph:
@@ -174,7 +174,7 @@ def add_open_box(
     return rebuild(graph, x.clone(), objects, goals)
 
 
-def open_box_contents(graph: Graph, geometry: SceneGeometry) -> tuple[str, ...]:
+def open_box_contents(graph: Graph, geometry: DemoWorldSizes) -> tuple[str, ...]:
     """What an open box added while the expert takes a cover off a box may hold and keep
     the label: ``"blocks"`` (loose blocks on its floor) where no free block goal lies outside
     the box being opened, ``"goals"`` (free block goals on its floor) where no block still
@@ -198,7 +198,7 @@ def open_box_contents(graph: Graph, geometry: SceneGeometry) -> tuple[str, ...]:
     return tuple(kinds)
 
 
-def is_closing(graph: Graph, geometry: SceneGeometry) -> bool:
+def is_closing(graph: Graph, geometry: DemoWorldSizes) -> bool:
     """The expert puts a cover from the table back onto a box."""
     chosen = graph.x[graph.object_index]
     return int(chosen[0]) == COVER and float(chosen[3]) <= geometry.block_size

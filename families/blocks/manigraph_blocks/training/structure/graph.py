@@ -35,7 +35,7 @@ class Graph:
 
 
 @dataclass(frozen=True)
-class SceneGeometry:
+class DemoWorldSizes:
     """Sizes of the world the demonstrations come from, metres.
 
     Args:
@@ -58,7 +58,7 @@ class SceneGeometry:
     workspace_y: tuple[float, float] = (-0.35, 0.35)
 
 
-def box_sites(x: Tensor, geometry: SceneGeometry) -> Tensor:
+def box_sites(x: Tensor, geometry: DemoWorldSizes) -> Tensor:
     """(x, y) of every cover or cover goal above the table: a box stands there."""
     lids = ((x[:, 0] == COVER) | (x[:, 0] == COVER_GOAL)) & (x[:, 3] > geometry.block_size)
     return x[lids, 1:3]
@@ -76,14 +76,14 @@ def columns(x: Tensor, rows: Tensor) -> list[Tensor]:
     return columns
 
 
-def away_from_boxes(x: Tensor, column: Tensor, boxes: Tensor, geometry: SceneGeometry) -> bool:
+def away_from_boxes(x: Tensor, column: Tensor, boxes: Tensor, geometry: DemoWorldSizes) -> bool:
     if boxes.numel() == 0:
         return True
     gap = (boxes - x[column[0], 1:3]).abs().amax(dim=1)
     return bool((gap > geometry.box_half_width).all())
 
 
-def free_site(taken: Tensor, generator: torch.Generator, geometry: SceneGeometry) -> Tensor | None:
+def free_site(taken: Tensor, generator: torch.Generator, geometry: DemoWorldSizes) -> Tensor | None:
     low = torch.tensor([geometry.workspace_x[0], geometry.workspace_y[0]])
     high = torch.tensor([geometry.workspace_x[1], geometry.workspace_y[1]])
     for _ in range(50):

@@ -11,8 +11,8 @@ from manigraph_blocks.training.structure.graph import (
     BLOCK,
     BLOCK_GOAL,
     COLUMN_TOLERANCE,
+    DemoWorldSizes,
     Graph,
-    SceneGeometry,
     away_from_boxes,
     box_sites,
     columns,
@@ -23,7 +23,7 @@ from manigraph_blocks.training.structure.graph import (
 
 
 def extend_towers(
-    graph: Graph, source_levels: int, stack_levels: int, free_levels: int, geometry: SceneGeometry
+    graph: Graph, source_levels: int, stack_levels: int, free_levels: int, geometry: DemoWorldSizes
 ) -> Graph:
     """Slide ``source_levels`` blocks under every source tower, and ``stack_levels`` filled
     goals (each holding a block) under and ``free_levels`` free goals on top of every goal
@@ -83,7 +83,7 @@ def add_finished_tower(
     graph: Graph,
     levels: int,
     generator: torch.Generator,
-    geometry: SceneGeometry,
+    geometry: DemoWorldSizes,
     free_levels: int = 0,
 ) -> Graph:
     """Add a goal stack elsewhere: ``levels`` filled block goals, each holding its block, and
@@ -111,7 +111,7 @@ def add_finished_tower(
     return rebuild(graph, x.clone(), blocks, goals)
 
 
-def drop_finished_pairs(graph: Graph, levels: int, geometry: SceneGeometry) -> Graph:
+def drop_finished_pairs(graph: Graph, levels: int, geometry: DemoWorldSizes) -> Graph:
     """Remove finished work: up to ``levels`` filled block goals with the blocks in them from
     the bottom of every free-standing goal stack (what stood above them moves down by whole
     block sizes), and every filled block goal with its block on a box floor.
