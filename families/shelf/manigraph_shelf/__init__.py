@@ -9,4 +9,8 @@ point names.
 
 #: Where each service finds this family's part (``"module:attribute"``), imported only when
 #: that service first reads its family registry.
-PARTS: dict[str, str] = {}
+PARTS = {
+    "sim": "manigraph_shelf.sim.family:ShelfFamily",
+    "planner": "manigraph_shelf.planner:FAMILY",
+    "tools": "manigraph_shelf.tools:FAMILY",
+}

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from manigraph_shared.errors import ConfigError
+from manigraph_shared.messages import Scene
 
 #: The rows of a column, as a slot names them: the back slot is filled first.
 BACK = "back"
@@ -152,3 +153,13 @@ def blocked(slot: Slot, filled: set[str], slots: list[Slot]) -> bool:
 START_X = (0.24, 0.40)
 START_Y = (-0.26, 0.26)
 START_SPACING = 0.08
+
+
+#: The goal attribute that says a slot's row (``back`` or ``front``): what tells a shelf
+#: scene (and its back slots) apart, for the sim's Scene, the expert and the planner.
+ROW_ATTRIBUTE = "shelf_row"
+
+
+def is_shelf_scene(scene: Scene) -> bool:
+    """Whether ``scene`` (a ``Scene``) is a shelf's: some goal says its row."""
+    return any(ROW_ATTRIBUTE in goal.attributes for goal in scene.goals)
