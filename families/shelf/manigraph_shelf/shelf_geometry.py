@@ -148,11 +148,23 @@ def blocked(slot: Slot, filled: set[str], slots: list[Slot]) -> bool:
     )
 
 
-#: Where the objects start: a region of the table in front of the shelf (x, y ranges of
-#: object centres, metres), objects at least ``START_SPACING`` apart.
+#: Where the objects start: a grid of cells on the table in front of the shelf, their centres
+#: from ``START_X[0]`` to ``START_X[1]`` and ``START_Y[0]`` to ``START_Y[1]``,
+#: ``START_SPACING`` apart (3 x 7 cells, metres); each object takes a cell and lies within
+#: ``START_JITTER`` of its centre.
 START_X = (0.24, 0.40)
-START_Y = (-0.26, 0.26)
+START_Y = (-0.24, 0.24)
 START_SPACING = 0.08
+START_JITTER = 0.01
+
+
+def start_cells() -> list[tuple[float, float]]:
+    """The (x, y) centres of the start grid's cells, row by row from the robot."""
+
+    def steps(low: float, high: float) -> list[float]:
+        return [low + i * START_SPACING for i in range(round((high - low) / START_SPACING) + 1)]
+
+    return [(x, y) for x in steps(*START_X) for y in steps(*START_Y)]
 
 
 #: The goal attribute that says a slot's row (``back`` or ``front``): what tells a shelf

@@ -8,12 +8,11 @@ from manigraph_shared.errors import ConfigError, TaskError
 from manigraph_shelf.shelf_geometry import (
     OBJECT_SIZE,
     ROW_ATTRIBUTE,
-    START_SPACING,
-    START_X,
-    START_Y,
+    START_JITTER,
     geometry_for,
     levels_for,
     slots_for,
+    start_cells,
 )
 from manigraph_shelf.sim.layout import ShelfLayout
 from manigraph_shelf.sim.options import ShelfTask
@@ -22,23 +21,24 @@ from manigraph_sim.world_model import BLOCK, Body, Goal
 
 #: Objects when the request sets none.
 DEFAULT_OBJECTS = 4
-#: Draws of a start position before the layout gives up on spacing the objects.
-MAX_DRAWS = 2000
 
 
 def start_positions(rng: np.random.Generator, count: int) -> list[np.ndarray]:
-    """``count`` object centres on the table in front of the shelf, at least
-    ``START_SPACING`` apart (drawn until they fit)."""
-    sites: list[np.ndarray] = []
-    for _ in range(MAX_DRAWS):
-        if len(sites) == count:
-            break
-        site = np.array([rng.uniform(*START_X), rng.uniform(*START_Y), OBJECT_SIZE / 2])
-        if all(np.linalg.norm(site[:2] - other[:2]) >= START_SPACING for other in sites):
-            sites.append(site)
-    if len(sites) < count:
-        raise TaskError(f"objects: {count} blocks do not fit on the table in front of the shelf")
-    return sites
+    """``count`` object centres on the table in front of the shelf: random cells of the
+    start grid, jittered."""
+    cells = start_cells()
+    if count > len(cells):
+        raise TaskError(f"objects: {count} blocks do not fit on the table ({len(cells)} cells)")
+    chosen = rng.choice(len(cells), size=count, replace=False)
+    return [
+        np.array(
+            [
+                *np.array(cells[int(c)]) + rng.uniform(-START_JITTER, START_JITTER, 2),
+                OBJECT_SIZE / 2,
+            ]
+        )
+        for c in chosen
+    ]
 
 
 @register_task("shelf")
@@ -51,7 +51,8 @@ class ShelfFilling(ShelfTask):
     above, so a filled front slot blocks the way to the back slot behind it: fill the back
     one first. ``objects`` / 2 columns fill levels of up to three columns, bottom first.
 
-    **Randomizations**: the blocks' start positions on the table (at least 8 cm apart).
+    **Randomizations**: the blocks' start positions on the table: random cells of an 8 cm
+    grid, jittered by up to 1 cm.
 
     **Success Conditions**: every slot holds a block.
     """
@@ -64,7 +65,8 @@ class ShelfFilling(ShelfTask):
 
     @property
     def objects(self) -> int:
-        return self.params.objects or DEFAULT_OBJECTS
+        objects = self.params.objects
+        return DEFAULT_OBJECTS if objects is None else objects
 
     def layout(self, rng: np.random.Generator) -> ShelfLayout:
         geometry = geometry_for(self.objects)
