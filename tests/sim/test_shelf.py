@@ -50,6 +50,8 @@ def test_a_filled_front_slot_blocks_the_back_slot_and_the_block_stays_put() -> N
     assert w.held is None and np.allclose(w.positions["block_1"], start)
     assert "slot_0_0_back" not in w.filled()
     put(w, "block_1", "slot_0_1_back")  # another column's back slot is still free
+    put(w, "block_0", "slot_0_0_back")  # lifted out of the front slot, it blocks no more
+    assert w.filled() == {"slot_0_0_back", "slot_0_1_back"}
 
 
 def test_success_is_every_slot_filled() -> None:

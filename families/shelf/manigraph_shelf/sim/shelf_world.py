@@ -66,7 +66,8 @@ class ShelfWorld:
             return
         if self.occupant.get(slot.id, body_id) != body_id:
             raise SkillError("slot_filled", f"{slot.id} holds {self.occupant[slot.id]}")
-        if blocked(slot, self.filled(), self.slots):
+        own = self.slot_of(body_id)  # lifted out of it: it no longer blocks anything
+        if blocked(slot, self.filled() - {own.id if own else ""}, self.slots):
             raise SkillError("slot_blocked", f"the front slot before {slot.id} is filled")
         self._leave_slot(body_id)
         self.occupant[slot.id] = body_id
