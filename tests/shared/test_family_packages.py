@@ -64,7 +64,9 @@ def test_families_register_in_name_order_and_only_where_they_have_a_part(
         """,
     )
     assert result.returncode == 0, result.stderr[-2000:]
-    assert result.stdout.strip() == "['aardvark', 'blocks', 'dishwasher'] ['blocks', 'dishwasher']"
+    assert result.stdout.strip() == (
+        "['aardvark', 'blocks', 'dishwasher'] ['blocks', 'dishwasher', 'shelf']"
+    )
 
 
 def test_a_second_fallback_family_is_refused_naming_the_first(tmp_path: Path) -> None:

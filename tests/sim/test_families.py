@@ -25,7 +25,7 @@ def request(task: str, **fields: object) -> EpisodeRequest:
 
 
 def test_both_families_are_registered_with_their_options() -> None:
-    assert list(FAMILIES) == ["blocks", "dishwasher"]
+    assert list(FAMILIES) == ["blocks", "dishwasher", "shelf"]
     assert FAMILIES.entry("blocks").options is BlockOptions
     assert FAMILIES.entry("dishwasher").options is DishwasherOptions
     assert FAMILIES["dishwasher"].layout_type is DishwasherLayout

@@ -34,7 +34,8 @@ def first_scene(task: str, **request: int) -> Scene:
 
 
 def test_each_family_registers_its_heads_feature_spec_and_experts() -> None:
-    assert set(FAMILIES) == {"dishwasher", "blocks"}
+    assert set(FAMILIES) == {"dishwasher", "blocks", "shelf"}
+    assert FAMILIES["shelf"].heads == "object-goal"  # the paper's heads: no network of its own
     blocks, dishwasher = FAMILIES["blocks"], FAMILIES["dishwasher"]
     assert (blocks.heads, dishwasher.heads) == ("object-goal", "dishwasher")
     assert set(HEADS) == {"object-goal", "dishwasher"}
