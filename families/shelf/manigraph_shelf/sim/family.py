@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from manigraph_shared.errors import ConfigError, SkillError
+from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import GripperOp, RobotCommand, Scene
 from manigraph_shelf.sim import task as _task  # noqa: F401  (registers it)
 from manigraph_shelf.sim.layout import ShelfLayout
@@ -56,7 +56,9 @@ class ShelfFamily(SimFamily):
     def physics_world(
         self, layout: ShelfLayout, make_world: MakePhysicsWorld, goal_tolerance: float
     ) -> PhysicsTaskWorld:
-        raise ConfigError("backend", "the shelf family has no physics world yet: use geometric")
+        from manigraph_shelf.sim.physics import physics_shelf
+
+        return physics_shelf(self, layout, make_world, goal_tolerance)
 
 
 class ShelfTaskWorld(ShelfWorld, GeometricTaskWorld):
