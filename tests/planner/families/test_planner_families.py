@@ -23,6 +23,7 @@ from manigraph_planner.policies.gnn import GNNPolicy
 from manigraph_shared.errors import CONFIG_EXIT_CODE, ConfigError
 from manigraph_shared.messages import EpisodeRequest, Scene
 from manigraph_sim.geometric.backend import GeometricBackend
+from manigraph_testkit.families import families_with
 
 REPO = Path(__file__).resolve().parents[3]
 
@@ -34,8 +35,7 @@ def first_scene(task: str, **request: int) -> Scene:
 
 
 def test_each_family_registers_its_heads_feature_spec_and_experts() -> None:
-    assert set(FAMILIES) == {"dishwasher", "blocks", "shelf"}
-    assert FAMILIES["shelf"].heads == "object-goal"  # the paper's heads: no network of its own
+    assert list(FAMILIES) == families_with("planner")
     blocks, dishwasher = FAMILIES["blocks"], FAMILIES["dishwasher"]
     assert (blocks.heads, dishwasher.heads) == ("object-goal", "dishwasher")
     assert set(HEADS) == {"object-goal", "dishwasher"}
