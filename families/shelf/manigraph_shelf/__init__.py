@@ -12,5 +12,6 @@ point names.
 PARTS = {
     "sim": "manigraph_shelf.sim.family:ShelfFamily",
     "planner": "manigraph_shelf.planner:FAMILY",
+    "skills": "manigraph_shelf.skills:FAMILY",
     "tools": "manigraph_shelf.tools:FAMILY",
 }
