@@ -11,7 +11,8 @@ A family owns
   filled, how many there are, how many hold an object they do not accept, and whether that is
   success);
 * its **world adapters**: :meth:`SimFamily.geometric_world` for the geometric backend and
-  :meth:`SimFamily.physics_world` for the physics backend. A backend holds the adapter and
+  :meth:`SimFamily.physics_world` for the physics backend (optional: without one the
+  physics backend refuses the family's episodes). A backend holds the adapter and
   nothing family-specific: it never asks which family a layout is.
 
 Each family is a package of its own (``families/<name>/`` at the repository root,
@@ -192,11 +193,12 @@ class SimFamily(ABC):
     def geometric_world(self, layout: Any, goal_tolerance: float) -> GeometricTaskWorld:
         """``layout`` as a world for the geometric backend."""
 
-    @abstractmethod
     def physics_world(
         self, layout: Any, make_world: MakePhysicsWorld, goal_tolerance: float
     ) -> PhysicsTaskWorld:
-        """``layout`` in the physics backend's simulator (``make_world`` builds it)."""
+        """``layout`` in the physics backend's simulator (``make_world`` builds it). A family
+        without one need not say so: the physics backend refuses its episodes, naming it."""
+        raise ConfigError("backend", f"the {self.name} family has no physics world")
 
 
 def _register_installed() -> None:
