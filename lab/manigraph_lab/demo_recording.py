@@ -16,6 +16,7 @@ goals that accept them; ``manigraph_planner.policies.matching``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
@@ -81,6 +82,23 @@ def family_expert(request: EpisodeRequest) -> Policy:
     """A fresh expert for ``request``: its task's family (the sim's registry, by task name or
     task file) as the planner registers it says which of its experts demonstrates it."""
     return PLANNER_FAMILIES[family_of(request).name].expert(request)
+
+
+def family_experts(
+    rules: str | None = None, source: str = "rules file"
+) -> Callable[[EpisodeRequest], Policy]:
+    """Who plays each episode when no policy is named (``manigraph eval``'s default): its
+    family's expert (:func:`family_expert`), one instance per expert for every episode it
+    plays, told the rules of ``rules`` (a task file's, named ``source``) when given."""
+    experts: dict[str, Policy] = {}
+
+    def expert_for(request: EpisodeRequest) -> Policy:
+        fresh = family_expert(request)
+        if fresh.name not in experts:
+            experts[fresh.name] = with_rules(fresh, rules, source)
+        return experts[fresh.name]
+
+    return expert_for
 
 
 def record_demos(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import statistics
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TextIO
 
@@ -13,6 +14,7 @@ from manigraph_shared.decision_failure import OUT_OF_OPTIONS
 from manigraph_shared.errors import DrawRefused
 from manigraph_shared.messages import EpisodeRequest
 from manigraph_shared.progress import Progress
+from manigraph_tools.episode_plan import episode_size
 
 
 @dataclass(frozen=True)
@@ -48,22 +50,27 @@ class EvalSpec:
 
 
 def evaluate(
-    policy: Policy,
+    policy: Policy | Callable[[EpisodeRequest], Policy],
     spec: EvalSpec,
     progress: TextIO | None = None,
     checkpoint: dict[str, object] | None = None,
 ) -> dict[str, object]:
-    """Play ``spec``'s episodes; ``progress``: stream for a bar, drawn only on a terminal;
-    ``checkpoint``: the policy's file (``results.checkpoint_field``), named in the summary."""
+    """Play ``spec``'s episodes; ``policy``: who plays every episode, or who plays each one
+    by its request (``demo_recording.family_experts``: its family's expert); ``progress``:
+    stream for a bar, drawn only on a terminal; ``checkpoint``: the policy's file
+    (``results.checkpoint_field``), named in the summary."""
     records: list[EpisodeRecord] = []
     refused: list[dict[str, object]] = []
     started = time.perf_counter()
     decisions = 0
-    label = f"eval {policy.name} {spec.task_file_name or spec.task} K={spec.blocks}"
+    requests = spec.requests()
+    players = [policy if isinstance(policy, Policy) else policy(r) for r in requests]
+    name = "+".join(dict.fromkeys(player.name for player in players))  # each once, in order
+    label = f"eval {name} {spec.task_file_name or spec.task} K={spec.blocks}"
     with Progress(spec.episodes, label, unit="episode", stream=progress) as bar:
-        for request in spec.requests():
+        for request, player in zip(requests, players, strict=True):
             try:
-                record = run_episode(policy, request, noise=spec.noise)
+                record = run_episode(player, request, noise=spec.noise)
             except DrawRefused as exc:  # this seed's draw only: the others still run
                 refused.append({"seed": request.seed, "reason": str(exc)})
                 bar.note(f"  refused {spec.task_file_name}, seed {request.seed}: {exc}")
@@ -74,13 +81,17 @@ def evaluate(
             bar.status(f"success {sum(r.success for r in records) / len(records):.3f}")
             bar.update()
     seconds = time.perf_counter() - started
-    summary = summarize(policy.name, spec, records, seconds, decisions, checkpoint)
+    summary = summarize(name, spec, records, seconds, decisions, checkpoint)
     if refused:
         summary["refused_seeds"] = refused
     return summary
 
 
-def success_rate(policy: Policy, spec: EvalSpec, progress: TextIO | None = None) -> float:
+def success_rate(
+    policy: Policy | Callable[[EpisodeRequest], Policy],
+    spec: EvalSpec,
+    progress: TextIO | None = None,
+) -> float:
     """The fraction of ``spec``'s episodes that ``policy`` finishes."""
     return float(evaluate(policy, spec, progress)["success_rate"])  # type: ignore[arg-type]
 
@@ -104,10 +115,8 @@ def summarize(
         **(checkpoint or {}),
         "task": spec.task,
         **({"task_file": spec.task_file_name} if spec.task_file is not None else {}),
-        "blocks": spec.blocks,
-        "stacks": spec.stacks,
-        **({"objects": spec.objects} if spec.objects is not None else {}),
-        **({"preference": spec.preference} if spec.preference is not None else {}),
+        # blocks and stacks, or what the task's family sizes its episodes by (as `up` does)
+        **episode_size(spec.task, spec),
         "noise": spec.noise,
         "seed": spec.seed,
         "episodes": count,

@@ -246,13 +246,14 @@ def _task_file_limit() -> int:
     return EpisodeRequest.max_length("task_file")
 
 
-def _size(plan: EpisodePlan) -> dict[str, object]:
-    """What the episodes hold: a family's own sizes (its count and options), or blocks and
-    stacks."""
-    family = family_of_task(plan.task)
+def episode_size(task: str, sizes: object) -> dict[str, object]:
+    """What ``task``'s episodes hold, read from ``sizes`` (a plan, ``manigraph eval``'s spec:
+    anything with those fields): its family's own sizes (its count and options, as asked),
+    or blocks and stacks."""
+    family = family_of_task(task)
     if family is not None:
-        return {name: getattr(plan, name) for name in family.sized_by}
-    return {"blocks": plan.blocks, "stacks": plan.stacks}
+        return {name: getattr(sizes, name) for name in family.sized_by}
+    return {name: getattr(sizes, name) for name in ("blocks", "stacks")}
 
 
 def summarize(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, object]:
@@ -261,7 +262,7 @@ def summarize(plan: EpisodePlan, results: list[EpisodeResult]) -> dict[str, obje
     return {
         "task": plan.task,
         **named,
-        **_size(plan),
+        **episode_size(plan.task, plan),
         "seed": plan.seed,
         "episodes": count,
         "success_rate": sum(r.success for r in results) / count if count else 0.0,

@@ -20,10 +20,17 @@ from manigraph_shared.options import (
     options_from_args,
 )
 
+#: ``--policy``'s default: each episode's task family's expert (the block family's is named
+#: so; a shelf or dishwasher episode is played by that family's own).
+FAMILY_EXPERTS = "expert"
+
 
 @dataclass(frozen=True)
 class EvalOptions(Options):
-    policy: str = option("expert", help="policy name or checkpoint file")
+    policy: str = option(
+        FAMILY_EXPERTS,
+        help=f"policy name or checkpoint file ({FAMILY_EXPERTS}: each task family's expert)",
+    )
     noise: float = option(0.0, help="observation noise sigma", within=Interval(0, None), unit="m")
     accepts_filter: Literal["on", "off"] = option(
         "on",
@@ -48,6 +55,7 @@ def _eval_configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _eval_run(args: argparse.Namespace) -> int:
+    from manigraph_lab.demo_recording import family_experts
     from manigraph_lab.evaluate import EvalSpec, evaluate
     from manigraph_planner.policies import POLICIES, load_policy
     from manigraph_planner.policies.teacher_rules import TEACHERS, with_rules
@@ -76,7 +84,11 @@ def _eval_run(args: argparse.Namespace) -> int:
     if rules is not None and options.policy in TEACHERS:  # the teacher is told them
         policy = with_rules(policy, rules, str(episodes.rules))
     checkpoint = None if options.policy in POLICIES else checkpoint_field(options.policy)
-    summary = rounded(evaluate(policy, spec, progress, checkpoint))
+    # The default: each episode is played by its family's expert (the teacher told the rules).
+    player = (
+        family_experts(rules, str(episodes.rules)) if options.policy == FAMILY_EXPERTS else policy
+    )
+    summary = rounded(evaluate(player, spec, progress, checkpoint))
     assert isinstance(summary, dict)
     if policy.accepts_filter is not None:  # what was judged: the network alone, or filtered
         summary["accepts_filter"] = "on" if policy.accepts_filter else "off"
