@@ -93,7 +93,7 @@ def test_training_is_seeded(demo_log: Path) -> None:
 
 def test_bad_training_values_name_the_field() -> None:
     with pytest.raises(ValueError, match="epochs"):
-        TrainConfig(epochs=0)
+        TrainConfig(epochs=-1)
     with pytest.raises(ValueError, match="translate_z"):
         Augmentation(translate_z=-1.0)
 

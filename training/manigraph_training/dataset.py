@@ -54,6 +54,9 @@ class Demonstrations:
     skipped: int
     #: What the columns of every sample's ``x`` mean, learned from the scenes.
     feature_spec: FeatureSpec = FEATURE_SPEC
+    #: The task family every sample's scene belongs to (``family.family_of``); None for
+    #: samples of several families.
+    family: str | None = None
 
 
 def read_decisions(paths: Iterable[Path]) -> tuple[dict[tuple[str, int], Scene], list[Action]]:
@@ -108,6 +111,7 @@ def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
     samples: list[Sample] = []
     skipped = 0
     episodes = set()
+    families = set()
     for action, scene in zip(actions, paired, strict=True):
         trains = scene is not None and _trains_here(scene)
         sample = _sample(scene, action, spec) if scene is not None and trains else None
@@ -116,11 +120,13 @@ def load_demonstrations(paths: Iterable[Path]) -> Demonstrations:
             continue
         samples.append(sample)
         episodes.add(action.episode_id)
+        families.add(family_of(scene).name if scene else "")
         digest.update(scene.encode() if scene else b"")
         digest.update(f"{action.object_id}->{action.goal_id}".encode())
     if not samples:
         raise LogError("demonstrations: no action could be paired with the scene it was decided on")
-    return Demonstrations(samples, digest.hexdigest()[:16], len(episodes), skipped, spec)
+    family = families.pop() if len(families) == 1 else None
+    return Demonstrations(samples, digest.hexdigest()[:16], len(episodes), skipped, spec, family)
 
 
 def _trains_here(scene: Scene) -> bool:

@@ -61,15 +61,21 @@ class TrainConfig:
     #: How node states become a decision (:data:`~manigraph_planner.gnn.models.config.DECODERS`):
     #: "nodes", the paper's two softmaxes; "pairs", one softmax over (object, goal) pairs.
     decoder: str = "nodes"
+    #: The task family whose demonstrations it trains (``manigraph train`` sets it from the
+    #: scenes): the augmentation is drawn from its recipes, if it names some; None: from the
+    #: fallback's (:func:`~manigraph_training.recipes.recipes`).
+    family: str | None = None
 
     def __post_init__(self) -> None:
-        for name in ("epochs", "batch_size"):
-            if getattr(self, name) < 1:
-                raise ConfigError(name, "must be >= 1")
+        # 0 epochs: the network as initialised, the untrained baseline beside a learned one
+        if self.epochs < 0:
+            raise ConfigError("epochs", "must be >= 0 (0: the untrained network)")
+        if self.batch_size < 1:
+            raise ConfigError("batch_size", "must be >= 1")
         self.model_config()  # the architecture and sizes, checked where a network is built
         resample_every = self.resample_every
         if resample_every is None:
-            resample_every = resample_every_for(self.architecture)
+            resample_every = resample_every_for(self.architecture, self.family)
             object.__setattr__(self, "resample_every", resample_every)
         if resample_every < 0:
             raise ConfigError("resample_every", "must be >= 0 epochs")
@@ -78,7 +84,8 @@ class TrainConfig:
         BATCH_LAYOUTS.check(self.batch_layout)
         _check_device(self.device)
         if self.augmentation is None:
-            object.__setattr__(self, "augmentation", augmentation_for(self.architecture))
+            augmentation = augmentation_for(self.architecture, family=self.family)
+            object.__setattr__(self, "augmentation", augmentation)
 
     def model_config(self) -> ModelConfig:
         """The network this trains (``ConfigError`` naming a bad field)."""
@@ -109,6 +116,8 @@ class TrainConfig:
         values.pop("features")
         if values["decoder"] == "nodes":  # as before there was a choice
             values.pop("decoder")
+        if values["family"] is None:  # as before the family chose the recipe
+            values.pop("family")
         return values
 
 
@@ -224,7 +233,7 @@ def _fit(
     optimiser = FlatAdam(  # torch.optim.Adam's arithmetic, in one kernel per operation
         net.parameters(), lr=config.learning_rate, weight_decay=config.weight_decay
     )
-    schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, T_max=config.epochs)
+    schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, T_max=max(config.epochs, 1))
     layout = BATCH_LAYOUTS[config.batch_layout]
     batches_per_epoch = max(1, (len(samples) + config.batch_size - 1) // config.batch_size)
     started = time.perf_counter()
@@ -250,7 +259,9 @@ def _fit(
             on_epoch(epoch, loss_value)
     optimiser.unflatten()
     metrics: dict[str, object] = {
-        "final_loss": round(loss_value, 6),
+        # 0 epochs: no loss was taken, and the checkpoint says the network is untrained
+        "final_loss": round(loss_value, 6) if config.epochs else None,
+        **({"untrained": True} if config.epochs == 0 else {}),
         "demo_accuracy": round(accuracy(net, demos.samples, config.batch_layout), 4),
         "training_samples": len(samples),
         "demonstration_samples": len(demos.samples),

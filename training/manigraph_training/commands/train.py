@@ -40,7 +40,10 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         "--device", default="cpu", help="cpu, cuda or cuda:N (block policies; default cpu)"
     )
     parser.add_argument(
-        "--epochs", type=int, help="full passes (default: 150; dishwasher heads: 300)"
+        "--epochs",
+        type=int,
+        help="full passes (default: 150; dishwasher heads: 300); 0 writes the network "
+        "untrained, the baseline beside a learned one",
     )
     from manigraph_planner.family import FAMILIES
 
@@ -116,20 +119,29 @@ def _run(args: argparse.Namespace) -> int:
     from manigraph_training.recipes import augmentation_for
     from manigraph_training.trainer import TrainConfig, train
 
+    def configured(family: str | None) -> TrainConfig:
+        """The run's config, its augmentation drawn from ``family``'s recipes."""
+        config = TrainConfig(
+            architecture=args.arch,
+            seed=args.seed,
+            epochs=150 if args.epochs is None else args.epochs,
+            resample_every=args.resample_every,
+            device=args.device,
+            decoder=args.decoder,
+            family=family,
+        )
+        if args.copies is not None:
+            copies = augmentation_for(args.arch, copies=args.copies, family=family)
+            config = replace(config, augmentation=copies)
+        return config
+
     # TrainConfig checks the architecture (ModelConfig) and takes the defaults of its recipe
-    # (training.recipes, the block family's); each raises a ConfigError naming the field.
-    config = TrainConfig(
-        architecture=args.arch,
-        seed=args.seed,
-        epochs=150 if args.epochs is None else args.epochs,
-        resample_every=args.resample_every,
-        device=args.device,
-        decoder=args.decoder,
-    )
-    if args.copies is not None:
-        config = replace(config, augmentation=augmentation_for(args.arch, copies=args.copies))
+    # (training.recipes); each raises a ConfigError naming the field, before the logs are read.
+    configured(None)
     demos = load_demonstrations(args.demos)
-    config = config.for_task(demos.feature_spec)  # a task's columns, generic augmentation
+    # The recipe of the demonstrations' family (the fallback's for several, or one without);
+    # a task's columns, its augmentation for them.
+    config = configured(demos.family).for_task(demos.feature_spec)
     if args.grow is not None and config.augmentation is not None:
         config = replace(config, augmentation=config.augmentation.grown(args.grow))
     net, metrics = train(demos, config, progress=sys.stderr)  # a bar on a terminal only

@@ -114,8 +114,8 @@ class DishTrainConfig:
     members: int = 3
 
     def __post_init__(self) -> None:
-        if self.epochs < 1:
-            raise ConfigError("epochs", "must be >= 1")
+        if self.epochs < 0:  # 0: the members as initialised, the untrained baseline
+            raise ConfigError("epochs", "must be >= 0 (0: the untrained network)")
         if self.learning_rate <= 0:
             raise ConfigError("learning_rate", "must be > 0")
         if self.members < 1:
@@ -235,4 +235,5 @@ def _train_one(demos: DishDemos, config: DishTrainConfig, seed: int) -> tuple[Di
         loss.backward()
         optimiser.step()
     net.eval()
-    return net, {"final_loss": float(loss.detach()), "samples": len(samples)}
+    final_loss = float(loss.detach()) if config.epochs else None  # 0 epochs: no loss taken
+    return net, {"final_loss": final_loss, "samples": len(samples)}

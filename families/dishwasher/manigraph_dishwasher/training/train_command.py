@@ -34,6 +34,8 @@ def train_from_args(args: argparse.Namespace) -> int:
     )
     demos = load_dish_demonstrations(args.demos)
     net, metrics = train_dish(demos, config)
+    if config.epochs == 0:  # the checkpoint says so: a baseline, not a learned policy
+        metrics = {**metrics, "untrained": True}
     output = args.output or RUNS / f"dishwasher-{args.arch}-seed{args.seed}.pt"
     output.parent.mkdir(parents=True, exist_ok=True)
     save_checkpoint(
