@@ -12,7 +12,9 @@ registry (:func:`family_of_task`), never which family a task is.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from manigraph_shared.errors import ConfigError
 from manigraph_shared.family_packages import register_parts
@@ -32,12 +34,17 @@ class ToolsFamily:
             instead of blocks and stacks; the first is the count that names and describes
             them (``<task>-<count>``, ``<task> <count> <counted> <the others>``).
         counted: what the count counts, in progress lines (``dishes``).
+        expert_of: the registered name of the expert that plays its episodes in ``manigraph
+            up`` when no policy is named, from the run's episode options (``preference``,
+            ``objects``, ...); None: the ``expert`` policy. A rule the planner part reads too
+            (which expert demonstrates a request) goes in a common module of the package.
     """
 
     name: str
     tasks: tuple[str, ...]
     sized_by: tuple[str, ...]
     counted: str
+    expert_of: Callable[[Mapping[str, Any]], str] | None = None
     help: str = ""
 
 

@@ -17,6 +17,7 @@ from manigraph_shared.options import option_argv
 from manigraph_shared.registry import Registry
 from manigraph_tools.access import CELL_SEPARATOR
 from manigraph_tools.episodes import EpisodePlan
+from manigraph_tools.family import family_of_task
 from manigraph_tools.supervisor import ProcessSpec
 
 
@@ -41,6 +42,8 @@ HUMAN = "human"
 #: ``up --policy none``: no decider at all; a client of one's own plays the planner's part
 #: (``examples/demonstrator.py``), and ``--record`` keeps its demonstrations.
 NOBODY = "none"
+#: ``up``'s default policy: the expert of the task's family (:func:`planner_policy`).
+DEFAULT_EXPERT = "expert"
 
 
 def demo_ui_argv(args: argparse.Namespace) -> list[str]:
@@ -115,8 +118,17 @@ def cell_specs(
     return specs
 
 
+def planner_policy(args: argparse.Namespace) -> str:
+    """The policy the planner plays: the one named, or for the default (``expert``) the expert
+    of the task's family (its tools part's ``expert_of``; blocks and task files: ``expert``)."""
+    family = family_of_task(args.task) if getattr(args, "task_file", None) is None else None
+    if args.policy != DEFAULT_EXPERT or family is None or family.expert_of is None:
+        return str(args.policy)
+    return family.expert_of(vars(args))
+
+
 def planner_argv(args: argparse.Namespace, plan: EpisodePlan | None) -> list[str]:
-    planner = ["planner", "--policy", args.policy]
+    planner = ["planner", "--policy", planner_policy(args)]
     if args.explain_decisions:
         planner.append("--explain-decisions")
     if args.accepts_filter == "off":

@@ -55,3 +55,17 @@ def allows(
     if slot_kind != dish_kind or slot_rack != preferred_rack(preference, dish_kind):
         return False
     return preference is Preference.TOP_BOTTOM or left == (dish_kind == PLATE)
+
+
+#: The registered name of the expert of each preference (its planner part registers them).
+EXPERTS: Final = {
+    Preference.TOP_BOTTOM: "dishwasher-top-bottom",
+    Preference.LEFT_RIGHT: "dishwasher-left-right",
+}
+
+
+def expert_name(preference: str | None) -> str:
+    """The expert of ``preference`` (unset: top-bottom, as the sim lays it out; an unknown
+    one is the sim's to refuse when the episode starts: top-bottom here)."""
+    known = {p.value: p for p in Preference}
+    return EXPERTS[known.get(preference or "", Preference.TOP_BOTTOM)]

@@ -9,5 +9,6 @@ FAMILY = ToolsFamily(
     tasks=("shelf",),
     sized_by=("objects",),
     counted="blocks",
+    expert_of=lambda options: "shelf-expert",
     help="episodes sized by their blocks (one per slot)",
 )

@@ -26,6 +26,7 @@ from manigraph_tools.commands.episode_flags import episode_arguments, plan_from_
 from manigraph_tools.episodes import raise_if_aborted, run_episodes
 from manigraph_tools.owned_dir import OwnedDirectory
 from manigraph_tools.stack_processes import (
+    DEFAULT_EXPERT,
     HUMAN,
     NOBODY,
     SHARED_PLANNER,
@@ -53,8 +54,9 @@ def _up_configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--record", type=Path, help="also record everything to this MCAP file")
     parser.add_argument(
         "--policy",
-        default="expert",
-        help=f"planner policy or checkpoint; '{HUMAN}': no planner, a person decides on the "
+        default=DEFAULT_EXPERT,
+        help="planner policy or checkpoint (default: the expert of the task's family); "
+        f"'{HUMAN}': no planner, a person decides on the "
         f"demonstration page instead (docs/demo-ui.md); '{NOBODY}': no decider, a client of "
         "your own decides (examples/demonstrator.py)",
     )

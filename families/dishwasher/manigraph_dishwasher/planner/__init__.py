@@ -7,25 +7,22 @@ training part, ``manigraph_dishwasher.training``), declared below as one
 """
 
 from manigraph_dishwasher.planner import expert  # noqa: F401  (registers its experts)
-from manigraph_dishwasher.preference import Preference
+from manigraph_dishwasher.preference import EXPERTS, expert_name
 from manigraph_dishwasher.rules import is_dishwasher_scene
 from manigraph_planner.family import PlannerFamily
 from manigraph_shared.messages import EpisodeRequest
 
 
 def _expert_of(request: EpisodeRequest) -> str:
-    """The expert of the request's preference (unset: top-bottom, as the sim lays it out; an
-    unknown one is the sim's to refuse when the episode starts)."""
-    if request.preference == Preference.LEFT_RIGHT:
-        return "dishwasher-left-right"
-    return "dishwasher-top-bottom"
+    """The expert of the request's preference (:func:`..preference.expert_name`)."""
+    return expert_name(request.preference)
 
 
 #: This family's planner part (its package's ``manigraph.families`` entry names it).
 FAMILY = PlannerFamily(
     name="dishwasher",
     heads="dishwasher",
-    experts=("dishwasher-top-bottom", "dishwasher-left-right"),
+    experts=tuple(EXPERTS.values()),
     expert_of=_expert_of,
     matches=is_dishwasher_scene,
     feature_spec="manigraph_dishwasher.planner.features:DISH_FEATURE_SPEC",
