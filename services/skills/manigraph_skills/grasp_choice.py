@@ -16,7 +16,11 @@
 * **How wide to open**: around a dish the fingers open to its width across them plus
   ``OPENING_MARGIN`` (a plate on its rim: 3.5 cm), not fully (8 cm): on the counter's rows
   8 cm apart and in slots 5.5 cm apart, fully open fingers reach into the neighbouring dish.
-  Within ``FULLY_OPEN_WITHIN`` of fully open (a bowl), and for blocks and covers, fully.
+  Within ``FULLY_OPEN_WITHIN`` of fully open (a bowl), and for covers, fully. A block is
+  taken fully open (room for a pose a centimetre or two off) and let go of the dish way
+  (``release_opening``): fully open, the far finger's pad reaches 4.6 cm beyond a 4 cm
+  block's side, into a bin's wall 2 cm from the goal (colour sort); it jammed there, and
+  the hand rising dragged the block 1.7 cm off its goal, towards the wall.
 * **How high to carry**: a cover sticks out far beyond the hand, so it is carried with its
   underside above every object's top and every goal (a box's rim is under its lid goal); a
   held block is carried the same way (its underside 2 cm over every top), and the empty hand
@@ -81,6 +85,20 @@ def dish_opening(item: SceneObject, closing: np.ndarray | None = None) -> float 
         width = float(size[horizontal].max())
     else:
         width = float(size[int(np.argmax(np.abs(rotation.T @ closing)))])
+    opening = width + OPENING_MARGIN
+    return opening if opening <= 2 * FINGER_OPEN - FULLY_OPEN_WITHIN else 2 * FINGER_OPEN
+
+
+def release_opening(item: SceneObject) -> float | None:
+    """How far apart to open the fingers letting go of ``item`` at its goal: a block as a
+    dish (its wider horizontal side plus ``OPENING_MARGIN``: what stands beside the goal and
+    the skills do not see, a bin's wall, is not reached); a dish as it was taken; a cover
+    fully (None)."""
+    if item.category is not ObjectCategory.BLOCK:
+        return dish_opening(item)
+    rotation = rotation_matrix(item.orientation)
+    size = np.array(item.size.as_tuple())
+    width = float(size[np.argsort(np.abs(rotation[2]))[:2]].max())
     opening = width + OPENING_MARGIN
     return opening if opening <= 2 * FINGER_OPEN - FULLY_OPEN_WITHIN else 2 * FINGER_OPEN
 
@@ -206,6 +224,6 @@ def choose_grasps(scene: Scene, item: SceneObject, goal: Vector3) -> tuple[Grasp
         closing_turn(scene, _point(goal, height), item.id),
         carry,
         scene_obstacles(scene, item, there),
-        opening=opening,
+        opening=release_opening(item),
     )
     return pick, place
