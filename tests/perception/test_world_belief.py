@@ -99,6 +99,32 @@ def test_a_grasp_that_closes_on_nothing_moves_nothing() -> None:
     assert np.array_equal(world.beliefs["block_0"].position, start)
 
 
+
+def test_a_block_let_go_of_a_little_wider_than_it_lands_on_its_goal() -> None:
+    """The skills let a block go with the fingers 6 cm apart (2 cm wider than it: fully open,
+    a finger jammed against a bin's wall), a width that was "holding" before: the opening
+    beyond the grip says it was let go of. Fingers left 6 cm open are no grip."""
+    world = WorldModel()
+    world.set_layout(_layout())
+    start = world.beliefs["block_0"].position.copy()
+    world.on_gripper(0.06)  # the last release left them so
+    world.on_action("e1", "block_0", "goal_0")
+    world.on_gripper(0.06)  # not closed on anything yet
+    world.on_gripper(0.08)  # opened for the grasp
+    assert np.array_equal(world.beliefs["block_0"].position, start)
+    world.on_gripper(0.0395)  # closed on the block
+    world.on_gripper(0.0405)  # carried: a grip loosens by a millimetre
+    assert np.array_equal(world.beliefs["block_0"].position, start)
+    world.on_gripper(0.06)  # let go, 2 cm wider
+    assert np.allclose(world.beliefs["block_0"].position, [0.5, 0.0, 0.02])
+    # The next action's grasp, seen only once closed (a sim that reports the joints at the
+    # end of each motion): it closed from the 6 cm the release left.
+    world.update(_seen_at(0.1), 5.0)
+    world.on_action("e1", "block_0", "goal_0")
+    world.on_gripper(0.04)
+    world.on_gripper(0.06)
+    assert np.allclose(world.beliefs["block_0"].position, [0.5, 0.0, 0.02])
+
 CAMERA = np.array([0.92, 0.0, 0.45])
 
 

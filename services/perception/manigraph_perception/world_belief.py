@@ -15,13 +15,19 @@ hysteresis, and a stale flag.
   no frame arrived for ``stale_after`` seconds: the last world is served, flagged.
 * A carried object goes where the robot put it: after the planner's action to move it, the
   gripper closing on something (``JointState.gripper_width`` between ``held_width``) and
-  opening again means it was released at the action's goal; it is believed there until a
-  marker of it says otherwise. (The camera may not see it land: in a pyramid, the stack the
-  blocks come from can hide the goals behind it.)
+  opening again (``let_go`` wider than it held, or fully) means it was released at the
+  action's goal; it is believed there until a marker of it says otherwise. A block is let go
+  of with the fingers only 2 cm wider than it (``grasp_choice.release_opening``: fully open,
+  a finger jammed against a bin's wall), a width inside ``held_width``: so the fingers'
+  movement says it, not the width alone. Holding starts with the fingers closing (``let_go``
+  narrower than the widest since the action) onto something, so fingers left 6 cm open by
+  the last release are not taken for a grip. (The camera may not see it land: in a pyramid,
+  the stack the blocks come from can hide the goals behind it.)
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -53,6 +59,9 @@ class WorldConfig:
     #: Gripper openings (metres) that mean "holding something": a block is 4 cm wide, a
     #: cover's handle 3 cm; the open Panda gripper is 8 cm, closed on nothing 0.
     held_width: tuple[float, float] = (0.005, 0.07)
+    #: Fingers this much wider than they were while holding have let go, metres (a block is
+    #: let go of 2 cm wider than it; a grip squeezes or loosens by a millimetre or two).
+    let_go: float = 0.01
     #: A block's depth along the viewing ray from what it rests on (``resting.py``); None:
     #: the marker pose as measured.
     rest: RestConfig | None = field(default_factory=RestConfig)
@@ -91,6 +100,11 @@ class WorldModel:
         #: (object id, goal id) of the action being carried out, and whether it is held.
         self.carrying: tuple[str, str] | None = None
         self.holding = False
+        #: The narrowest opening while holding (what the fingers closed on), the last opening
+        #: seen, and the widest since the action (unknown: infinite).
+        self.held_at = 0.0
+        self.width = math.inf
+        self.widest = math.inf
 
     def set_layout(
         self, layout: TaskLayout, attributes: dict[str, dict[str, str | float]] | None = None
@@ -121,18 +135,25 @@ class WorldModel:
         if object_id in self.beliefs and goal_id in goals:
             self.carrying = (object_id, goal_id)
             self.holding = False
+            self.widest = self.width
 
     def on_gripper(self, width: float) -> None:
         """The gripper's opening now: closing on the carried object, then letting go of it at
         its goal, moves it there."""
+        self.width = width
         if self.carrying is None or self.layout is None:
             return
+        self.widest = max(self.widest, width)
         low, high = self.config.held_width
-        if low < width < high:
-            self.holding = True
-        elif width <= low:
+        if not self.holding:
+            if low < width < high and width <= self.widest - self.config.let_go:
+                self.holding, self.held_at = True, width  # closed on something
+            return
+        if width <= low:
             self.holding = False  # closed on nothing: it slipped or was dropped
-        elif self.holding:
+        elif width < high and width < self.held_at + self.config.let_go:
+            self.held_at = min(self.held_at, width)  # still holding
+        else:
             object_id, goal_id = self.carrying
             goal = next(g for g in self.layout.goals if g.id == goal_id)
             self.beliefs[object_id].position = np.array(goal.position.as_tuple())
