@@ -34,11 +34,18 @@ import numpy as np
 import pinocchio as pin
 
 from manigraph_shared.errors import SkillError
+from manigraph_shelf.shelf_geometry import OBJECT_SIZE
 from manigraph_skills.motion import GraspPlanner, JointTrajectory
 from manigraph_skills.motion.model import HOME_Q
 
-#: How far the hand's approach is pitched down from level, radians, in the order tried.
-PITCHES = (0.2, 0.3)
+#: How far the hand's approach is pitched down from level, radians, in the order tried: to
+#: take a block off the table (steeper, the hand's rear rises over its neighbours), and to set
+#: it into a slot (flatter, the wrist passes under the board above).
+PICK_PITCHES = (0.2, 0.3, 0.4)
+PLACE_PITCHES = (0.2, 0.15, 0.25)
+#: At most this much steeper or flatter the hand may place than it took, radians: the block
+#: is let go tilted so much, a corner first, and settles flat.
+MAX_TILT = 0.2
 #: TCP above the block's centre when holding it, metres (the pads cover its middle).
 GRASP_RAISE = 0.004
 #: How far behind the block (along the approach) the fingers come down, metres.
@@ -49,6 +56,8 @@ LIFT = 0.08
 #: TCP height for moves across the table, metres: a held block's underside 4 cm over the
 #: others' tops.
 CARRY_Z = 0.13
+#: Least TCP height of a joint move's high point (:func:`high_via`), metres.
+VIA_Z = 0.3
 #: The block's front face this far in front of the shelf where it comes down outside it.
 ENTRY_GAP = 0.02
 #: TCP height above a slot's centre while entering the shelf, metres: the hand's rear clears
@@ -64,6 +73,8 @@ RELEASE = 0.003
 #: Cartesian speeds, m/s.
 SPEED = 0.4
 SLOW = 0.15
+#: At most this many IK solutions of one pose are tried (each a way to plan on).
+MAX_SOLUTIONS = 6
 #: Joint-space samples of a joint move.
 JOINT_SAMPLES = 40
 
@@ -116,7 +127,7 @@ SEEDS = _seeds()
 
 def solutions(planner: GraspPlanner, pose: pin.SE3, near: np.ndarray) -> Iterator[np.ndarray]:
     """IK solutions of ``pose``, from ``near`` first, then the fixed seeds, each new one
-    (more than 0.3 rad from those before) once."""
+    (more than 0.3 rad from those before) once, at most :data:`MAX_SOLUTIONS`."""
     found: list[np.ndarray] = []
     for seed in [near, HOME_Q, *SEEDS]:
         result = planner.ik.solve(pose, seed, restart=False)
@@ -124,6 +135,8 @@ def solutions(planner: GraspPlanner, pose: pin.SE3, near: np.ndarray) -> Iterato
             continue
         found.append(result.q)
         yield result.q
+        if len(found) == MAX_SOLUTIONS:
+            return
 
 
 def joint_move(
@@ -168,27 +181,51 @@ def rise(planner: GraspPlanner, trajectory: JointTrajectory, height: float, clos
 
 
 def side_pick(
-    planner: GraspPlanner, q: np.ndarray, hand: Hand, centre: np.ndarray, above: np.ndarray
+    planner: GraspPlanner, q: np.ndarray, hand: Hand, centre: np.ndarray
 ) -> Iterator[JointTrajectory]:
-    """The ways (one per IK solution of the pose over the pregrasp) to take the block whose
-    centre is ``centre`` with ``hand``: from ``q`` (empty), up, over to ``above`` (the
-    pregrasp's x and y), down behind the block, in, close, lift."""
+    """The ways (one per IK solution of the pose over the pregrasp, each reached by a joint
+    move or by one through :func:`high_via`) to take the block whose centre is ``centre``
+    with ``hand``: from ``q`` (empty), up, over to above the pregrasp, down behind the block,
+    in, close, lift."""
     grasp = centre + np.array([0.0, 0.0, GRASP_RAISE])
     pregrasp = grasp - PREGRASP_BACK * hand.approach + np.array([0.0, 0.0, PREGRASP_RISE])
-    over = np.array([pregrasp[0], pregrasp[1], max(above[2], pregrasp[2])])
-    for target in solutions(planner, hand.at(over), q):
-        trajectory = JointTrajectory()
-        trajectory.add(0.0, q, closed=False)
-        rise(planner, trajectory, CARRY_Z, closed=False)
-        try:
-            joint_move(planner, trajectory, target, closed=False)
-            line(planner, trajectory, hand, pregrasp, False, "pregrasp", SPEED)
-            line(planner, trajectory, hand, grasp, False, "side grasp")
-            trajectory.hold(planner.config.grip_time, closed=True)
-            line(planner, trajectory, hand, grasp + np.array([0.0, 0.0, LIFT]), True, "lift")
-        except SkillError:
-            continue
-        yield trajectory
+    over = np.array([pregrasp[0], pregrasp[1], CARRY_Z])
+    start = JointTrajectory()
+    start.add(0.0, q, closed=False)
+    rise(planner, start, CARRY_Z, closed=False)
+    for target in solutions(planner, hand.at(over), start.final):
+        for via in _vias(planner, start.final, target):
+            trajectory = _copy(start)
+            try:
+                for point in via:
+                    joint_move(planner, trajectory, point, closed=False)
+                line(planner, trajectory, hand, pregrasp, False, "pregrasp", SPEED)
+                line(planner, trajectory, hand, grasp, False, "side grasp")
+                trajectory.hold(planner.config.grip_time, closed=True)
+                line(planner, trajectory, hand, grasp + np.array([0.0, 0.0, LIFT]), True, "lift")
+            except SkillError:
+                continue
+            yield trajectory
+
+
+def high_via(planner: GraspPlanner, q: np.ndarray, target: np.ndarray) -> np.ndarray | None:
+    """A point to pass on a joint move from ``q`` to ``target``: the shoulder and elbow
+    folded up as at home, the base and wrist joints already as at ``target``, so the wrist
+    turns over high above everything and the arm then unfolds down to ``target``. None where
+    that point is not high (the hand over :data:`VIA_Z`)."""
+    via = target.copy()
+    via[1], via[3] = HOME_Q[1], HOME_Q[3]
+    via = planner.model.clamp(via)
+    return via if planner.model.tcp_pose(via).translation[2] >= VIA_Z else None
+
+
+def _vias(planner: GraspPlanner, q: np.ndarray, target: np.ndarray) -> list[list[np.ndarray]]:
+    """The joint moves to try from ``q`` to ``target``: straight, then by :func:`high_via`."""
+    ways = [[target]]
+    via = high_via(planner, q, target)
+    if via is not None:
+        ways.append([via, target])
+    return ways
 
 
 @dataclass(frozen=True)
@@ -206,11 +243,13 @@ class Approach:
     release: np.ndarray
 
 
-def approach_to(slot: np.ndarray, front_x: float) -> Approach:
+def approach_to(slot: np.ndarray, front_x: float, tilt: float = 0.0) -> Approach:
     """The waypoints to set a block's centre down at ``slot`` (a slot's centre), the shelf's
-    open side at ``front_x``."""
+    open side at ``front_x``, the block held ``tilt`` radians off square (its lowest edge
+    :data:`RELEASE` over the floor)."""
     x, y, z = (float(v) for v in slot)
-    held = z + RELEASE + GRASP_RAISE
+    corner = OBJECT_SIZE / 2 * (np.cos(tilt) + np.sin(abs(tilt))) - OBJECT_SIZE / 2
+    held = z + RELEASE + corner + GRASP_RAISE
     entry_x = front_x - ENTRY_GAP - 0.02  # the block's front face ENTRY_GAP before the shelf
     dive_x = min(front_x + DIVE_DEPTH, x)
     entry_z = held + ENTRY_RISE
@@ -242,9 +281,11 @@ def front_place(planner: GraspPlanner, q: np.ndarray, hand: Hand, way: Approach)
 
     def by_joints() -> Iterator[JointTrajectory]:
         for target in solutions(planner, hand.at(way.over), start.final):
-            moved = _copy(start)
-            joint_move(planner, moved, target, closed=True)
-            yield moved
+            for via in _vias(planner, start.final, target):
+                moved = _copy(start)
+                for point in via:
+                    joint_move(planner, moved, point, closed=True)
+                yield moved
 
     for carried in [*ways, *by_joints()]:
         inward = len(carried) - 1

@@ -15,16 +15,26 @@ was taken.
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from manigraph_shared.errors import SkillError
-from manigraph_shared.messages import Action, Scene, SceneObject, SkillState, SkillStatus
+from manigraph_shared.messages import (
+    Action,
+    Quaternion,
+    Scene,
+    SceneObject,
+    SkillState,
+    SkillStatus,
+    Vector3,
+)
 from manigraph_shelf.skills.front_motion import (
-    PITCHES,
-    Approach,
+    MAX_TILT,
+    PICK_PITCHES,
+    PLACE_PITCHES,
     Carry,
     Hand,
     approach_to,
@@ -34,10 +44,10 @@ from manigraph_shelf.skills.front_motion import (
     side_pick,
 )
 from manigraph_shelf.skills.obstacles import scene_geometry
-from manigraph_skills.drivers.base import Motion
+from manigraph_skills.drivers.base import PLANNING_FAILURES, Motion
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
 from manigraph_skills.grasp_choice import choose_grasps
-from manigraph_skills.motion import JointTrajectory
+from manigraph_skills.motion import HOME_Q, JointTrajectory
 from manigraph_skills.motion.collision import Contact, refusal
 from manigraph_skills.motion.plan import grasp_yaw
 from manigraph_skills.obstacles import Obstacle, scene_obstacles
@@ -52,6 +62,19 @@ log = logging.getLogger("manigraph.skills.shelf")
 OPENING = 0.065
 #: Their width while holding it, for the arm check of the moves that carry it.
 HOLDING = 0.04
+#: Where a block that cannot be taken from its side where it lies is first set down
+#: top-down (x and y of the spots, metres, nearest the slot's column first): on the table
+#: between the start cells and the shelf, and among the cells, at least ``STAGING_FREE`` from
+#: every other block on the table (below ``STAGING_LEVEL``), at most ``MAX_STAGING_SPOTS``
+#: of them planned.
+STAGING_X = (0.44, 0.36)
+STAGING_Y = tuple(np.round(np.arange(-0.24, 0.241, 0.06), 3))
+STAGING_FREE = 0.14
+STAGING_LEVEL = 0.1
+MAX_STAGING_SPOTS = 3
+#: Seconds of planning a side grasp and its place may take before it is given up (each way
+#: tried costs 0.1-1 s; where one plans, one of the first does).
+PLAN_BUDGET = 15.0
 
 
 def place_from_front(
@@ -97,29 +120,28 @@ class FrontPlace:
         self.front_x = scene_geometry(scene).front_x
 
     def into(self, slot: np.ndarray) -> None:
-        """Take the block and put it into the slot whose centre is ``slot``."""
-        way = approach_to(slot, self.front_x)
-        taking = scene_obstacles(self.scene, self.item, self.here)
+        """Take the block and put it into the slot whose centre is ``slot``: from its side
+        where it lies, else first moved top-down to a spot on the table where it can be
+        (:meth:`_staging_spot`)."""
+        self.slot = slot
         placing = scene_obstacles(self.scene, self.item, slot)
         chosen: list[Hand] = []
 
         def plan_pick(q: np.ndarray) -> JointTrajectory:
-            contacts: dict[tuple[str, str], Contact] = {}
-            for hand in self._hands():
-                for pick in side_pick(self.driver.planner, q, hand, self.here, way.over):
-                    self.driver.raise_if_stopped()
-                    if not self._clear(pick, taking, OPENING, contacts):
-                        continue
-                    if self._place(pick.final, hand, way, placing, contacts) is None:
-                        continue
-                    chosen[:] = [hand]
-                    log.info("taking %s from its side: %s", self.item.id, hand)
-                    return pick
-            if contacts:
-                raise SkillError("collision", f"taking it to the shelf: {refusal(contacts)}")
-            raise SkillError("no_ik_solution", f"no side grasp of {self.item.id} reaches its slot")
+            pick, hand = self._plan_take(q, self.here, placing)
+            chosen[:] = [hand]
+            log.info("taking %s from its side: %s", self.item.id, hand)
+            return pick
 
-        held = self.driver.run_plan(self.decision, plan_pick, home_around=taking)
+        taking = scene_obstacles(self.scene, self.item, self.here)
+        try:
+            held = self.driver.run_plan(self.decision, plan_pick, home_around=taking)
+        except SkillError as exc:
+            if exc.reason not in PLANNING_FAILURES:
+                raise
+            self._stage(self._staging_spot(exc))
+            taking = scene_obstacles(self.scene, self.item, self.here)
+            held = self.driver.run_plan(self.decision, plan_pick, home_around=taking)
         hand = chosen[0]
         if held.gripper_width < self.driver.min_grasp_width:
             self._let_go(hand)
@@ -132,7 +154,7 @@ class FrontPlace:
 
         def plan_place(q: np.ndarray) -> JointTrajectory:
             contacts: dict[tuple[str, str], Contact] = {}
-            found = self._place(q, hand, way, placing, contacts)
+            found = self._place(q, hand, placing, contacts)
             if found is None:
                 detail = refusal(contacts) if contacts else "no IK solution"
                 raise SkillError("collision", f"into the shelf: {detail}")
@@ -162,6 +184,69 @@ class FrontPlace:
                     "placement_missed", f"{self.item.id} rests {miss * 1000:.0f} mm from its slot"
                 )
 
+    def _plan_take(
+        self, q: np.ndarray, here: np.ndarray, placing: tuple[Obstacle, ...]
+    ) -> tuple[JointTrajectory, Hand]:
+        """The first side grasp of the block lying at ``here``, planned from ``q``, after
+        which its place into the slot also plans, both clear of the arm check; and its hand.
+        ``collision`` or ``no_ik_solution`` if there is none."""
+        taking = scene_obstacles(self.scene, self.item, here)
+        contacts: dict[tuple[str, str], Contact] = {}
+        deadline = time.monotonic() + PLAN_BUDGET
+        for hand in self._hands():
+            for pick in side_pick(self.driver.planner, q, hand, here):
+                self.driver.raise_if_stopped()
+                if time.monotonic() > deadline:
+                    break
+                if not self._clear(pick, taking, OPENING, contacts):
+                    continue
+                if self._place(pick.final, hand, placing, contacts) is None:
+                    continue
+                return pick, hand
+        if contacts:
+            raise SkillError("collision", f"taking it to the shelf: {refusal(contacts)}")
+        raise SkillError("no_ik_solution", f"no side grasp of {self.item.id} reaches its slot")
+
+    def _staging_spot(self, failure: SkillError) -> np.ndarray:
+        """A free spot on the table from which the block's side grasp and place both plan
+        (the nearest the slot's column first); ``failure`` if there is none."""
+        others = [
+            np.array(o.position.as_tuple())
+            for o in self.scene.objects
+            if o.id != self.item.id and o.position.z < STAGING_LEVEL
+        ]
+        placing = scene_obstacles(self.scene, self.item, self.slot)
+        spots = [
+            np.array([x, y, self.here[2]])
+            for x in STAGING_X
+            for y in sorted(STAGING_Y, key=lambda y: abs(y - float(self.slot[1])))
+        ]
+        free = [
+            spot
+            for spot in spots
+            if all(np.linalg.norm((spot - other)[:2]) >= STAGING_FREE for other in others)
+        ]
+        for spot in free[:MAX_STAGING_SPOTS]:
+            try:
+                self._plan_take(HOME_Q, spot, placing)
+            except SkillError:
+                continue
+            return spot
+        raise failure
+
+    def _stage(self, spot: np.ndarray) -> None:
+        """Move the block top-down (the skills' own pick and place) to ``spot``, and take it
+        as lying there."""
+        log.info("moving %s to %s to take it from its side", self.item.id, np.round(spot, 3))
+        target = Vector3(x=float(spot[0]), y=float(spot[1]), z=float(spot[2]))
+        pick, place = choose_grasps(self.scene, self.item, target)
+        item = self.item
+        self.driver.pick(Motion(self.decision, item.id, item.position, item.orientation, pick))
+        self.driver.place(Motion(self.decision, item.id, target, Quaternion(), place))
+        seen = self.driver.transport.object_position(item.id, after=time.time())
+        self.here = spot.copy() if seen is None else np.asarray(seen, dtype=float)
+        self.item = item.replace(position=target, orientation=Quaternion())
+
     def _hands(self) -> list[Hand]:
         """The side hands to take the block with: each pitch, approaching square to its faces
         from the robot's side, then from either flank, the wrist either way round."""
@@ -169,7 +254,7 @@ class FrontPlace:
         square = grasp_yaw((quaternion.x, quaternion.y, quaternion.z, quaternion.w))
         return [
             Hand(square + turn, pitch, flipped)
-            for pitch in PITCHES
+            for pitch in PICK_PITCHES
             for turn in (0.0, -np.pi / 2, np.pi / 2)
             for flipped in (False, True)
         ]
@@ -178,21 +263,23 @@ class FrontPlace:
         self,
         q: np.ndarray,
         taken: Hand,
-        way: Approach,
         obstacles: tuple[Obstacle, ...],
         contacts: dict[tuple[str, str], Contact],
     ) -> Carry | None:
         """The first place into the slot from ``q`` (holding, taken with ``taken``) whose
         moves, and the retreat after it, clear the arm check; None if there is none."""
-        hand = Hand(0.0, taken.pitch, taken.flipped)
         planner = self.driver.planner
-        for carry in front_place(planner, q, hand, way):
-            self.driver.raise_if_stopped()
-            if not self._clear(carry.trajectory, obstacles, HOLDING, contacts):
-                continue
-            back = retreat(planner, carry.trajectory.final, carry)
-            if self._clear(back, obstacles, OPENING, contacts):
-                return carry
+        pitches = [p for p in PLACE_PITCHES if abs(p - taken.pitch) <= MAX_TILT + 1e-9]
+        for pitch in sorted(pitches, key=lambda p: abs(p - taken.pitch)):
+            hand = Hand(0.0, pitch, taken.flipped)
+            way = approach_to(self.slot, self.front_x, pitch - taken.pitch)
+            for carry in front_place(planner, q, hand, way):
+                self.driver.raise_if_stopped()
+                if not self._clear(carry.trajectory, obstacles, HOLDING, contacts):
+                    continue
+                back = retreat(planner, carry.trajectory.final, carry)
+                if self._clear(back, obstacles, OPENING, contacts):
+                    return carry
         return None
 
     def _clear(
