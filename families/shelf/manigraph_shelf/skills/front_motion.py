@@ -75,6 +75,12 @@ SPEED = 0.4
 SLOW = 0.15
 #: At most this many IK solutions of one pose are tried (each a way to plan on).
 MAX_SOLUTIONS = 6
+#: A joint move holding a block runs at this fraction of the planner's joint speeds: at
+#: full speed the wrist turning over flung a block out of the fingers.
+HOLDING_JOINT_SPEED = 0.3
+#: A joint move holding a block turns no joint further than this, radians: swung round
+#: further (the wrist turning over with it), the block slid out of the fingers.
+MAX_HOLDING_SWING = 1.2
 #: Joint-space samples of a joint move.
 JOINT_SAMPLES = 40
 
@@ -145,7 +151,8 @@ def joint_move(
     """Append a straight joint-space move from the trajectory's end to ``q``."""
     start = trajectory.final
     path = start + np.linspace(0.0, 1.0, JOINT_SAMPLES)[:, None] * (q - start)
-    trajectory.add_segment(path, closed, 0.0, SPEED, planner.joint_speed)
+    speed = planner.joint_speed * (HOLDING_JOINT_SPEED if closed else 1.0)
+    trajectory.add_segment(path, closed, 0.0, SPEED, speed)
 
 
 def line(
@@ -281,7 +288,9 @@ def front_place(planner: GraspPlanner, q: np.ndarray, hand: Hand, way: Approach)
 
     def by_joints() -> Iterator[JointTrajectory]:
         for target in solutions(planner, hand.at(way.over), start.final):
-            for via in _vias(planner, start.final, target):
+            if float(np.max(np.abs(target - start.final))) > MAX_HOLDING_SWING:
+                continue
+            for via in [[target]]:
                 moved = _copy(start)
                 for point in via:
                     joint_move(planner, moved, point, closed=True)
