@@ -50,7 +50,7 @@ def episode(policy, seed: int, objects: int, preference: str) -> dict:
         task="dishwasher",
         objects=objects,
         seed=seed,
-        preference=preference,
+        options={"preference": preference} if preference is not None else {},
     )
     started, cpu = time.perf_counter(), time.process_time()
     record = run_episode(

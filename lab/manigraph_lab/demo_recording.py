@@ -71,7 +71,7 @@ class DemoProtocol:
                 task=combos[i % len(combos)][0],
                 blocks=combos[i % len(combos)][1],
                 objects=self.objects,
-                preference=self.preference,
+                options={"preference": self.preference} if self.preference is not None else {},
                 seed=self.seed + i,
             )
             for i in range(self.trajectories)

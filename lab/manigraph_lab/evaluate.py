@@ -40,7 +40,7 @@ class EvalSpec:
                 blocks=self.blocks,
                 stacks=self.stacks,
                 objects=self.objects,
-                preference=self.preference,
+                options={"preference": self.preference} if self.preference is not None else {},
                 seed=self.seed + i,
                 task_file=self.task_file,
                 rules=self.rules,

@@ -13,7 +13,8 @@ from __future__ import annotations
 ROBOT_TYPE = "panda"
 #: Prefix of the per-node observation columns (``observation.nodes.position``, ...).
 NODES = "observation.nodes"
-#: ``observation.nodes.category`` codes (index in this tuple); padding rows hold -1.
+#: ``observation.nodes.category`` codes (index in this tuple); padding rows hold -1. An
+#: entry without ``:`` is a fixture's kind (``SceneFixture.kind``).
 NODE_CATEGORIES = (
     "object:cover",
     "object:block",
@@ -25,5 +26,8 @@ NODE_CATEGORIES = (
     "goal:bowl",
     "rack",
 )
-#: ``action``'s tray column: index in this tuple (the contract's ``TrayAction`` values).
-TRAY_ACTIONS = ("none", "toggle_top", "toggle_bottom")
+#: ``action``'s family-action column: index in this tuple (``Action.family_action``; 0: none,
+#: a pick and place). The object and goal columns name the fixture it acts on. Datasets of
+#: contract version 3 wrote 1 and 2 for the two racks' toggles: both read as ``toggle``, and a
+#: toggle is written as 1.
+FAMILY_ACTIONS = ("none", "toggle", "toggle")

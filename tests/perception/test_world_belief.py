@@ -99,7 +99,6 @@ def test_a_grasp_that_closes_on_nothing_moves_nothing() -> None:
     assert np.array_equal(world.beliefs["block_0"].position, start)
 
 
-
 def test_a_block_let_go_of_a_little_wider_than_it_lands_on_its_goal() -> None:
     """The skills let a block go with the fingers 6 cm apart (2 cm wider than it: fully open,
     a finger jammed against a bin's wall), a width that was "holding" before: the opening
@@ -124,6 +123,7 @@ def test_a_block_let_go_of_a_little_wider_than_it_lands_on_its_goal() -> None:
     world.on_gripper(0.04)
     world.on_gripper(0.06)
     assert np.allclose(world.beliefs["block_0"].position, [0.5, 0.0, 0.02])
+
 
 CAMERA = np.array([0.92, 0.0, 0.45])
 

@@ -115,7 +115,7 @@ def test_a_log_names_its_contract_version_and_older_logs_still_decode(tmp_path: 
     path = tmp_path / "now.mcap"
     writer = McapLogWriter(path)
     writer.close()
-    assert contract_version(path) == CONTRACT_VERSION == 3
+    assert contract_version(path) == CONTRACT_VERSION == 4
     golden = GOLDEN / "sage-stack4.mcap"
     assert contract_version(golden) == 1  # written before versions were recorded
     scenes = [m for m in decode_log(golden) if isinstance(m, Scene)]

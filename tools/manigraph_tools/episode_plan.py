@@ -176,7 +176,7 @@ class EpisodePlan:
             blocks=UNSET_BLOCKS if file else self.blocks,
             stacks=self.stacks,
             objects=self.objects,
-            preference=self.preference,
+            options={"preference": self.preference} if self.preference is not None else {},
             seed=seed,
             task_file=self.task_file,
             rules=self.rules,

@@ -13,7 +13,7 @@ registry (:func:`family_of_task`), never which family a task is.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from manigraph_shared.errors import ConfigError
@@ -38,6 +38,8 @@ class ToolsFamily:
             up`` when no policy is named, from the run's episode options (``preference``,
             ``objects``, ...); None: the ``expert`` policy. A rule the planner part reads too
             (which expert demonstrates a request) goes in a common module of the package.
+        fixture_actions: the family action each kind of its fixtures takes on the
+            demonstration page (a fixture's button sends it; ``Action.family_action``).
     """
 
     name: str
@@ -46,6 +48,7 @@ class ToolsFamily:
     counted: str
     expert_of: Callable[[Mapping[str, Any]], str] | None = None
     help: str = ""
+    fixture_actions: Mapping[str, str] = field(default_factory=dict)
 
 
 def _register_installed() -> None:

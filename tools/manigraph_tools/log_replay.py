@@ -21,7 +21,7 @@ from pathlib import Path
 from manigraph_shared.bus import Bus
 from manigraph_shared.errors import LogError
 from manigraph_shared.mcap_log import LoggedMessage, read_log
-from manigraph_shared.messages import Action, Delivery, ServiceStatus, TrayAction, key_matches
+from manigraph_shared.messages import Action, Delivery, ServiceStatus, key_matches
 from manigraph_shared.messages.base import PREFIX
 
 
@@ -75,7 +75,7 @@ class ActionCheck:
 
     @staticmethod
     def signature(action: Action) -> tuple[object, ...]:
-        return (action.object_id, action.goal_id, action.orientation_index, action.tray_action)
+        return (action.object_id, action.goal_id, action.orientation_index, action.family_action)
 
     def mismatches(self) -> list[str]:
         """Every problem found so far, then every unexpected live decision."""
@@ -89,11 +89,11 @@ def name(action: Action) -> str:
 
 
 def choice(action: Action) -> str:
-    """``block_2 -> goal_3``, with the orientation and tray action when it has them."""
+    """``block_2 -> goal_3``, with the orientation and family action when it has them."""
     text = f"{action.object_id} -> {action.goal_id}"
     extras = [
         f"orientation {action.orientation_index}" if action.orientation_index is not None else "",
-        f"tray {action.tray_action.value}" if action.tray_action is not TrayAction.NONE else "",
+        f"family action {action.family_action}" if action.family_action is not None else "",
     ]
     extras = [e for e in extras if e]
     return text + (f" ({', '.join(extras)})" if extras else "")

@@ -20,17 +20,16 @@ from typing import Any
 import pyarrow.parquet as pq
 
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.lerobot_codes import NODE_CATEGORIES, NODES, ROBOT_TYPE, TRAY_ACTIONS
+from manigraph_shared.lerobot_codes import FAMILY_ACTIONS, NODE_CATEGORIES, NODES, ROBOT_TYPE
 from manigraph_shared.messages import (
     Action,
     GoalCategory,
     ObjectCategory,
     Quaternion,
     Scene,
+    SceneFixture,
     SceneGoal,
     SceneObject,
-    SceneRack,
-    TrayAction,
     Vector3,
 )
 
@@ -119,14 +118,16 @@ def _episode_ids(root: Path) -> dict[int, str]:
 
 
 def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
-    """The scene of one frame: its real nodes (mask) back as objects, goals and racks."""
+    """The scene of one frame: its real nodes (mask) back as objects, goals and fixtures."""
     ids = json.loads(row[f"{NODES}.ids"])
     count = sum(1 for valid in row[f"{NODES}.mask"] if valid)
     if len(ids) != count:
         raise ConfigError(
             "dataset", f"column '{NODES}.ids' names {len(ids)} nodes where the mask has {count}"
         )
-    racks = {k: ids[k] for k in range(count) if _category(row[f"{NODES}.category"][k]) == "rack"}
+    fixtures = {
+        k: ids[k] for k in range(count) if ":" not in _category(row[f"{NODES}.category"][k])
+    }
     # Datasets exported before attributes existed have no such column: none then.
     attributes = json.loads(row.get(f"{NODES}.attributes") or "[]") or [{}] * count
     if len(attributes) != count:
@@ -134,7 +135,7 @@ def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
             "dataset",
             f"column '{NODES}.attributes' names {len(attributes)} nodes where the mask has {count}",
         )
-    objects, goals, scene_racks = [], [], []
+    objects, goals, scene_fixtures = [], [], []
     for k in range(count):
         kind, _, name = _category(row[f"{NODES}.category"][k]).partition(":")
         x, y, z = row[f"{NODES}.position"][k]
@@ -157,7 +158,7 @@ def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
                 )
             )
         elif kind == "goal":
-            rack = row[f"{NODES}.rack"][k]
+            fixture = row[f"{NODES}.rack"][k]
             goals.append(
                 SceneGoal(
                     id=ids[k],
@@ -166,13 +167,18 @@ def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
                     orientation=orientation,
                     filled=filled,
                     visible=visible,
-                    rack=racks.get(rack) if rack >= 0 else None,
+                    fixture=fixtures.get(fixture) if fixture >= 0 else None,
                     accepts=attributes[k],
                 )
             )
         else:
-            scene_racks.append(
-                SceneRack(id=ids[k], position=position, open=row[f"{NODES}.open"][k])
+            scene_fixtures.append(
+                SceneFixture(
+                    id=ids[k],
+                    kind=kind,
+                    position=position,
+                    state={"open": bool(row[f"{NODES}.open"][k])},
+                )
             )
     return Scene(
         episode_id=episode_id,
@@ -180,7 +186,7 @@ def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
         sequence=row["observation.scene_sequence"],
         objects=objects,
         goals=goals,
-        racks=scene_racks,
+        fixtures=scene_fixtures,
     )
 
 
@@ -188,9 +194,12 @@ def frame_action(row: dict[str, Any], scene: Scene, episode_id: str) -> Action:
     """The decision of one frame, naming its nodes by id (an index off the scene: an id no
     node has, so training skips it as it skips a log's)."""
     ids = json.loads(row[f"{NODES}.ids"])
-    object_node, goal_node, orientation, tray = row["action"]
-    if not 0 <= tray < len(TRAY_ACTIONS):
-        raise ConfigError("dataset", f"column 'action': tray {tray} is not in 0..2")
+    object_node, goal_node, orientation, family = row["action"]
+    if not 0 <= family < len(FAMILY_ACTIONS):
+        raise ConfigError(
+            "dataset",
+            f"column 'action': family action {family} is not in 0..{len(FAMILY_ACTIONS) - 1}",
+        )
 
     def node_id(index: int) -> str:
         return ids[index] if 0 <= index < len(ids) else "not-in-scene"
@@ -202,7 +211,7 @@ def frame_action(row: dict[str, Any], scene: Scene, episode_id: str) -> Action:
         object_id=node_id(object_node),
         goal_id=node_id(goal_node),
         orientation_index=None if orientation < 0 else orientation,
-        tray_action=TrayAction(TRAY_ACTIONS[tray]),
+        family_action=None if family == 0 else FAMILY_ACTIONS[family],
         policy=POLICY,
         stamp=scene.stamp,
     )

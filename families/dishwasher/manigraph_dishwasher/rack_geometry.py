@@ -10,16 +10,16 @@ import numpy as np
 
 from manigraph_shared.errors import ConfigError
 
-#: The racks (``Scene.racks``): where the gripper takes each rack's handle, relative to the
-#: position a ``Scene`` reports for the rack (x, y, z, metres). The physical handle is a tab,
-#: 1.5 cm across y, sticking out of the rack's front towards the robot, beside the rack (the
-#: top rack's at its right side, the bottom rack's at its left), joined to the floor's front
-#: corner by a bar; the fingers close across it (along y). Beside the racks, a handle is
-#: beyond the counter's dishes and the slots: a hand over either never meets it (in the
-#: middle, a pulled-out top rack's tab was over the counter's far row at the wrist's height,
-#: and a dish lying under it could not be taken). Each sticks out 8 cm in front of the
-#: reported handle, so the hand takes the bottom one in front of the top rack standing above
-#: it. Here so the sim builds the tab where the skills grasp it.
+#: The racks (``Scene.fixtures`` of kind ``rack``): where the gripper takes each rack's handle,
+#: relative to the position a ``Scene`` reports for the rack (x, y, z, metres). The physical handle
+#: is a tab, 1.5 cm across y, sticking out of the rack's front towards the robot, beside the rack
+#: (the top rack's at its right side, the bottom rack's at its left), joined to the floor's front
+#: corner by a bar; the fingers close across it (along y). Beside the racks, a handle is beyond the
+#: counter's dishes and the slots: a hand over either never meets it (in the middle, a pulled-out
+#: top rack's tab was over the counter's far row at the wrist's height, and a dish lying under it
+#: could not be taken). Each sticks out 8 cm in front of the reported handle, so the hand takes the
+#: bottom one in front of the top rack standing above it. Here so the sim builds the tab where the
+#: skills grasp it.
 RACK_GRIP_OFFSET: dict[str, tuple[float, float, float]] = {
     "rack_top": (-0.08, 0.44, 0.015),
     "rack_bottom": (-0.08, -0.44, 0.015),

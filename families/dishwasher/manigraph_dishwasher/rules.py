@@ -15,6 +15,7 @@ from typing import Final
 
 import numpy as np
 
+from manigraph_dishwasher.fixtures import racks
 from manigraph_shared.errors import SkillError
 from manigraph_shared.messages import Scene, SceneGoal, SceneObject
 
@@ -29,7 +30,7 @@ SLOT_FIT: Final = 0.02
 def is_dishwasher_scene(scene: Scene) -> bool:
     """A dishwasher scene shows its racks (the trays the expert opens and closes): how the
     planner and the skills tell this family's scenes from another's."""
-    return bool(scene.racks)
+    return bool(racks(scene))
 
 
 def rack_refusal(rack_id: str, open_racks: Mapping[str, bool]) -> SkillError | None:
@@ -75,7 +76,7 @@ def slot_of(scene: Scene, dish: SceneObject) -> SceneGoal | None:
     """The slot ``dish`` stands in, if any."""
     if not dish.filled:
         return None
-    slots = [g for g in scene.goals if g.rack is not None and _distance(g, dish) <= SLOT_FIT]
+    slots = [g for g in scene.goals if g.fixture is not None and _distance(g, dish) <= SLOT_FIT]
     return min(slots, key=lambda g: _distance(g, dish), default=None)
 
 
@@ -91,11 +92,11 @@ def check_dish_move(scene: Scene, dish: SceneObject, goal: SceneGoal) -> None:
     """Raise ``SkillError`` naming the rule if moving ``dish`` to ``goal`` breaks one, in the
     geometric world's order: taking it out of its rack, putting it into the goal's rack, the
     goal slot taken, the goal slot of another kind."""
-    open_racks = {rack.id: rack.open for rack in scene.racks}
+    open_racks = {rack.id: rack.open for rack in racks(scene)}
     here = slot_of(scene, dish)
-    if here is not None and here.rack is not None:
-        check_rack_usable(here.rack, open_racks)
-    if goal.rack is None:
+    if here is not None and here.fixture is not None:
+        check_rack_usable(here.fixture, open_racks)
+    if goal.fixture is None:
         return
-    check_rack_usable(goal.rack, open_racks)
+    check_rack_usable(goal.fixture, open_racks)
     check_slot(goal.id, goal.category.value, dish.id, dish.category.value, occupant(scene, goal))

@@ -4,6 +4,7 @@ dishes and the loading preference, not blocks and stacks (``manigraph_tools.fami
 from collections.abc import Mapping
 from typing import Any
 
+from manigraph_dishwasher.fixtures import RACK, TOGGLE
 from manigraph_dishwasher.preference import expert_name
 from manigraph_tools.family import ToolsFamily
 
@@ -20,4 +21,5 @@ FAMILY = ToolsFamily(
     counted="dishes",
     expert_of=_expert_of,
     help="episodes sized by their dishes and the preference",
+    fixture_actions={RACK: TOGGLE},
 )

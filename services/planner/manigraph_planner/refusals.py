@@ -38,6 +38,7 @@ for the same reason. A lesson only orders the options: an episode never ends on 
 from __future__ import annotations
 
 import math
+import zlib
 from collections import Counter
 from dataclasses import dataclass, field
 from typing import Literal
@@ -204,8 +205,8 @@ class RefusalMemory:
         goal = _find(scene.goals, goal_id)
         if goal is not None:
             centres.append((goal.position.x, goal.position.y))
-            if goal.rack is not None:
-                keys.add(f"r:{goal.rack}")
+            if goal.fixture is not None:
+                keys.add(f"f:{goal.fixture}")
         if radius <= 0:
             return keys
         r2 = radius * radius
@@ -230,7 +231,9 @@ class RefusalMemory:
             turned = key[0] in "og" and _angle(then[3:7], now[3:7]) > self.turn_tolerance
             flags = then[7:] if key[0] in "og" else then[3:]
             news = now[7:] if key[0] in "og" else now[3:]
-            if turned or max(abs(a - b) for a, b in zip(flags, news, strict=True)) > 1e-3:
+            if turned or len(flags) != len(news):
+                return True
+            if flags and max(abs(a - b) for a, b in zip(flags, news, strict=True)) > 1e-3:
                 return True
         return False
 
@@ -240,7 +243,8 @@ def _find(items, name: str):  # objects or goals, by id
 
 
 def _states(scene: Scene) -> dict[str, _State]:
-    """Each object's, goal's and rack's state: position, then orientation and flags."""
+    """Each object's, goal's and fixture's state: position, then orientation and flags (a
+    fixture: its state)."""
     states: dict[str, _State] = {}
     for o in scene.objects:
         states[f"o:{o.id}"] = (*_position(o), *_turn(o), float(o.filled), float(o.visible))
@@ -257,9 +261,15 @@ def _states(scene: Scene) -> dict[str, _State]:
             float(g.filled),
             float(g.visible),
         )
-    for r in scene.racks:
-        states[f"r:{r.id}"] = (r.position.x, r.position.y, r.position.z, float(r.open))
+    for f in scene.fixtures:  # its state's values, by name (a text as a number of its own)
+        values = (_scalar(value) for _, value in sorted(f.state.items()))
+        states[f"f:{f.id}"] = (f.position.x, f.position.y, f.position.z, *values)
     return states
+
+
+def _scalar(value: bool | float | str) -> float:
+    """A fixture's state value as a number that changes when it does."""
+    return float(zlib.crc32(value.encode())) if isinstance(value, str) else float(value)
 
 
 def _angle(a: tuple[float, ...], b: tuple[float, ...]) -> float:

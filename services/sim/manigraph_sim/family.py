@@ -129,7 +129,8 @@ class SimFamily(ABC):
 
     Class attributes: ``layout_type`` (the layout its tasks make), ``tasks`` (their names in
     ``TASKS``), ``takes_task_files`` (whether a user's task file is laid out in its world),
-    ``request_fields`` (the ``EpisodeRequest`` fields it reads into its options)."""
+    ``request_fields`` (the generic ``EpisodeRequest`` fields it reads into its options;
+    the request's ``options`` are its own, by name)."""
 
     name: ClassVar[str]
     help: ClassVar[str] = ""
@@ -143,10 +144,18 @@ class SimFamily(ABC):
         """This family's options for ``request``, its tasks laid out in ``geometry``'s world.
         A field of another family set in the request is refused (``ConfigError`` naming
         ``family.<field>``)."""
+        if request.family is not None and request.family != self.name:
+            raise ConfigError(
+                "family", f"'{request.task}' is a task of {self.name}, not of {request.family}"
+            )
         values = {name: getattr(request, name) for name in self.request_fields}
         for name in OWNED_FIELDS:
             if name not in values and getattr(request, name) is not None:
                 values[name] = getattr(request, name)  # another family's: refused below
+        for name, value in request.options.items():
+            if name in _REQUEST_FIELDS:
+                raise ConfigError(f"options.{name}", "is a field of the request, not an option")
+            values[name] = value  # a name no family owns, or another family's: refused below
         return FAMILIES.options(self.name, values | self.geometry_options(geometry))
 
     def geometry_options(self, geometry: str) -> dict[str, Any]:
@@ -221,8 +230,11 @@ TASKS.fill_with(_register_tasks)
 #: The request fields a family may own that are unset (None) unless a client chose them: one
 #: set for a family that does not read it is refused. ``blocks`` and ``stacks`` have defaults
 #: in the contract, so every request carries them; a family that does not read them ignores
-#: them (it cannot tell a default from a choice).
-OWNED_FIELDS = ("objects", "preference")
+#: them (it cannot tell a default from a choice). What else a family reads it owns: the
+#: request's ``options``.
+OWNED_FIELDS = ("objects",)
+#: The request's own fields, which no family option may shadow.
+_REQUEST_FIELDS = frozenset({"blocks", "stacks", "objects", "seed", "max_steps", "task"})
 
 
 def register_family(family: type[SimFamily]) -> type[SimFamily]:
@@ -235,6 +247,8 @@ def family_of(request: EpisodeRequest) -> SimFamily:
     """The family whose task ``request`` asks for (a task file: the family that takes task
     files); ``ConfigError`` naming the known tasks if none has it."""
     wants_file = request.task == "file" or request.task_file is not None
+    if request.family is not None and request.family not in FAMILIES.names():
+        FAMILIES.check(request.family)  # an unknown family: ConfigError naming the known ones
     for _, family in FAMILIES.items():
         if (wants_file and family.takes_task_files) or request.task in family.tasks:
             return family

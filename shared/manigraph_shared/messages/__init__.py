@@ -12,11 +12,9 @@ from manigraph_shared.messages.base import (
 )
 from manigraph_shared.messages.decision import (
     REFUSAL_REASONS,
-    TRAY_RACKS,
     Action,
     SkillState,
     SkillStatus,
-    TrayAction,
 )
 from manigraph_shared.messages.episode import EpisodeEvent, EpisodePhase, EpisodeRequest
 from manigraph_shared.messages.robot import GripperOp, RobotCommand, RobotFeedback
@@ -24,9 +22,9 @@ from manigraph_shared.messages.scene import (
     GoalCategory,
     ObjectCategory,
     Scene,
+    SceneFixture,
     SceneGoal,
     SceneObject,
-    SceneRack,
 )
 from manigraph_shared.messages.status import Checkpoint, EstopState, ServiceState, ServiceStatus
 
@@ -34,7 +32,6 @@ __all__ = [
     "CONTRACT_VERSION",
     "MAX_PAYLOAD_BYTES",
     "REFUSAL_REASONS",
-    "TRAY_RACKS",
     "Action",
     "Checkpoint",
     "Delivery",
@@ -50,14 +47,13 @@ __all__ = [
     "RobotCommand",
     "RobotFeedback",
     "Scene",
+    "SceneFixture",
     "SceneGoal",
     "SceneObject",
-    "SceneRack",
     "ServiceState",
     "ServiceStatus",
     "SkillState",
     "SkillStatus",
-    "TrayAction",
     "Vector3",
     "key_matches",
     "message_type_for_key",

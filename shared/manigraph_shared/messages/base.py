@@ -35,15 +35,24 @@ MAX_PAYLOAD_BYTES = 1 << 20
 PREFIX = "manigraph"
 
 #: The contract's version, written into every MCAP log (``mcap_log.contract_version`` reads it).
-#: Every change since 1 added fields with defaults, so a log of an older version decodes as is
-#: (the golden logs of tests/golden are version 1):
+#: Versions 2 and 3 added fields with defaults, so a log of an older version decodes as is;
+#: version 4 renamed some, and a payload of 1-3 is upgraded as it is decoded (the golden logs
+#: of tests/golden are version 1):
 #:
 #: * 2: objects' ``attributes`` and goals' ``accepts`` (Scene, TaskLayout); the end event's
 #:   ``goals_wrong_object``; ServiceStatus's version, start, policy, checkpoint and e-stop;
 #:   EmergencyStop's ``by``; the ``explainer_warming_up`` refusal; DepthImage.
 #: * 3: goals' ``attributes`` (Scene, TaskLayout); EpisodeRequest's ``rules``; the end event's
 #:   ``rule_violations``.
-CONTRACT_VERSION = 3
+#: * 4: the contract knows no task family. A scene's ``racks`` became its ``fixtures`` (of a
+#:   kind the family defines, with a ``state`` it reads) and a goal's ``rack`` its
+#:   ``fixture``; an action's ``tray_action`` became its ``family_action`` (a name the
+#:   family defines, on the fixture named as object and goal) and the robot's
+#:   ``toggle_tray`` op ``operate``; an episode request names its ``family`` and carries
+#:   the family's ``options`` (the ``preference`` moved there). This renamed fields, so a
+#:   payload of versions 1-3 is read through its type's ``upgrade`` (``messages.legacy``)
+#:   when it does not decode as is.
+CONTRACT_VERSION = 4
 
 Identifier = Annotated[
     str,
@@ -319,7 +328,35 @@ class Message(Struct, frozen=True, kw_only=True):
         try:
             return decoder.decode(payload)
         except (msgspec.DecodeError, ValueError) as exc:  # ValueError: bytes that are not UTF-8
-            raise MessageError(cls.type_name(), key, _problems(cls, payload, exc)) from None
+            older = cls._older(payload)
+            if older is None:
+                raise MessageError(cls.type_name(), key, _problems(cls, payload, exc)) from None
+        try:  # a payload of an older contract version, in this version's fields
+            return decoder.decode(older)
+        except (msgspec.DecodeError, ValueError) as exc:
+            raise MessageError(cls.type_name(), key, _problems(cls, older, exc)) from None
+
+    @classmethod
+    def upgrade(cls, data: dict[str, Any]) -> dict[str, Any]:
+        """``data``, a payload of an older contract version as builtins, in this version's
+        fields (a type whose fields changed overrides this; ``messages.legacy``)."""
+        return data
+
+    @classmethod
+    def _older(cls, payload: bytes | bytearray | memoryview) -> bytes | None:
+        """``payload`` upgraded from an older version of this type (a log of an older
+        contract replayed), or None if it holds nothing older. Only a refused payload comes
+        here, so payloads of this version pay nothing for it."""
+        if cls.upgrade.__func__ is Message.upgrade.__func__:  # type: ignore[attr-defined]
+            return None
+        try:
+            data = msgspec.json.decode(payload)
+        except (msgspec.DecodeError, ValueError, RecursionError):
+            return None
+        if not isinstance(data, dict):
+            return None
+        upgraded = cls.upgrade(data)
+        return None if upgraded is data else _ENCODER.encode(upgraded)
 
     @classmethod
     def prepare(cls) -> msgspec.json.Decoder[Any]:

@@ -3,42 +3,24 @@
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import Annotated, ClassVar, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 from msgspec import Meta
 
+from manigraph_shared.messages import legacy
 from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp
-
-
-class TrayAction(StrEnum):
-    """The dishwasher's extra action head (paper, section 'Dishwasher loading')."""
-
-    NONE = "none"
-    TOGGLE_TOP = "toggle_top"
-    TOGGLE_BOTTOM = "toggle_bottom"
-
-    @property
-    def rack_id(self) -> str | None:
-        """The id of the rack this action toggles (``SceneRack.id``), None for NONE."""
-        return TRAY_RACKS.get(self)
-
-
-#: The dishwasher's racks by the tray action that toggles them.
-TRAY_RACKS: dict[TrayAction, str] = {
-    TrayAction.TOGGLE_TOP: "rack_top",
-    TrayAction.TOGGLE_BOTTOM: "rack_bottom",
-}
-
+from manigraph_shared.messages.scene import FamilyName
 
 #: Why a policy's first choice was passed over (``Action.recovery``).
 RecoveryReason = Literal["no_progress", "repeated_pair", "escalated", "exhausted", "refused"]
 
 
 class Action(Message, frozen=True, kw_only=True):
-    """Move ``object_id`` to ``goal_id`` (PickAndPlace), or toggle a tray.
+    """Move ``object_id`` to ``goal_id`` (PickAndPlace), or operate a fixture.
 
     A placement turns the object to ``orientation_index`` (``manigraph_shared.orientations``)
-    when set; a tray toggle names its rack (``TrayAction.rack_id``) as object and goal."""
+    when set; a family action (``family_action``, a name the task's family defines, such as
+    ``toggle``) names its fixture (``Scene.fixtures``) as object and goal."""
 
     key: ClassVar[str] = "manigraph/planner/action"
     delivery: ClassVar[Delivery] = Delivery.RELIABLE
@@ -55,7 +37,13 @@ class Action(Message, frozen=True, kw_only=True):
         Annotated[int, Meta(ge=0, le=5)] | None,
         Meta(description="one of six discrete orientations (orientations.py)"),
     ] = None
-    tray_action: TrayAction = TrayAction.NONE
+    family_action: Annotated[
+        FamilyName | None,
+        Meta(
+            description="an action the task's family defines (e.g. toggle) on the fixture "
+            "named as object and goal; null: pick and place"
+        ),
+    ] = None
     policy: Annotated[str, Meta(max_length=128, description="name of the policy that decided")]
     stamp: Stamp
     rank: Annotated[
@@ -78,6 +66,15 @@ class Action(Message, frozen=True, kw_only=True):
             "(docs/recovery.md)"
         ),
     ] = None
+
+    def _check(self) -> None:
+        if self.family_action is not None and self.object_id != self.goal_id:
+            raise ValueError("goal_id: a family action names its fixture as object and goal")
+
+    @classmethod
+    def upgrade(cls, data: dict[str, Any]) -> dict[str, Any]:
+        """An action of contract version 1-3 in this version's fields (:mod:`.legacy`)."""
+        return legacy.action(data)
 
 
 #: Failure reasons of a skill that refused its action before any motion, because the action

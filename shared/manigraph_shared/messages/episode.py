@@ -3,11 +3,19 @@
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import Annotated, ClassVar
+from typing import Annotated, Any, ClassVar
 
+import msgspec
 from msgspec import Meta
 
+from manigraph_shared.messages import legacy
 from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp
+from manigraph_shared.messages.scene import (
+    MAX_ATTRIBUTES,
+    AttributeName,
+    FamilyName,
+    FamilyScalar,
+)
 
 
 class EpisodeRequest(Message, frozen=True, kw_only=True):
@@ -21,14 +29,22 @@ class EpisodeRequest(Message, frozen=True, kw_only=True):
     task: Annotated[str, Meta(max_length=64, description="registered task name, e.g. stack")]
     blocks: Annotated[int, Meta(ge=1, le=64, description="blocks per stack (K)")] = 4
     stacks: Annotated[int, Meta(ge=1, le=16, description="number of stacks (s)")] = 1
+    family: Annotated[
+        FamilyName | None,
+        Meta(description="the task's family (null: the family whose task it is)"),
+    ] = None
     objects: Annotated[
         Annotated[int, Meta(ge=1, le=64)] | None,
-        Meta(description="dishes (dishwasher task): half plates, half bowls"),
+        Meta(description="objects the task lays out, as its family says (null: its default)"),
     ] = None
-    preference: Annotated[
-        Annotated[str, Meta(max_length=64)] | None,
-        Meta(description="how to load (dishwasher task): top-bottom, left-right"),
-    ] = None
+    options: Annotated[
+        dict[AttributeName, FamilyScalar],
+        Meta(
+            max_length=MAX_ATTRIBUTES,
+            description="options the task's family owns, by name (docs/families.md); the "
+            "family refuses a name it does not know",
+        ),
+    ] = msgspec.field(default_factory=dict)
     seed: Annotated[int, Meta(ge=0, le=2**32 - 1)] = 0
     max_steps: Annotated[
         Annotated[int, Meta(ge=1, le=10_000)] | None, Meta(description="default: 2 x goals + 4")
@@ -45,6 +61,11 @@ class EpisodeRequest(Message, frozen=True, kw_only=True):
             "TaskLayout"
         ),
     ] = None
+
+    @classmethod
+    def upgrade(cls, data: dict[str, Any]) -> dict[str, Any]:
+        """A request of contract version 1-3 in this version's fields (:mod:`.legacy`)."""
+        return legacy.episode_request(data)
 
 
 class EpisodePhase(StrEnum):

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import Annotated, ClassVar
+from typing import Annotated, Any, ClassVar
 
 from msgspec import Meta
 
+from manigraph_shared.messages import legacy
 from manigraph_shared.messages.base import (
     Delivery,
     Identifier,
@@ -22,8 +23,9 @@ class GripperOp(StrEnum):
     PICK = "pick"
     #: Lower the held object to ``position``, turned to ``orientation``, and open.
     PLACE = "place"
-    #: Grasp rack ``object_id``'s handle and pull it out, or push it in (dishwasher).
-    TOGGLE_TRAY = "toggle_tray"
+    #: Operate fixture ``object_id`` by its handle at ``position``, as its family says (a
+    #: rack: pull it out, or push it in).
+    OPERATE = "operate"
 
 
 class RobotCommand(Message, frozen=True, kw_only=True):
@@ -42,6 +44,11 @@ class RobotCommand(Message, frozen=True, kw_only=True):
         Quaternion, Meta(description="the object's orientation at grasp or at release")
     ] = Quaternion()
     stamp: Stamp
+
+    @classmethod
+    def upgrade(cls, data: dict[str, Any]) -> dict[str, Any]:
+        """A command of contract version 1-3 in this version's fields (:mod:`.legacy`)."""
+        return legacy.robot_command(data)
 
 
 class DriverAnswer(Message, frozen=True, kw_only=True):

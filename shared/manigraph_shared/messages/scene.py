@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import Annotated, ClassVar
+from typing import Annotated, Any, ClassVar
 
 import msgspec
 from msgspec import Meta
 
+from manigraph_shared.messages import legacy
 from manigraph_shared.messages.base import (
     Delivery,
     Identifier,
@@ -19,6 +20,8 @@ from manigraph_shared.messages.base import (
 )
 
 MAX_ENTITIES = 256
+#: Fixtures one scene may carry.
+MAX_FIXTURES = 16
 #: Attributes one object may carry (colour, label, ...), and keys one goal's ``accepts`` may list.
 MAX_ATTRIBUTES = 16
 
@@ -60,6 +63,30 @@ Accepts = Annotated[
         description="what an object must carry to fill this goal: every key must match "
         "(an attribute's value, ``id``, or ``size`` within 1 mm); empty: any object of its "
         "category",
+    ),
+]
+
+
+#: A name a family defines (a fixture's kind, a family action): lower case, like an attribute.
+FamilyName = Annotated[
+    str,
+    Meta(
+        pattern=r"^[a-z][a-z0-9_]{0,31}$",
+        description="a name the task's family defines: lower case, 1-32 of [a-z0-9_]",
+    ),
+]
+#: A scalar a family reads: a fixture's state, an episode request's option.
+FamilyScalar = (
+    bool
+    | Annotated[float, Meta(ge=-1e6, le=1e6)]
+    | Annotated[str, Meta(min_length=1, max_length=64)]
+)
+FixtureState = Annotated[
+    dict[AttributeName, FamilyScalar],
+    Meta(
+        max_length=MAX_ATTRIBUTES,
+        description="the fixture's state as its family reads it (open, travel, ...): flag, "
+        "number or text",
     ),
 ]
 
@@ -114,30 +141,28 @@ class SceneGoal(Struct, frozen=True, kw_only=True):
     orientation: Quaternion = Quaternion()
     filled: Annotated[bool, Meta(description="an object it accepts occupies it")] = False
     visible: Annotated[bool, Meta(description="observed now (false: inside a closed box)")] = True
-    rack: Annotated[
-        Identifier | None, Meta(description="the dishwasher rack holding this slot")
+    fixture: Annotated[
+        Identifier | None,
+        Meta(description="the fixture holding this goal (``Scene.fixtures``), if any"),
     ] = None
     accepts: Accepts = msgspec.field(default_factory=dict)
     attributes: GoalAttributes = msgspec.field(default_factory=dict)
 
 
-class SceneRack(Struct, frozen=True, kw_only=True):
-    """A dishwasher rack that slides out (open) and in along its rail."""
+class SceneFixture(Struct, frozen=True, kw_only=True):
+    """A part of the world the robot operates rather than moves (a drawer, a rack on its
+    rail): of a ``kind`` the task's family defines, with a ``state`` the family reads."""
 
     id: Identifier
-    position: Annotated[Vector3, Meta(description="centre of the rack's handle, metres")]
-    open: Annotated[bool, Meta(description="pulled out: it can be loaded")]
-    travel: Annotated[
-        Annotated[float, Meta(ge=0.0, le=1.0)] | None,
-        Meta(description="how far it is out, metres, where measured"),
+    kind: Annotated[FamilyName, Meta(description="a kind its family defines (a rack, ...)")]
+    position: Annotated[
+        Vector3, Meta(description="where the gripper takes the fixture (its handle), metres")
+    ]
+    orientation: Quaternion = Quaternion()
+    size: Annotated[
+        Vector3 | None, Meta(description="full extents, metres, where the family says")
     ] = None
-    rail: Annotated[
-        Annotated[float, Meta(gt=0.0, le=1.0)] | None,
-        Meta(
-            description="how far it slides out all the way, metres, where the world says so "
-            "(None: the family's own default)"
-        ),
-    ] = None
+    state: FixtureState = msgspec.field(default_factory=dict)
 
 
 class Scene(Message, frozen=True, kw_only=True):
@@ -153,8 +178,9 @@ class Scene(Message, frozen=True, kw_only=True):
     sequence: Annotated[int, Meta(ge=0, description="increases by one per published scene")]
     objects: Annotated[list[SceneObject], Meta(max_length=MAX_ENTITIES)]
     goals: Annotated[list[SceneGoal], Meta(max_length=MAX_ENTITIES)]
-    racks: Annotated[
-        list[SceneRack], Meta(max_length=8, description="dishwasher racks (dishwasher task)")
+    fixtures: Annotated[
+        list[SceneFixture],
+        Meta(max_length=MAX_FIXTURES, description="fixtures of the task's family (its racks, ...)"),
     ] = msgspec.field(default_factory=list)
     episode_ended: Annotated[
         bool, Meta(description="the world ended this episode (sim only): planners stop deciding")
@@ -166,10 +192,10 @@ class Scene(Message, frozen=True, kw_only=True):
 
     def _check(self) -> None:
         seen: set[str] = set()
-        entities: list[SceneObject | SceneGoal | SceneRack] = [
+        entities: list[SceneObject | SceneGoal | SceneFixture] = [
             *self.objects,
             *self.goals,
-            *self.racks,
+            *self.fixtures,
         ]
         for entity in entities:
             if entity.id in seen:
@@ -188,8 +214,13 @@ class Scene(Message, frozen=True, kw_only=True):
                 return item
         raise KeyError(goal_id)
 
-    def rack(self, rack_id: str) -> SceneRack:
-        for item in self.racks:
-            if item.id == rack_id:
+    def fixture(self, fixture_id: str) -> SceneFixture:
+        for item in self.fixtures:
+            if item.id == fixture_id:
                 return item
-        raise KeyError(rack_id)
+        raise KeyError(fixture_id)
+
+    @classmethod
+    def upgrade(cls, data: dict[str, Any]) -> dict[str, Any]:
+        """A scene of contract version 1-3 in this version's fields (:mod:`.legacy`)."""
+        return legacy.scene(data)

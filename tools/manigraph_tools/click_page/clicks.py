@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 from manigraph_shared.errors import ManigraphError
 from manigraph_shared.ids import derived_id
-from manigraph_shared.messages import Action, Scene, TrayAction
+from manigraph_shared.messages import Action, Scene
 from manigraph_shared.orientations import NUM_ORIENTATIONS, ORIENTATION_NAMES, nearest_orientation
 
 #: ``Action.policy`` of every decision a person makes through the page.
@@ -28,12 +28,13 @@ class ClickRefused(ManigraphError):
 
 @dataclass(frozen=True)
 class Click:
-    """What the page asks for: an object to a goal (in an orientation), or a tray toggle."""
+    """What the page asks for: an object to a goal (in an orientation), or a family action
+    (``family_action``, such as ``toggle``) on fixture ``object_id``."""
 
     object_id: str | None = None
     goal_id: str | None = None
     orientation_index: int | None = None
-    tray_action: TrayAction = TrayAction.NONE
+    family_action: str | None = None
 
 
 def action_for(
@@ -46,15 +47,17 @@ def action_for(
 ) -> Action:
     """The ``Action`` for ``click`` on ``scene`` as step ``step`` of ``episode_id``, stamped by
     ``clock`` and named ``policy``; :class:`ClickRefused` saying why not where the scene does
-    not allow it (an id it does not have or hides, a goal of another category, a rack it has
+    not allow it (an id it does not have or hides, a goal of another category, a fixture it has
     not)."""
     orientation = click.orientation_index
-    if click.tray_action is not TrayAction.NONE:
-        rack_id = click.tray_action.rack_id
-        assert rack_id is not None
-        if not any(rack.id == rack_id for rack in scene.racks):
-            raise ClickRefused(f"this world has no {rack_id}: no rack to toggle")
-        object_id = goal_id = rack_id
+    if click.family_action is not None:
+        fixture_id = click.object_id or ""
+        if not any(fixture.id == fixture_id for fixture in scene.fixtures):
+            raise ClickRefused(
+                f"this world has no fixture {fixture_id or '(none named)'}: "
+                f"nothing to {click.family_action}"
+            )
+        object_id = goal_id = fixture_id
         orientation = None
     else:
         if click.goal_id is None:
@@ -74,7 +77,7 @@ def action_for(
             )
         if orientation is not None and not 0 <= orientation < NUM_ORIENTATIONS:
             raise ClickRefused(f"orientation_index: must be in 0..{NUM_ORIENTATIONS - 1}")
-        if orientation is None and scene.racks:
+        if orientation is None and scene.fixtures:
             orientation = nearest_orientation(goal.orientation)  # the slot's own
     return Action(
         decision_id=derived_id(episode_id, ":", str(step)),
@@ -83,7 +86,7 @@ def action_for(
         object_id=object_id,
         goal_id=goal_id,
         orientation_index=orientation,
-        tray_action=click.tray_action,
+        family_action=click.family_action,
         policy=policy,
         stamp=clock(),
     )
@@ -91,19 +94,19 @@ def action_for(
 
 def same_decision(a: Action, b: Action) -> bool:
     """Whether ``a`` and ``b`` ask the robot for the same thing (ids, stamps and names apart)."""
-    return (a.object_id, a.goal_id, a.orientation_index, a.tray_action) == (
+    return (a.object_id, a.goal_id, a.orientation_index, a.family_action) == (
         b.object_id,
         b.goal_id,
         b.orientation_index,
-        b.tray_action,
+        b.family_action,
     )
 
 
 def describe(action: Action) -> str:
     """``action`` as the page's messages name it: ``object -> goal`` with the orientation's
-    name, or ``toggle <rack>``."""
-    if action.tray_action is not TrayAction.NONE:
-        return f"toggle {action.tray_action.rack_id}"
+    name, or ``<family action> <fixture>`` (``toggle rack_top``)."""
+    if action.family_action is not None:
+        return f"{action.family_action} {action.object_id}"
     turn = (
         f" ({ORIENTATION_NAMES[action.orientation_index]})"
         if action.orientation_index is not None

@@ -19,13 +19,14 @@ from __future__ import annotations
 
 import json
 import logging
+import re
 import threading
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib.resources import files
 from typing import Any, Protocol
 
-from manigraph_shared.messages import Action, TrayAction
+from manigraph_shared.messages import Action
 from manigraph_tools.click_page.clicks import Click, ClickRefused
 from manigraph_tools.click_page.session import DemoSession
 
@@ -63,7 +64,7 @@ class DemoApp(Protocol):
 
 def click_from_json(body: dict[str, Any]) -> Click:
     """A :class:`Click` from the page's JSON; :class:`BadRequest` naming a bad field."""
-    known = {"object_id", "goal_id", "orientation_index", "tray_action"}
+    known = {"object_id", "goal_id", "orientation_index", "family_action"}
     unknown = sorted(set(body) - known)
     if unknown:
         raise BadRequest(
@@ -80,12 +81,16 @@ def click_from_json(body: dict[str, Any]) -> Click:
         isinstance(orientation, bool) or not isinstance(orientation, int)
     ):
         raise BadRequest("orientation_index: must be an integer 0..5 or null")
-    try:
-        tray = TrayAction(body.get("tray_action") or "none")
-    except ValueError:
-        choices = ", ".join(t.value for t in TrayAction)
-        raise BadRequest(f"tray_action: must be one of {choices}") from None
-    return Click(ids["object_id"], ids["goal_id"], orientation, tray)
+    family_action = body.get("family_action")
+    if family_action is not None and (
+        not isinstance(family_action, str) or not _FAMILY_NAME.fullmatch(family_action)
+    ):
+        raise BadRequest("family_action: must be a name of 1-32 of [a-z0-9_] or null")
+    return Click(ids["object_id"], ids["goal_id"], orientation, family_action)
+
+
+#: A family action's name, as the contract takes it (``Action.family_action``).
+_FAMILY_NAME = re.compile(r"[a-z][a-z0-9_]{0,31}")
 
 
 class DemoHttpServer(ThreadingHTTPServer):

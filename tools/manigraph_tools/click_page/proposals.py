@@ -109,7 +109,7 @@ class Proposals:
                 "object_id": action.object_id,
                 "goal_id": action.goal_id,
                 "orientation_index": action.orientation_index,
-                "tray_action": action.tray_action.value,
+                "family_action": action.family_action,
                 "text": describe(action),
             },
         }

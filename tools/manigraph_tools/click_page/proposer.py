@@ -48,7 +48,7 @@ def load_proposer(spec: str) -> Decide:
             decision.object_id,
             decision.goal_id,
             decision.orientation_index,
-            decision.tray_action,
+            decision.family_action,
         )
 
     return decide

@@ -105,20 +105,24 @@ def scene_view(scene: Scene) -> dict[str, object]:
             "orientation": nearest_orientation(goal.orientation),
             "filled": goal.filled,
             "visible": goal.visible,
-            "rack": goal.rack,
+            "fixture": goal.fixture,
             "fill": _hex(goal.accepts),
             "accepts": describe(goal.accepts),
             "tag": _tag(goal.accepts),
         }
         for goal in scene.goals
     ]
-    racks = [{"id": rack.id, **_xyz(rack.position), "open": rack.open} for rack in scene.racks]
+    # A fixture's state beside its position (``open`` of a rack): what the page draws it by.
+    fixtures = [
+        {**fixture.state, "id": fixture.id, "kind": fixture.kind, **_xyz(fixture.position)}
+        for fixture in scene.fixtures
+    ]
     return {
         "episode_id": scene.episode_id,
         "sequence": scene.sequence,
         "objects": objects,
         "goals": goals,
-        "racks": racks,
+        "fixtures": fixtures,
         "ended": scene.episode_ended,
     }
 
@@ -131,7 +135,7 @@ def same_world(a: Scene | None, b: Scene) -> bool:
         and a.episode_id == b.episode_id
         and a.objects == b.objects
         and a.goals == b.goals
-        and a.racks == b.racks
+        and a.fixtures == b.fixtures
         and a.episode_ended == b.episode_ended
         and a.stale == b.stale
     )

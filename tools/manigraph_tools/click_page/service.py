@@ -36,6 +36,7 @@ from manigraph_tools.click_page.http import (
 from manigraph_tools.click_page.proposer import Proposer, load_proposer
 from manigraph_tools.click_page.session import Click, DemoSession
 from manigraph_tools.episodes import read_task_file
+from manigraph_tools.family import FAMILIES
 
 AT_LEAST_ONE = Interval(1, None)
 #: Longest wait for the sim to answer a reset, seconds.
@@ -57,8 +58,14 @@ class DemoUiOptions(Options):
     task_file: Path | None = option(None, help="your own TOML layout (docs/running.md)")
     blocks: int = option(3, help="blocks per stack K", within=AT_LEAST_ONE)
     stacks: int = option(1, help="number of stacks s", within=AT_LEAST_ONE)
-    objects: int | None = option(None, help="dishes (dishwasher; default 10)", within=AT_LEAST_ONE)
-    preference: str | None = option(None, help="dishwasher: top-bottom (default) or left-right")
+    objects: int | None = option(
+        None,
+        help="objects, for a task sized by them (unset: its family's default)",
+        within=AT_LEAST_ONE,
+    )
+    preference: str | None = option(
+        None, help="how the objects are to be placed, for a task whose family reads it (its docs)"
+    )
     seed: int = option(0, help="seed of the first episode", within=Interval(0, None))
     propose: str | None = option(
         None,
@@ -159,6 +166,7 @@ class DemoUiService(Service):
             "objects": o.objects,
             "preference": o.preference,
             "seed": o.seed,
+            **_family_fields(),
         }
 
     def start_episode(self, fields: dict[str, Any]) -> str:
@@ -182,7 +190,7 @@ class DemoUiService(Service):
                     "blocks": values["blocks"],
                     "stacks": values["stacks"],
                     "objects": values["objects"],
-                    "preference": values["preference"] or None,
+                    "options": {"preference": values["preference"]} if values["preference"] else {},
                     "seed": seed,
                     "task_file": task_file,
                 }
@@ -209,3 +217,15 @@ class DemoUiService(Service):
         action = self.session.act(click, wait=READY_WAIT)
         self.bus.publish(action)
         return action
+
+
+def _family_fields() -> dict[str, Any]:
+    """What the page learns of the installed families (``manigraph_tools.family``): each
+    family task's episode fields, what its count counts, and the family action each kind of
+    fixture takes (its button's)."""
+    families = [family for _, family in FAMILIES.items()]
+    return {
+        "family_tasks": {t: list(f.sized_by) for f in families for t in f.tasks},
+        "counted": {t: f.counted for f in families for t in f.tasks},
+        "fixture_actions": {k: a for f in families for k, a in f.fixture_actions.items()},
+    }

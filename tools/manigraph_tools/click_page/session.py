@@ -42,7 +42,6 @@ from manigraph_shared.messages import (
     Scene,
     SkillState,
     SkillStatus,
-    TrayAction,
 )
 from manigraph_shared.orientations import ORIENTATION_NAMES
 from manigraph_tools.click_page.clicks import (
@@ -331,7 +330,7 @@ class DemoSession:
         finishing waits up to ``wait`` seconds for the world to settle."""
         with self._lock:
             try:
-                if click.tray_action is TrayAction.NONE and click.object_id is None:
+                if click.family_action is None and click.object_id is None:
                     raise ClickRefused(
                         f"goal {click.goal_id} clicked without an object: click an object first"
                         if click.goal_id

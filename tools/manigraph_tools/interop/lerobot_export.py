@@ -150,13 +150,14 @@ def _read_episodes(source: SourceLog) -> tuple[list[Episode], int, LatestFrames]
 
 
 def _node_count(scene: Scene) -> int:
-    return len(scene.objects) + len(scene.goals) + len(scene.racks)
+    return len(scene.objects) + len(scene.goals) + len(scene.fixtures)
 
 
 def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
     """The per-node columns of one scene, padded to ``max_nodes`` rows."""
-    racks = {
-        rack.id: len(scene.objects) + len(scene.goals) + i for i, rack in enumerate(scene.racks)
+    fixtures = {
+        fixture.id: len(scene.objects) + len(scene.goals) + i
+        for i, fixture in enumerate(scene.fixtures)
     }
     columns: dict[str, list[Any]] = {
         name: [] for name in ("mask", "category", "position", "orientation", "size")
@@ -165,7 +166,14 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
     ids: list[str] = []
     attributes: list[dict[str, Any]] = []
 
-    def node(category: str, entity: Any, size: list[float], filled: bool, visible: bool) -> None:
+    def node(
+        category: str,
+        entity: Any,
+        size: list[float],
+        filled: bool,
+        visible: bool,
+        open_: bool = False,
+    ) -> None:
         q = getattr(entity, "orientation", None)
         columns["mask"].append(True)
         columns["category"].append(codes.NODE_CATEGORIES.index(category))
@@ -174,9 +182,9 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
         columns["size"].append(size)
         columns["filled"].append(filled)
         columns["visible"].append(visible)
-        columns["open"].append(bool(getattr(entity, "open", False)))
-        rack = getattr(entity, "rack", None)
-        columns["rack"].append(racks.get(rack, -1) if rack is not None else -1)
+        columns["open"].append(open_)
+        fixture = getattr(entity, "fixture", None)
+        columns["rack"].append(fixtures.get(fixture, -1) if fixture is not None else -1)
         ids.append(entity.id)
         attributes.append(
             dict(getattr(entity, "attributes", None) or getattr(entity, "accepts", {}))
@@ -188,8 +196,8 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
         )
     for goal in scene.goals:
         node(f"goal:{goal.category.value}", goal, [0.0] * 3, goal.filled, goal.visible)
-    for rack in scene.racks:
-        node("rack", rack, [0.0] * 3, False, True)
+    for item in scene.fixtures:
+        node(item.kind, item, [0.0] * 3, False, True, bool(item.state.get("open", False)))
     padding = max_nodes - len(ids)
     pads: dict[str, Any] = {"mask": False, "category": -1, "position": [0.0] * 3}
     pads.update({"orientation": [0.0] * 4, "size": [0.0] * 3, "filled": False})
@@ -203,14 +211,14 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
 
 
 def decision(action: Action, ids: list[str]) -> list[int]:
-    """``action``: object node, goal node, orientation (-1: none), tray action index."""
+    """``action``: object node, goal node, orientation (-1: none), family action index."""
 
     def index(node_id: str) -> int:
         return ids.index(node_id) if node_id in ids else -1
 
     orientation = -1 if action.orientation_index is None else action.orientation_index
-    tray = codes.TRAY_ACTIONS.index(action.tray_action.value)
-    return [index(action.object_id), index(action.goal_id), orientation, tray]
+    family = codes.FAMILY_ACTIONS.index(action.family_action or "none")
+    return [index(action.object_id), index(action.goal_id), orientation, family]
 
 
 def _rows(

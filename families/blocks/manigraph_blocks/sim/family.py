@@ -117,8 +117,8 @@ class BlocksWorld(GeometricWorld, GeometricTaskWorld):
         self.layout = layout
 
     def execute(self, command: RobotCommand, count_step: Callable[[], None]) -> None:
-        if command.op is GripperOp.TOGGLE_TRAY:
-            raise SkillError("unsupported", "this task has no trays")
+        if command.op is GripperOp.OPERATE:
+            raise SkillError("unsupported", "this task has no fixtures to operate")
         if command.op is GripperOp.PICK:
             # Refused before counting: a pick of nothing is not a step of the episode.
             if command.object_id not in self.bodies:

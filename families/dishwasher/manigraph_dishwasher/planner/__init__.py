@@ -14,8 +14,9 @@ from manigraph_shared.messages import EpisodeRequest
 
 
 def _expert_of(request: EpisodeRequest) -> str:
-    """The expert of the request's preference (:func:`..preference.expert_name`)."""
-    return expert_name(request.preference)
+    """The expert of the request's preference option (:func:`..preference.expert_name`)."""
+    preference = request.options.get("preference")
+    return expert_name(preference if isinstance(preference, str) else None)
 
 
 #: This family's planner part (its package's ``manigraph.families`` entry names it).

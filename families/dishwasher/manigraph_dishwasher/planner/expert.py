@@ -4,21 +4,19 @@ from __future__ import annotations
 
 import zlib
 
+from manigraph_dishwasher.fixtures import TOGGLE, TRAY_RACKS, TrayAction, racks
 from manigraph_dishwasher.preference import Preference, allows, preferred_rack
 from manigraph_planner.policies.base import Decision, Policy, register_policy
 from manigraph_shared.messages import (
-    TRAY_RACKS,
     GoalCategory,
     ObjectCategory,
     Scene,
     SceneGoal,
     SceneObject,
-    TrayAction,
 )
 from manigraph_shared.orientations import nearest_orientation, up_axis_orientation
 
 TOP, BOTTOM = TRAY_RACKS[TrayAction.TOGGLE_TOP], TRAY_RACKS[TrayAction.TOGGLE_BOTTOM]
-_TOGGLE = {rack: action for action, rack in TRAY_RACKS.items()}
 _DISHES = (ObjectCategory.PLATE, ObjectCategory.BOWL)
 #: Slots nearer than this (metres, on every axis) to a dish hold it: the geometric world puts
 #: a dish exactly at its slot, a physical dish settles a few millimetres off (the physics
@@ -31,7 +29,7 @@ def preferred(preference: str, dish: ObjectCategory, slot: SceneGoal) -> bool:
     :func:`~manigraph_dishwasher.preference.allows`, read off the scene: a slot's rack, its
     category, and its side, left being y < 0)."""
     return allows(
-        Preference(preference), dish.value, slot.category.value, slot.rack, slot.position.y < 0
+        Preference(preference), dish.value, slot.category.value, slot.fixture, slot.position.y < 0
     )
 
 
@@ -48,8 +46,8 @@ class DishwasherExpert(Policy):
     preference: Preference
 
     def decide(self, scene: Scene) -> Decision | None:
-        racks = {rack.id: rack for rack in scene.racks}
-        if TOP not in racks or BOTTOM not in racks:
+        by_id = {rack.id: rack for rack in racks(scene)}
+        if TOP not in by_id or BOTTOM not in by_id:
             return None
         pending = {TOP: [], BOTTOM: []}  # type: dict[str, list[SceneObject]]
         for dish in sorted(scene.objects, key=lambda o: o.id):
@@ -57,7 +55,7 @@ class DishwasherExpert(Policy):
                 continue
             pending[self._rack_for(dish.category)].append(dish)
         for rack_id in (TOP, BOTTOM):
-            rack = racks[rack_id]
+            rack = by_id[rack_id]
             if pending[rack_id]:
                 if not rack.open:
                     return self._toggle(rack_id)
@@ -99,7 +97,7 @@ class DishwasherExpert(Policy):
 
     @staticmethod
     def _toggle(rack_id: str) -> Decision:
-        return Decision(rack_id, rack_id, None, _TOGGLE[rack_id])
+        return Decision(rack_id, rack_id, None, TOGGLE)
 
 
 @register_policy("dishwasher-top-bottom")

@@ -25,9 +25,10 @@ from dataclasses import dataclass, field
 import torch
 from torch import Tensor
 
+from manigraph_dishwasher.fixtures import TRAY_RACKS, TrayAction, racks
 from manigraph_planner.gnn.features import FeatureSpec
 from manigraph_shared.errors import PolicyError
-from manigraph_shared.messages import TRAY_RACKS, Scene, TrayAction
+from manigraph_shared.messages import Scene
 from manigraph_shared.orientations import (
     NUM_ORIENTATIONS,
     nearest_orientation,
@@ -85,7 +86,7 @@ class DishGraph:
     object_ids: list[str]
     goal_ids: list[str]
     rack_ids: list[str]
-    #: The rack of each slot (``SceneGoal.rack``), and whether each rack is out.
+    #: The rack of each slot (``SceneGoal.fixture``), and whether each rack is out.
     goal_racks: list[str | None] = field(default_factory=list)
     rack_open: dict[str, bool] = field(default_factory=dict)
 
@@ -135,12 +136,13 @@ def dish_scene_to_graph(scene: Scene) -> DishGraph:
             o = nearest_orientation(goal.orientation)
             row(_SLOT_CODE[goal.category.value], goal.position.as_tuple(), goal.filled, 0.0, o)
             goal_ids.append(goal.id)
-            goal_racks.append(goal.rack)
-    for rack in scene.racks:
+            goal_racks.append(goal.fixture)
+    scene_racks = racks(scene)
+    for rack in scene_racks:
         if rack.id not in _RACK_CODE:
             raise PolicyError(f"scene: rack '{rack.id}' is not one of {sorted(_RACK_CODE)}")
         row(_RACK_CODE[rack.id], rack.position.as_tuple(), 0.0, float(rack.open), None)
         rack_ids.append(rack.id)
     x = torch.stack(rows) if rows else torch.zeros(0, DISH_FEATURE_SPEC.num_features)
-    rack_open = {rack.id: rack.open for rack in scene.racks}
+    rack_open = {rack.id: rack.open for rack in scene_racks}
     return DishGraph(x, object_ids, goal_ids, rack_ids, goal_racks, rack_open)

@@ -6,6 +6,7 @@ import itertools
 
 import torch
 
+from manigraph_dishwasher.fixtures import TRAY_RACKS, TrayAction
 from manigraph_dishwasher.planner.features import (
     FILLED_COLUMN,
     ORIENTATION_COLUMNS,
@@ -18,7 +19,7 @@ from manigraph_dishwasher.planner.net import DishHeads, DishPolicyNet
 from manigraph_dishwasher.rules import rack_usable
 from manigraph_planner.gnn.checkpoint import CheckpointInfo
 from manigraph_planner.policies.base import Decision, Policy
-from manigraph_shared.messages import TRAY_RACKS, Scene, TrayAction
+from manigraph_shared.messages import Scene
 from manigraph_shared.orientations import postures_like
 
 __all__ = ["DishwasherGNNPolicy", "decision_from_heads"]
@@ -84,7 +85,7 @@ class DishwasherGNNPolicy(Policy):
         first = decision_from_heads(graph, heads)
         pointless = _pointless_toggles(graph)
         toggles = [
-            Decision(tray.rack_id, tray.rack_id, None, tray)
+            Decision(tray.rack_id, tray.rack_id, None, tray.family_action)
             for index in heads.tray.argsort(descending=True).tolist()
             if (tray := TRAY_ACTIONS[int(index)]) is not TrayAction.NONE
             and tray.rack_id
@@ -135,7 +136,7 @@ def decision_from_heads(graph: DishGraph, heads: DishHeads) -> Decision | None:
     if tray is not TrayAction.NONE:
         rack = tray.rack_id
         assert rack is not None
-        return Decision(rack, rack, None, tray)
+        return Decision(rack, rack, None, tray.family_action)
     assert scores is not None
     m = graph.num_goals
     flat = int(scores.flatten().argmax())

@@ -43,7 +43,7 @@ class DishwasherFamily(SimFamily):
     options_type = DishwasherOptions
     layout_type = DishwasherLayout
     tasks = ("dishwasher",)
-    request_fields = ("objects", "preference")
+    request_fields = ("objects",)
 
     def max_steps(self, task: Task[Any], layout: DishwasherLayout) -> int:
         return task.max_steps(len(layout.dishes))

@@ -10,7 +10,7 @@ from manigraph_sim.tasks.base import Task
 
 @dataclass(frozen=True)
 class DishwasherOptions(Options):
-    """From the request's ``objects`` and ``preference``; the task checks them
+    """From the request's ``objects`` and its option ``preference``; the task checks them
     (``TaskError`` naming the field)."""
 
     objects: int | None = option(None, help="dishes, half plates, half bowls (unset: 10)")

@@ -5,7 +5,7 @@ bodies, all built from boxes (nothing downloaded).
   the racks stand pushed in (``dishwasher.task.RACK_CENTRES``, the geometric world's).
 * **Racks**: one link each on a prismatic joint along x (0: pushed in, ``-RAIL``:
   pulled out towards the robot, 4 cm short of the geometric world's ``RACK_TRAVEL``, and
-  reported so: ``SceneRack.rail``), with joint damping so a rack stays where it is left. A
+  reported so: the rack fixture's ``rail``), with joint damping so a rack stays where it is left. A
   rack is a floor whose top is 5 mm above its centre, a pair of 1.5 cm ribs around every plate
   slot (plates stand between them), and a handle: a tab at one side of its front, sticking
   out towards the robot, grasped where ``manigraph_dishwasher.rack_geometry.RACK_GRIP_OFFSET``

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from manigraph_dishwasher.fixtures import Rack
 from manigraph_dishwasher.sim.dishwasher_world import DishwasherWorld
 from manigraph_shared.messages import (
     GoalCategory,
@@ -12,7 +13,6 @@ from manigraph_shared.messages import (
     Scene,
     SceneGoal,
     SceneObject,
-    SceneRack,
 )
 from manigraph_shared.orientations import orientation
 from manigraph_sim.world_model import vector
@@ -57,18 +57,18 @@ def dishwasher_scene(
             position=vector(world.slot_position(slot)),
             orientation=orientation(slot.orientation),
             filled=world.occupant(slot.id) is not None,
-            rack=slot.rack,
+            fixture=slot.rack,
         )
         for slot in world.slots.values()
     ]
     racks = [
-        SceneRack(
+        Rack(
             id=rack.id,
             position=vector(rack.handle),
             open=rack.open,
             travel=rack.travel,
             rail=rack.rail,
-        )
+        ).fixture()
         for rack in world.racks.values()
     ]
     return Scene(
@@ -77,6 +77,6 @@ def dishwasher_scene(
         sequence=sequence,
         objects=objects,
         goals=goals,
-        racks=racks,
+        fixtures=racks,
         episode_ended=ended,
     )

@@ -1,17 +1,18 @@
-"""The dishwasher family's skill extensions: its tray actions (:mod:`.trays`, the drivers'
-``toggle_tray``), its loading rules checked before a dish is moved
-(``manigraph_dishwasher.rules``), where in its slot a bowl is set down
-(:mod:`.slot_room`), its racks' floors and handles as obstacles (:mod:`.obstacles`) and
-turning a dish over on the counter (which tilts, :mod:`.turn_over`; the Panda drivers'
-manoeuvre from the driver's public pieces, :mod:`.panda_turn_over`)."""
+"""The dishwasher family's skill extensions: its tray actions (the family action ``toggle``,
+:mod:`.trays`, the drivers' ``toggle_tray``), its loading rules checked before a dish is moved
+(``manigraph_dishwasher.rules``), where in its slot a bowl is set down (:mod:`.slot_room`), its
+racks' floors and handles as obstacles (:mod:`.obstacles`) and turning a dish over on the
+counter (which tilts, :mod:`.turn_over`; the Panda drivers' manoeuvre from the driver's public
+pieces, :mod:`.panda_turn_over`)."""
 
+from manigraph_dishwasher.fixtures import TOGGLE
 from manigraph_dishwasher.rules import is_dishwasher_scene
-from manigraph_shared.messages import Action, TrayAction
+from manigraph_shared.messages import Action
 from manigraph_skills.family import SkillFamily
 
 
 def _is_tray_action(action: Action) -> bool:
-    return action.tray_action is not TrayAction.NONE
+    return action.family_action == TOGGLE
 
 
 _HERE = "manigraph_dishwasher.skills"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from manigraph_dishwasher.fixtures import racks
 from manigraph_dishwasher.rack_geometry import (
     RACK_FLOOR_HALF_Y,
     RACK_FLOOR_THICKNESS,
@@ -29,7 +30,7 @@ def rack_obstacles(
     largest half extent, whichever way up it stands), is a support, like a block under a
     goal: the fingers may come close to it."""
     found = []
-    for rack in scene.racks:
+    for rack in racks(scene):
         centre = np.array(rack.position.as_tuple()) - np.array([RACK_HANDLE_X, 0.0, 0.0])
         bottom = RACK_FLOOR_TOP - RACK_FLOOR_THICKNESS
         low = centre + np.array([RACK_FLOOR_X[0], -RACK_FLOOR_HALF_Y, bottom])

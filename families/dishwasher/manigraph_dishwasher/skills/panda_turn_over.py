@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from manigraph_dishwasher.fixtures import racks
 from manigraph_dishwasher.rack_geometry import RACK_GRIP_OFFSET
 from manigraph_dishwasher.skills.turn_over import (
     next_tilts,
@@ -86,7 +87,7 @@ def set_down_spots(scene: Scene, item: SceneObject, here: np.ndarray) -> list[np
     # pushed in: pulled out, its handle is over them, and a dish turned there could not be
     # taken again. (The racks are never both out: one side is always free.)
     sides = [1.0, -1.0] if here[1] >= 0 else [-1.0, 1.0]
-    for rack in scene.racks:
+    for rack in racks(scene):
         if rack.open and rack.id in RACK_GRIP_OFFSET:
             side = float(np.sign(RACK_GRIP_OFFSET[rack.id][1]))
             if side in sides:

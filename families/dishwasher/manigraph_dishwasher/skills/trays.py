@@ -1,13 +1,15 @@
-"""ToggleTray: the dishwasher's tray action, run by the driver's ``toggle_tray``."""
+"""ToggleTray: the dishwasher's tray action (the family action ``toggle``), run by the
+driver's ``toggle_tray`` (an ``operate`` command)."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from manigraph_dishwasher.fixtures import Rack, TrayAction, rack
 from manigraph_dishwasher.rack_geometry import RACK_TRAVEL, rack_grip
 from manigraph_shared.errors import SkillError
-from manigraph_shared.messages import Action, Scene, SceneRack, SkillState, SkillStatus
+from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus
 from manigraph_skills.drivers.base import TrayToggle
 
 if TYPE_CHECKING:
@@ -21,19 +23,18 @@ def toggle_tray(
     status: Callable[[SkillState], SkillStatus],
 ) -> None:
     """The rack the tray action names, if the scene has it, pushed in or pulled out."""
-    rack_id = action.tray_action.rack_id
-    assert rack_id is not None
+    rack_id = TrayAction.of(action).rack_id or action.object_id
     try:
-        rack = scene.rack(rack_id)
+        toggled = rack(scene, rack_id)
     except KeyError:
         raise SkillError("unknown_rack", f"the scene has no {rack_id}") from None
-    if not runner.workspace.contains(rack.position):
-        raise SkillError("outside_workspace", f"{rack_id} handle at {rack.position.as_tuple()}")
+    if not runner.workspace.contains(toggled.position):
+        raise SkillError("outside_workspace", f"{rack_id} handle at {toggled.position.as_tuple()}")
     status(SkillState.RUNNING)
-    runner.driver.toggle_tray(tray_toggle(action.decision_id, rack))
+    runner.driver.toggle_tray(tray_toggle(action.decision_id, toggled))
 
 
-def tray_toggle(decision_id: str, rack: SceneRack) -> TrayToggle:
+def tray_toggle(decision_id: str, rack: Rack) -> TrayToggle:
     """The driver's toggle of ``rack`` as the scene shows it: its tab where
     ``rack_geometry.rack_grip`` says, its rail the scene's, else ``RACK_TRAVEL``
     (``ConfigError`` naming a rack without a handle)."""

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor
 
+from manigraph_dishwasher.fixtures import TrayAction
 from manigraph_dishwasher.planner.features import DISH_FEATURE_SPEC, TRAY_ACTIONS
-from manigraph_shared.messages import TrayAction
 
 __all__ = ["DishSample", "add_dishes", "counter_dishes", "drop_dishes"]
 

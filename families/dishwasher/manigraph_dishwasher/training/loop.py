@@ -25,6 +25,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
+from manigraph_dishwasher.fixtures import TrayAction, racks
 from manigraph_dishwasher.planner.ensemble import DishEnsembleNet
 from manigraph_dishwasher.planner.features import (
     DISH_FEATURE_SPEC,
@@ -40,7 +41,6 @@ from manigraph_dishwasher.training.augment import (
 )
 from manigraph_planner.gnn.models import ModelConfig
 from manigraph_shared.errors import ConfigError, LogError
-from manigraph_shared.messages import TrayAction
 from manigraph_training.dataset import read_decisions
 
 __all__ = [
@@ -71,11 +71,12 @@ def load_dish_demonstrations(paths: Iterable[Path]) -> DishDemos:
     samples, episodes = [], set()
     for action in actions:
         scene = scenes.get((action.episode_id, action.scene_sequence))
-        if scene is None or not scene.racks:
+        if scene is None or not racks(scene):
             continue
         graph = dish_scene_to_graph(scene)
-        tray = TRAY_ACTIONS.index(action.tray_action)
-        if action.tray_action is TrayAction.NONE:
+        tray_action = TrayAction.of(action)
+        tray = TRAY_ACTIONS.index(tray_action)
+        if tray_action is TrayAction.NONE:
             if action.object_id not in graph.object_ids or action.goal_id not in graph.goal_ids:
                 continue
             o, g = graph.object_ids.index(action.object_id), graph.goal_ids.index(action.goal_id)

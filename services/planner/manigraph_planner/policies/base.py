@@ -10,7 +10,7 @@ from typing import cast
 
 from manigraph_shared.errors import PolicyError
 from manigraph_shared.ids import derived_id
-from manigraph_shared.messages import Action, Scene, TrayAction
+from manigraph_shared.messages import Action, Scene
 from manigraph_shared.messages.decision import RecoveryReason
 from manigraph_shared.registry import Registry
 
@@ -20,7 +20,8 @@ class Decision:
     object_id: str
     goal_id: str
     orientation_index: int | None = None
-    tray_action: TrayAction = TrayAction.NONE
+    #: An action the task's family defines on the fixture named as object and goal.
+    family_action: str | None = None
 
     @property
     def pair(self) -> tuple[str, str]:
@@ -46,7 +47,7 @@ class Decision:
             object_id=self.object_id,
             goal_id=self.goal_id,
             orientation_index=self.orientation_index,
-            tray_action=self.tray_action,
+            family_action=self.family_action,
             policy=policy,
             stamp=stamp,
             rank=rank,

@@ -74,6 +74,6 @@ class GripperDriver(RobotDriver):
         self._send(GripperOp.PLACE, motion)
 
     def toggle_tray(self, toggle: TrayToggle) -> None:
-        """One ``toggle_tray`` command naming the rack, at its handle."""
+        """One ``operate`` command naming the rack, at its handle."""
         motion = Motion(toggle.decision_id, toggle.rack_id, toggle.handle, Quaternion())
-        self._send(GripperOp.TOGGLE_TRAY, motion)
+        self._send(GripperOp.OPERATE, motion)

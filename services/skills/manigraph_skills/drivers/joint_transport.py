@@ -14,8 +14,8 @@ from manigraph_shared.messages import (
     JointTrajectoryCommand,
     JointTrajectoryResult,
     Scene,
+    SceneFixture,
     SceneObject,
-    SceneRack,
 )
 
 
@@ -69,9 +69,9 @@ def object_seen_after(
 
 
 def position_in(scene: Scene, object_id: str) -> np.ndarray | None:
-    """Where object ``object_id`` is in ``scene``, or rack ``object_id``'s handle; None if
+    """Where object ``object_id`` is in ``scene``, or fixture ``object_id``'s handle; None if
     neither is in it."""
-    things: list[SceneObject | SceneRack] = [*scene.objects, *scene.racks]
+    things: list[SceneObject | SceneFixture] = [*scene.objects, *scene.fixtures]
     for thing in things:
         if thing.id == object_id:
             return np.array(thing.position.as_tuple())

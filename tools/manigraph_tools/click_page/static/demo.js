@@ -15,8 +15,9 @@
 "use strict";
 
 const SVG = "http://www.w3.org/2000/svg";
+// The episode fields of each task; a family's tasks come with the page's defaults
+// (``family_tasks``: the fields its episodes are sized by).
 const TASK_FIELDS = {
-  dishwasher: ["objects", "preference"],
   multistack: ["blocks", "stacks"],
   file: [],
 };
@@ -106,8 +107,9 @@ async function clickGoal(id) {
   }
 }
 
-async function clickTray(tray) {
-  await sendAction({ tray_action: tray });
+// A fixture's button sends the family action its kind takes (the page's ``fixture_actions``).
+async function clickFixture(fixtureId, action) {
+  await sendAction({ family_action: action, object_id: fixtureId });
 }
 
 function currentProposal() {
@@ -123,8 +125,8 @@ async function acceptProposal() {
   renderSelection();
   renderOrientations();
   const click =
-    proposal.tray_action !== "none"
-      ? { tray_action: proposal.tray_action }
+    proposal.family_action !== null
+      ? { family_action: proposal.family_action, object_id: proposal.object_id }
       : {
           object_id: proposal.object_id,
           goal_id: proposal.goal_id,
@@ -160,7 +162,7 @@ async function startEpisode(event) {
   const fields = TASK_FIELDS[task] || ["blocks"];
   for (const name of fields) {
     const value = form.get(name);
-    body[name] = name === "preference" ? value : Number(value);
+    body[name] = name === "blocks" || name === "stacks" || name === "objects" ? Number(value) : value;
   }
   page.selected = null;
   page.orientation = null;
@@ -177,9 +179,9 @@ function render() {
   $("episode").textContent = episode
     ? `${episode.id} · ${episode.task ?? "?"} · seed ${episode.seed ?? "?"}`
     : "none yet: start one";
-  const dishes = state.scene && state.scene.racks.length > 0;
-  const done = dishes
-    ? `${episode?.objects_placed}/${episode?.objects_total} dishes in a slot`
+  const counted = episode && (state.defaults.counted || {})[episode.task];
+  const done = counted
+    ? `${episode?.objects_placed}/${episode?.objects_total} ${counted} in place`
     : `${episode?.goals_filled}/${episode?.goals_total} goals filled`;
   $("progress").textContent = episode
     ? `${done} · ${episode.steps_recorded} ` +
@@ -198,19 +200,39 @@ function render() {
   }
   page.recorded = recorded.demonstrations;
   renderMessages(state.messages);
-  const racks = state.scene ? state.scene.racks : [];
-  $("racks").hidden = racks.length === 0;
-  for (const rack of racks) {
-    const button = rack.id === "rack_top" ? $("toggle-top") : $("toggle-bottom");
-    button.textContent = `${rack.id === "rack_top" ? "top" : "bottom"} rack: ` +
-      (rack.open ? "push in" : "pull out");
-    button.dataset.open = String(rack.open);
-  }
-  $("orientations").hidden = racks.length === 0;
+  const fixtures = state.scene ? state.scene.fixtures : [];
+  renderFixtureButtons(fixtures, state.defaults.fixture_actions || {});
+  $("orientations").hidden = fixtures.length === 0;
   if (page.selected && !objectInScene(page.selected)) page.selected = null;
   renderSelection();
   renderOrientations();
   drawViews();
+}
+
+// One button per fixture whose kind takes a family action, named by the fixture and its state.
+function renderFixtureButtons(fixtures, actions) {
+  const box = $("fixture-buttons");
+  const operable = fixtures.filter((f) => actions[f.kind]);
+  $("fixtures").hidden = operable.length === 0;
+  const ids = operable.map((f) => f.id).join(" ");
+  if (box.dataset.ids !== ids) {
+    box.dataset.ids = ids;
+    box.replaceChildren();
+    for (const fixture of operable) {
+      const button = document.createElement("button");
+      button.type = "button";
+      button.id = `fixture-${fixture.id}`;
+      button.dataset.fixture = fixture.id;
+      button.dataset.action = actions[fixture.kind];
+      button.addEventListener("click", () => clickFixture(fixture.id, actions[fixture.kind]));
+      box.appendChild(button);
+    }
+  }
+  for (const fixture of operable) {
+    const button = $(`fixture-${fixture.id}`);
+    button.textContent = `${fixture.id}: ${actions[fixture.kind]} (${fixture.open ? "out" : "in"})`;
+    button.dataset.open = String(!!fixture.open);
+  }
 }
 
 function renderRobot() {
@@ -237,14 +259,25 @@ function renderProposal() {
       ? `${proposer.policy} is deciding…`
       : `${proposer.policy}: no proposal now`;
   $("accept").disabled = !proposal || page.sending > 0;
-  for (const button of document.querySelectorAll("#racks button")) {
-    button.classList.toggle("proposed", !!proposal && proposal.tray_action === button.dataset.tray);
+  for (const button of document.querySelectorAll("#fixture-buttons button")) {
+    const proposed = !!proposal && proposal.family_action !== null &&
+      proposal.object_id === button.dataset.fixture;
+    button.classList.toggle("proposed", proposed);
   }
 }
 
 function fillForm(defaults) {
   if (page.formFilled || !defaults) return;
   page.formFilled = true;
+  for (const [task, fields] of Object.entries(defaults.family_tasks || {})) {
+    TASK_FIELDS[task] = fields;
+    if (![...$("task").options].some((o) => o.value === task)) {
+      const option = document.createElement("option");
+      option.value = task;
+      option.textContent = task;
+      $("task").appendChild(option);
+    }
+  }
   if (defaults.task === "file") {
     const option = document.createElement("option");
     option.value = "file";
@@ -347,7 +380,7 @@ function drawViews() {
 // through it; in the side view, where things line up behind each other, the halos say it).
 function drawProposal(svg, view, scene) {
   const proposal = currentProposal();
-  if (!proposal || proposal.tray_action !== "none" || !view.origin) return;
+  if (!proposal || proposal.family_action !== null || !view.origin) return;
   const item = scene.objects.find((o) => o.id === proposal.object_id);
   const goal = scene.goals.find((g) => g.id === proposal.goal_id);
   if (!item || !goal) return;
@@ -379,7 +412,7 @@ function growBounds(name, view, scene) {
     const [eu, ev] = extents(view, item);
     points.push([view.u(item) - eu / 2, view.v(item) - ev / 2], [view.u(item) + eu / 2, view.v(item) + ev / 2]);
   }
-  for (const rack of scene.racks) points.push([view.u(rack), view.v(rack)]);
+  for (const fixture of scene.fixtures) points.push([view.u(fixture), view.v(fixture)]);
   points.push([0, 0]); // the robot (top view) or the table under it (side view)
   let box = page.bounds[name];
   for (const [u, v] of points) {
@@ -397,15 +430,15 @@ function growBounds(name, view, scene) {
 // Things seen from above (or from the robot) cover what lies under (or behind) them, so they
 // are drawn in that order; free goals come last: where a person may put something is never
 // hidden by what stands elsewhere. Among free goals seen from above, a stack's lowest (the
-// next to fill) is on top, while a rack's slots are seen as they are: the top rack's over the
-// bottom rack's.
+// next to fill) is on top, while a fixture's goals are seen as they are (the top rack's slots
+// over the bottom rack's).
 function drawOrder(scene, name) {
   const depth = name === "top" ? (p) => p.z : (p) => -p.x;
   const things = [
     ...scene.goals.filter((g) => g.filled).map((g) => ({ ...g, kind: "goal" })),
     ...scene.objects.map((o) => ({ ...o, kind: "object" })),
   ].sort((a, b) => depth(a) - depth(b) || (a.kind === "goal" ? -1 : 1));
-  const freeDepth = name === "top" ? (g) => (g.rack ? g.z : -g.z) : depth;
+  const freeDepth = name === "top" ? (g) => (g.fixture ? g.z : -g.z) : depth;
   const free = scene.goals
     .filter((g) => !g.filled)
     .map((g) => ({ ...g, kind: "goal" }))
@@ -431,7 +464,7 @@ function drawGround(svg, view, box) {
 }
 
 function rackBox(scene, rack, view) {
-  const slots = scene.goals.filter((g) => g.rack === rack.id);
+  const slots = scene.goals.filter((g) => g.fixture === rack.id);
   let u0 = Infinity, u1 = -Infinity, v0 = Infinity, v1 = -Infinity;
   for (const slot of [...slots, { ...rack, extent: [0.02, 0.02, 0.02] }]) { // and its handle
     const [eu, ev] = extents(view, slot);
@@ -443,12 +476,13 @@ function rackBox(scene, rack, view) {
   return { u0: u0 - 10, u1: u1 + 10, v0: v0 - 10, v1: v1 + 10 };
 }
 
-function rackName(rack) {
-  return `${rack.id === "rack_top" ? "top" : "bottom"} rack (${rack.open ? "out" : "in"})`;
+function rackName(fixture) {
+  return `${fixture.id.replace(/_/g, " ")} (${fixture.open ? "out" : "in"})`;
 }
 
 function drawRacks(svg, view, scene) {
-  const racks = [...scene.racks].sort((a, b) => a.z - b.z); // the bottom rack under the top one
+  // The lower fixture under the upper one (the bottom rack under the top one).
+  const racks = [...scene.fixtures].sort((a, b) => a.z - b.z);
   for (const rack of racks) {
     const box = rackBox(scene, rack, view);
     const group = element("g", { class: `rack ${rack.open ? "open" : "closed"}`, "data-rack": rack.id }, svg);
@@ -459,7 +493,7 @@ function drawRacks(svg, view, scene) {
 }
 
 function drawRackLevels(svg, view, scene, box) {
-  for (const rack of scene.racks) {
+  for (const rack of scene.fixtures) {
     const level = view.v(rack);
     const group = element("g", { class: `rack ${rack.open ? "open" : "closed"}` }, svg);
     element("line", { x1: box.u0 + 20, x2: box.u1 - 20, y1: level, y2: level }, group);
@@ -475,7 +509,7 @@ function drawItem(svg, view, item) {
   if (item.kind === "object" && item.id === page.selected) classes.push("selected");
   const proposal = currentProposal();
   const proposed =
-    proposal && proposal.tray_action === "none" &&
+    proposal && proposal.family_action === null &&
     item.id === (item.kind === "object" ? proposal.object_id : proposal.goal_id);
   if (proposed) classes.push("proposed");
   const group = element("g", { class: classes.join(" "), "data-id": item.id }, svg);
@@ -500,7 +534,7 @@ function drawItem(svg, view, item) {
     `${item.id} (${item.category}${item.kind === "goal" ? " goal" : ""}` +
     `${item.filled ? ", filled" : ""}, ${orientation}${words ? `, ${words}` : ""}) at ` +
     `x ${item.x.toFixed(3)} y ${item.y.toFixed(3)} z ${item.z.toFixed(3)} m`;
-  if (item.kind === "object" && item.visible && (view.svg === "top-view" || !item.rack)) {
+  if (item.kind === "object" && item.visible && (view.svg === "top-view" || !item.fixture)) {
     const label = element("text", { x: view.u(item), y: view.v(item) + 4, "text-anchor": "middle" }, group);
     label.textContent = item.id.replace(/^(block|cover|plate|bowl)_/, (_, kind) => kind[0]);
   }
@@ -520,9 +554,6 @@ $("episode-form").addEventListener("submit", startEpisode);
 $("task").addEventListener("change", showTaskFields);
 $("clear-selection").addEventListener("click", () => clickObject(page.selected));
 $("accept").addEventListener("click", acceptProposal);
-for (const button of document.querySelectorAll("#racks button")) {
-  button.addEventListener("click", () => clickTray(button.dataset.tray));
-}
 showTaskFields();
 renderOrientations();
 listen();
