@@ -46,16 +46,23 @@ class EpisodeRefusals:
     actions: int = 0
 
 
-def racks(scene: Scene) -> tuple[tuple[str, bool, float], ...]:
+def fixtures(scene: Scene) -> tuple[tuple[str, tuple[tuple[str, object], ...]], ...]:
+    """Each fixture's state (a rack's travel to the centimetre)."""
     return tuple(
-        (r.id, r.open, round(r.travel or 0.0, 2)) for r in sorted(scene.racks, key=lambda r: r.id)
+        (
+            f.id,
+            tuple(
+                sorted((k, round(v, 2) if isinstance(v, float) else v) for k, v in f.state.items())
+            ),
+        )
+        for f in sorted(scene.fixtures, key=lambda f: f.id)
     )
 
 
 def unchanged(monitor: ProgressMonitor, a: Scene | None, b: Scene | None) -> bool:
     if a is None or b is None:
         return False
-    return monitor.same_world(a, b) and racks(a) == racks(b)
+    return monitor.same_world(a, b) and fixtures(a) == fixtures(b)
 
 
 def analyse(path: Path) -> dict[str, EpisodeRefusals]:

@@ -66,10 +66,10 @@ def f32(value: float) -> float:
 
 
 def expected_nodes(scene: Scene) -> dict[str, list[Any]]:
-    nodes: list[Any] = [*scene.objects, *scene.goals, *scene.racks]
+    nodes: list[Any] = [*scene.objects, *scene.goals, *scene.fixtures]
     categories = [f"object:{o.category.value}" for o in scene.objects]
     categories += [f"goal:{g.category.value}" for g in scene.goals]
-    categories += ["rack"] * len(scene.racks)
+    categories += [f.kind for f in scene.fixtures]
     return {
         "ids": [node.id for node in nodes],
         "category": [codes.NODE_CATEGORIES.index(c) for c in categories],
@@ -132,7 +132,7 @@ def test_lerobot_reads_every_step_of_20_demonstrations_back(
             want["ids"].index(action.object_id),
             want["ids"].index(action.goal_id),
             -1 if action.orientation_index is None else action.orientation_index,
-            codes.TRAY_ACTIONS.index(action.tray_action.value),
+            codes.FAMILY_ACTIONS.index(action.family_action or "none"),
         ]
         assert frame["observation.scene_sequence"] == scene.sequence
         assert frame["index"] == i

@@ -68,7 +68,7 @@ def test_dishwasher_decisions_round_trip_with_orientation_and_tray(tmp_path: Pat
     protocol = DemoProtocol(("dishwasher",), (4,), 2, 0, 4, "top-bottom")
     record_demos(dishwasher_expert("top-bottom"), protocol, log)
     export_lerobot(log, tmp_path / "dataset", io.StringIO())
-    racks = {r.id for item in read_log(log, [Scene.key]) for r in item.decode().racks}  # type: ignore[attr-defined]
+    racks = {f.id for item in read_log(log, [Scene.key]) for f in item.decode().fixtures}  # type: ignore[attr-defined]
     assert racks == {"rack_top", "rack_bottom"}
 
     a, b = load_dish_demonstrations([log]), load_dish_demonstrations([tmp_path / "dataset"])

@@ -33,7 +33,7 @@ def first_scene(task: str, **request: Any) -> tuple[GeometricBackend, Scene]:
 
 @pytest.mark.parametrize("preference", list(Preference))
 def test_the_judge_and_the_expert_read_one_preference(preference: Preference) -> None:
-    backend, scene = first_scene("dishwasher", objects=8, preference=preference.value)
+    backend, scene = first_scene("dishwasher", objects=8, options={"preference": preference.value})
     world = backend.world
     assert world.preference is preference  # type: ignore[attr-defined]
     slots = world.slots  # type: ignore[attr-defined]

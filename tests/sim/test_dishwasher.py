@@ -127,7 +127,7 @@ def test_the_expert_solves_every_preference(preference: str, objects: int) -> No
             episode_id=f"e{seed}",
             task="dishwasher",
             objects=objects,
-            preference=preference,
+            options={"preference": preference},
             seed=seed,
         )
         record = run_episode(expert, request)
@@ -137,6 +137,8 @@ def test_the_expert_solves_every_preference(preference: str, objects: int) -> No
 
 
 def test_the_other_preferences_expert_fails() -> None:
-    request = EpisodeRequest(episode_id="e", task="dishwasher", objects=4, preference="left-right")
+    request = EpisodeRequest(
+        episode_id="e", task="dishwasher", objects=4, options={"preference": "left-right"}
+    )
     record = run_episode(load_policy("dishwasher-top-bottom"), request)
     assert not record.success

@@ -63,7 +63,7 @@ def test_the_block_family_evaluates_its_own_success() -> None:
 def test_the_dishwasher_family_evaluates_its_own_success() -> None:
     """Its goals are the dishes (each loaded as preferred) and the racks (pushed in)."""
     family = FAMILIES["dishwasher"]
-    task = family.task(request("dishwasher", objects=4, preference="top-bottom"))
+    task = family.task(request("dishwasher", objects=4, options={"preference": "top-bottom"}))
     layout = task.layout(np.random.default_rng(0))
     world = family.geometric_world(layout, 0.01)
     start = world.evaluate()
@@ -92,8 +92,8 @@ def test_the_backend_ends_in_success_by_the_family_rule() -> None:
     ("task", "fields", "named"),
     [
         ("stack", {"objects": 4}, "family.objects"),
-        ("pyramid", {"preference": "left-right"}, "family.preference"),
-        ("box-pack", {"objects": 2, "preference": "top-bottom"}, "family.objects"),
+        ("pyramid", {"options": {"preference": "left-right"}}, "family.preference"),
+        ("box-pack", {"objects": 2, "options": {"preference": "top-bottom"}}, "family.objects"),
     ],
 )
 def test_a_request_field_of_another_family_is_refused(
@@ -102,6 +102,21 @@ def test_a_request_field_of_another_family_is_refused(
     with pytest.raises(ConfigError, match=rf"^{named}: not an option of family 'blocks'") as err:
         GeometricBackend().reset(request(task, **fields), 0.0)
     assert err.value.field == named
+
+
+def test_a_request_naming_its_family_is_checked_against_the_task() -> None:
+    backend = GeometricBackend()
+    backend.reset(request("dishwasher", family="dishwasher", objects=2), 0.0)
+    assert backend.scene(1.0) is not None
+    with pytest.raises(ConfigError, match=r"^family: 'stack' is a task of blocks, not of dish"):
+        backend.reset(request("stack", family="dishwasher"), 0.0)
+    with pytest.raises(ConfigError, match=r"^family"):
+        backend.reset(request("stack", family="no_such_family"), 0.0)
+
+
+def test_a_family_option_may_not_shadow_a_field_of_the_request() -> None:
+    with pytest.raises(ConfigError, match=r"^options\.seed: is a field of the request"):
+        GeometricBackend().reset(request("stack", options={"seed": 3.0}), 0.0)
 
 
 def test_a_task_file_request_with_another_family_field_is_refused() -> None:

@@ -18,7 +18,6 @@ from manigraph_shared.messages import (
     JointTrajectoryCommand,
     JointTrajectoryPoint,
     Quaternion,
-    SceneRack,
     Vector3,
 )
 from manigraph_shared.panda import ARM_JOINTS
@@ -258,9 +257,10 @@ def test_configuration_comes_from_the_environment_with_the_variable_named() -> N
 
 def top_rack(handle: Vector3, is_open: bool, **measured: float | None) -> TrayToggle:
     """The top rack's toggle as the dishwasher family asks it of a driver (its tab and rail)."""
+    from manigraph_dishwasher.fixtures import Rack
     from manigraph_dishwasher.skills.trays import tray_toggle
 
-    rack = SceneRack(id="rack_top", position=handle, open=is_open, **measured)
+    rack = Rack(id="rack_top", position=handle, open=is_open, **measured)
     return tray_toggle("e:0", rack)
 
 
@@ -312,7 +312,7 @@ def _grasped_and_slid() -> tuple[np.ndarray, np.ndarray]:
 
 @pytest.mark.parametrize("rail", [None, 0.12])
 def test_a_rack_is_pulled_out_as_far_as_its_rail_goes(rail: float | None) -> None:
-    """The scene may say how far a rack's rail lets it out (``SceneRack.rail``: the physics
+    """The scene may say how far a rack's rail lets it out (the rack fixture's ``rail``: the physics
     world's racks slide 12 cm); without it, the family's ``RACK_TRAVEL`` (16 cm)."""
     franka = driver()
     handle = Vector3(x=0.67, y=0.0, z=0.30)  # the top rack pushed in

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from arm_helpers import PerfectArm, trajectory_of
 
+from manigraph_dishwasher.fixtures import Rack
 from manigraph_dishwasher.skills.panda_turn_over import (
     SPARE_Y,
     SPOT_FREE,
@@ -15,7 +16,7 @@ from manigraph_dishwasher.skills.panda_turn_over import (
     set_down_spots,
 )
 from manigraph_dishwasher.skills.turn_over import up_index
-from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, SceneRack, Vector3
+from manigraph_shared.messages import ObjectCategory, Scene, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATIONS
 from manigraph_shared.rotations import rotation_matrix
 from manigraph_skills.drivers.panda_motion import PandaMotionDriver
@@ -99,10 +100,10 @@ def test_the_spare_spots_on_a_side_are_offered_only_while_the_rack_whose_handle_
     without flipping)."""
     dish = bowl("bowl_0", 0.38, dish_y)
     racks = [
-        SceneRack(id=rack, position=Vector3(x=0.6, y=0.0, z=z), open=rack == out)
+        Rack(id=rack, position=Vector3(x=0.6, y=0.0, z=z), open=rack == out).fixture()
         for rack, z in (("rack_top", 0.3), ("rack_bottom", 0.1))
     ]
-    scene = SCENE.replace(objects=[dish], racks=racks)
+    scene = SCENE.replace(objects=[dish], fixtures=racks)
     spots = set_down_spots(scene, dish, np.array([0.38, dish_y, 0.0175]))
     beside = [spot for spot in spots if abs(spot[1]) >= SPARE_Y]
     assert beside

@@ -11,7 +11,7 @@ from manigraph_dishwasher.skills.obstacles import rack_obstacles
 from manigraph_dishwasher.skills.panda_turn_over import turn_dish
 from manigraph_dishwasher.skills.slot_room import set_down_point
 from manigraph_dishwasher.skills.trays import toggle_tray
-from manigraph_shared.messages import Action, EpisodeRequest, Scene, TrayAction
+from manigraph_shared.messages import Action, EpisodeRequest, Scene
 from manigraph_sim.geometric.backend import GeometricBackend
 from manigraph_skills.family import FAMILIES, family_of, family_taking
 from manigraph_skills.obstacles import scene_obstacles
@@ -24,14 +24,14 @@ def first_scene(task: str, **request: int) -> Scene:
     return backend.scene(1.0)
 
 
-def action(tray: TrayAction) -> Action:
+def action(family_action: str | None) -> Action:
     return Action(
         decision_id="e:0",
         episode_id="e",
         scene_sequence=0,
         object_id="rack_top",
-        goal_id="rack_top",
-        tray_action=tray,
+        goal_id="rack_top" if family_action else "top_bowl_00",
+        family_action=family_action,
         policy="test",
         stamp=0.0,
     )
@@ -52,9 +52,9 @@ def test_each_family_registers_its_extensions() -> None:
 def test_the_runner_finds_the_family_by_the_scene_and_the_action() -> None:
     dishes, blocks = first_scene("dishwasher", objects=4), first_scene("box-pack", blocks=3)
     assert family_of(dishes).name == "dishwasher" and family_of(blocks).name == "blocks"
-    taking = family_taking(action(TrayAction.TOGGLE_TOP))
+    taking = family_taking(action("toggle"))
     assert taking is not None and taking.name == "dishwasher"
-    assert family_taking(action(TrayAction.NONE)) is None  # a PickAndPlace
+    assert family_taking(action(None)) is None  # a PickAndPlace
 
 
 def test_every_familys_fixtures_are_obstacles() -> None:

@@ -45,7 +45,7 @@ SLOT = SceneGoal(
     category=GoalCategory.BOWL,
     position=Vector3(x=0.685, y=0.0, z=SLOT_Z),
     orientation=ORIENTATIONS[UPSIDE_DOWN],
-    rack="rack_top",
+    fixture="rack_top",
 )
 
 

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from manigraph_dishwasher.fixtures import Rack, TrayAction
+from manigraph_dishwasher.fixtures import rack as rack_in
+from manigraph_dishwasher.fixtures import racks as racks_in
 from manigraph_dishwasher.rack_geometry import RACK_TRAVEL
 from manigraph_lab.episode_loop import StepClock, gripper_driver
 from manigraph_shared.errors import SkillError
@@ -13,7 +16,6 @@ from manigraph_shared.messages import (
     Scene,
     SkillState,
     SkillStatus,
-    TrayAction,
     Vector3,
 )
 from manigraph_shared.orientations import UPSIDE_DOWN, nearest_orientation
@@ -45,10 +47,10 @@ def test_a_toggle_then_an_oriented_placement_through_the_gripper_driver() -> Non
     closed = skill.execute(action(0, "bowl_0", "top_bowl_00"), backend.scene(1.0), reports.append)
     assert closed.state is SkillState.FAILED and closed.reason == "rack_closed"
 
-    toggle = action(1, "rack_top", "rack_top", tray_action=TrayAction.TOGGLE_TOP)
+    toggle = action(1, "rack_top", "rack_top", family_action="toggle")
     assert skill.execute(toggle, backend.scene(2.0), reports.append).state is SkillState.SUCCEEDED
     scene = backend.scene(3.0)
-    assert scene is not None and scene.rack("rack_top").open
+    assert scene is not None and rack_in(scene, "rack_top").open
 
     place = action(2, "bowl_0", "top_bowl_00", orientation_index=UPSIDE_DOWN)
     assert skill.execute(place, scene, reports.append).state is SkillState.SUCCEEDED
@@ -63,7 +65,7 @@ def test_a_tray_action_on_a_block_task_is_refused_by_name() -> None:
     backend = GeometricBackend()
     backend.reset(EpisodeRequest(episode_id="e", task="stack", blocks=2), 0.0)
     skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
-    toggle = action(0, "rack_top", "rack_top", tray_action=TrayAction.TOGGLE_TOP)
+    toggle = action(0, "rack_top", "rack_top", family_action="toggle")
     status = skill.execute(toggle, backend.scene(1.0), lambda _: None)
     assert status.state is SkillState.FAILED and status.reason == "unknown_rack"
 
@@ -96,7 +98,7 @@ def _rack_pulled_out(tray: TrayAction = TrayAction.TOGGLE_TOP) -> Scene:
     skill = PickAndPlace(gripper_driver(backend, StepClock()), Workspace(), lambda: 0.0)
     rack = tray.rack_id
     assert rack is not None
-    toggle = action(0, rack, rack, tray_action=tray)
+    toggle = action(0, rack, rack, family_action=tray.family_action)
     assert skill.execute(toggle, backend.scene(1.0), lambda _: None).state.value == "succeeded"
     scene = backend.scene(2.0)
     assert scene is not None
@@ -134,7 +136,7 @@ def test_a_pushed_in_racks_floor_is_an_obstacle_where_the_rack_stands() -> None:
     assert scene is not None
     floors = {o.id: o for o in rack_obstacles(scene) if o.id.endswith(":floor")}
     assert set(floors) == {"rack_top:floor", "rack_bottom:floor"}
-    for rack in scene.racks:
+    for rack in racks_in(scene):
         assert not rack.open
         front = floors[f"{rack.id}:floor"].centre[0] - floors[f"{rack.id}:floor"].size[0] / 2
         assert front == pytest.approx(rack.position.x - RACK_HANDLE_X + RACK_FLOOR_X[0])
@@ -183,11 +185,11 @@ def test_a_plate_on_its_rim_on_the_far_row_is_taken_under_a_pulled_out_bottom_ra
 
     scene = _rack_pulled_out(TrayAction.TOGGLE_BOTTOM)
     # The bottom rack out as far as the physics world's rail lets it, its slots with it.
-    rack = scene.rack("rack_bottom")
+    rack = rack_in(scene, "rack_bottom")
     back = RACK_TRAVEL - RAIL
-    rack = rack.replace(position=_moved(rack.position, back), travel=RAIL, rail=RAIL)
+    rack = Rack(rack.id, _moved(rack.position, back), rack.open, travel=RAIL, rail=RAIL)
     goals = [
-        g.replace(position=_moved(g.position, back)) if g.rack == rack.id else g
+        g.replace(position=_moved(g.position, back)) if g.fixture == rack.id else g
         for g in scene.goals
     ]
     far_row = COUNTER_ROWS[-1][1] + 0.005  # the far row, at its farthest jitter
@@ -198,8 +200,8 @@ def test_a_plate_on_its_rim_on_the_far_row_is_taken_under_a_pulled_out_bottom_ra
         size=Vector3(x=width, y=width, z=thickness),
     )
     others = [o for o in scene.objects if o.id != plate.id]
-    racks = [rack if r.id == rack.id else r for r in scene.racks]
-    scene = scene.replace(objects=[*others, plate], racks=racks, goals=goals)
+    fixtures = [rack.fixture() if f.id == rack.id else f for f in scene.fixtures]
+    scene = scene.replace(objects=[*others, plate], fixtures=fixtures, goals=goals)
     pick, _ = choose_grasps(scene, plate, scene.goal("bottom_plate_05").position)
     arm = PerfectArm()
     PandaMotionDriver(arm).pick(Motion("e:1", plate.id, plate.position, plate.orientation, pick))

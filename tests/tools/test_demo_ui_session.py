@@ -25,7 +25,6 @@ from manigraph_shared.messages import (
     SceneObject,
     SkillState,
     SkillStatus,
-    TrayAction,
     Vector3,
 )
 from manigraph_shared.orientations import UPRIGHT, UPSIDE_DOWN, nearest_orientation
@@ -122,7 +121,7 @@ def test_bad_clicks_are_refused_with_a_message_and_never_become_actions() -> Non
     assert "click an object first" in refusal(session, Click(goal_id="goal_0"))
     assert "now click a goal" in refusal(session, Click("block_0"))
     assert "has no ghost" in refusal(session, Click("ghost", "goal_0"))
-    assert "no rack_top" in refusal(session, Click(tray_action=TrayAction.TOGGLE_TOP))
+    assert "no fixture rack_top" in refusal(session, Click("rack_top", family_action="toggle"))
     assert "must be in 0..5" in refusal(session, Click("block_0", "goal_0", orientation_index=6))
     assert session.pending is None and session.step == 0
     said = [m["text"] for m in session.snapshot()["messages"]]  # type: ignore[union-attr]
@@ -208,7 +207,7 @@ def test_dishwasher_clicks_carry_the_slot_orientation_unless_one_is_chosen_and_t
 ):
     world = dish_world()
     session, _ = session_on(world)
-    toggle = session.act(Click(tray_action=TrayAction.TOGGLE_TOP))
+    toggle = session.act(Click("rack_top", family_action="toggle"))
     assert (toggle.object_id, toggle.goal_id, toggle.orientation_index) == (
         "rack_top",
         "rack_top",
@@ -217,7 +216,7 @@ def test_dishwasher_clicks_carry_the_slot_orientation_unless_one_is_chosen_and_t
     session.on_status(world.status(toggle, SkillState.SUCCEEDED))
     session.on_scene(world.scene())
     bowl = session.act(Click("bowl_0", "top_bowl_03"))
-    assert bowl.orientation_index == UPSIDE_DOWN and bowl.tray_action is TrayAction.NONE
+    assert bowl.orientation_index == UPSIDE_DOWN and bowl.family_action is None
     session.on_status(world.status(bowl, SkillState.SUCCEEDED))
     session.on_scene(world.scene())
     plate = session.act(Click("plate_0", "bottom_plate_01", orientation_index=0))
@@ -233,9 +232,11 @@ def test_the_page_sees_each_thing_with_its_extent_along_the_world_axes() -> None
     view = scene_view(world.scene())
     slots = {g["id"]: g for g in view["goals"]}  # type: ignore[union-attr]
     plate_slot = slots["top_plate_00"]
-    assert plate_slot["rack"] == "rack_top" and plate_slot["orientation"] == UPRIGHT
+    assert plate_slot["fixture"] == "rack_top" and plate_slot["orientation"] == UPRIGHT
     assert plate_slot["extent"] == pytest.approx([0.08, 0.015, 0.08])  # a plate on its rim
-    assert {r["id"] for r in view["racks"]} == {"rack_top", "rack_bottom"}  # type: ignore[union-attr]
+    fixtures = {f["id"]: f for f in view["fixtures"]}  # type: ignore[union-attr]
+    assert set(fixtures) == {"rack_top", "rack_bottom"}
+    assert fixtures["rack_top"]["kind"] == "rack" and fixtures["rack_top"]["open"] is False
     assert world_extent((1.0, 2.0, 3.0), world.scene().goals[0].orientation) == pytest.approx(
         [1.0, 3.0, 2.0]
     )
@@ -301,13 +302,17 @@ def test_clicks_from_the_page_are_checked_field_by_field() -> None:
     assert click_from_json({"object_id": "a", "goal_id": "b", "orientation_index": 2}) == Click(
         "a", "b", 2
     )
-    assert click_from_json({"tray_action": "toggle_bottom"}).tray_action is TrayAction.TOGGLE_BOTTOM
+    assert click_from_json({"family_action": "toggle", "object_id": "rack_bottom"}) == Click(
+        "rack_bottom", family_action="toggle"
+    )
     for body, field in [
         ({"object_id": 3}, "object_id"),
         ({"goal_id": "x" * 65}, "goal_id"),
         ({"orientation_index": "up"}, "orientation_index"),
         ({"orientation_index": True}, "orientation_index"),
-        ({"tray_action": "open_door"}, "tray_action"),
+        ({"family_action": "Open Door"}, "family_action"),
+        ({"family_action": 3}, "family_action"),
+        ({"tray_action": "toggle_top"}, "tray_action"),
         ({"position": [0, 0, 0]}, "position"),
     ]:
         with pytest.raises(BadRequest, match=f"^{field}:"):

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import StrEnum
+from typing import Protocol
 
 from manigraph_shared.messages import Action, Scene, SceneFixture, Vector3
 
@@ -68,6 +69,13 @@ def rack(scene: Scene, rack_id: str) -> Rack:
     return rack_of(fixture)
 
 
+class Decided(Protocol):
+    """A decision as a policy makes it (``manigraph_planner``'s ``Decision``)."""
+
+    object_id: str
+    family_action: str | None
+
+
 class TrayAction(StrEnum):
     """The dishwasher's extra action head (paper, section 'Dishwasher loading'): which rack
     to toggle, if any."""
@@ -82,9 +90,9 @@ class TrayAction(StrEnum):
         return TRAY_RACKS.get(self)
 
     @classmethod
-    def of(cls, action: Action) -> TrayAction:
-        """The tray action ``action`` is (NONE for a pick and place, or another family
-        action)."""
+    def of(cls, action: Action | Decided) -> TrayAction:
+        """The tray action ``action`` (the contract's, or a policy's decision) is (NONE for
+        a pick and place, or another family action)."""
         if action.family_action != TOGGLE:
             return cls.NONE
         return _BY_RACK.get(action.object_id, cls.NONE)

@@ -8,12 +8,13 @@ from pathlib import Path
 import pytest
 import torch
 
+from manigraph_dishwasher.fixtures import Rack, TrayAction
 from manigraph_dishwasher.planner.expert import dishwasher_expert, preferred
 from manigraph_dishwasher.planner.features import DISH_FEATURE_SPEC, TRAY_ACTIONS
 from manigraph_dishwasher.training.augment import DishSample, add_dishes, counter_dishes
 from manigraph_dishwasher.training.loop import DishDemos, load_dish_demonstrations
 from manigraph_lab.demo_recording import DemoProtocol, record_demos
-from manigraph_shared.messages import Scene, SceneGoal, SceneObject, SceneRack, Vector3
+from manigraph_shared.messages import Scene, SceneGoal, SceneObject, Vector3
 from manigraph_shared.orientations import ORIENTATIONS
 
 NAMES = DISH_FEATURE_SPEC.names
@@ -133,21 +134,21 @@ def as_scene(sample: DishSample) -> Scene:
         SceneGoal(
             id=f"s{j:02d}",
             category=kinds[int(row[2:4].argmax())],
-            rack=min(heights, key=lambda rack: abs(heights[rack] - float(row[Z]))),
+            fixture=min(heights, key=lambda rack: abs(heights[rack] - float(row[Z]))),
             **pose(row),  # type: ignore[arg-type]
         )
         for j, row in enumerate(sample.x[k : k + m])
     ]
     shelves = [
-        SceneRack(
+        Rack(
             id=rack,
             position=Vector3(x=float(row[X]), y=float(row[Y]), z=float(row[Z])),
             open=bool(row[OPEN]),
-        )
+        ).fixture()
         for rack, row in zip(("rack_top", "rack_bottom"), racks, strict=True)
     ]
     return Scene(
-        episode_id="aug", stamp=1.0, sequence=0, objects=objects, goals=goals, racks=shelves
+        episode_id="aug", stamp=1.0, sequence=0, objects=objects, goals=goals, fixtures=shelves
     )
 
 
@@ -159,7 +160,7 @@ def assert_expert_agrees(sample: DishSample, preference: str) -> None:
     scene = as_scene(sample)
     decision = dishwasher_expert(preference).decide(scene)
     assert decision is not None
-    assert TRAY_ACTIONS.index(decision.tray_action) == sample.tray
+    assert TRAY_ACTIONS.index(TrayAction.of(decision)) == sample.tray
     if sample.tray != PLACE:
         return
     label = scene.objects[sample.object_index]

@@ -7,6 +7,8 @@ from pathlib import Path
 import pytest
 import torch
 
+from manigraph_dishwasher.fixtures import TrayAction
+from manigraph_dishwasher.fixtures import rack as rack_in
 from manigraph_dishwasher.planner.expert import dishwasher_expert
 from manigraph_dishwasher.planner.features import DISH_FEATURE_SPEC, dish_scene_to_graph
 from manigraph_dishwasher.planner.gnn_policy import (
@@ -24,7 +26,7 @@ from manigraph_planner.gnn.checkpoint import load_checkpoint, save_checkpoint
 from manigraph_planner.policies import load_policy
 from manigraph_planner.recovery import ProgressMonitor
 from manigraph_shared.errors import PolicyError
-from manigraph_shared.messages import EpisodeRequest, SkillState, SkillStatus, TrayAction
+from manigraph_shared.messages import EpisodeRequest, SkillState, SkillStatus
 from manigraph_shared.orientations import UPSIDE_DOWN
 from manigraph_sim.geometric.backend import GeometricBackend
 
@@ -108,12 +110,12 @@ def test_the_policy_decodes_a_tray_action_or_a_feasible_placement() -> None:
     s = scene(4)
     decision = policy.decide(s)
     assert decision is not None
-    if decision.tray_action.value == "none":
+    if TrayAction.of(decision).value == "none":
         dish, slot = s.object(decision.object_id), s.goal(decision.goal_id)
         assert dish.category.value == slot.category.value and not slot.filled
         assert decision.orientation_index is not None
     else:
-        assert decision.object_id == decision.goal_id == decision.tray_action.rack_id
+        assert decision.object_id == decision.goal_id == TrayAction.of(decision).rack_id
 
 
 def test_a_placement_with_both_racks_in_becomes_the_more_likely_toggle() -> None:
@@ -123,7 +125,7 @@ def test_a_placement_with_both_racks_in_becomes_the_more_likely_toggle() -> None
     n = graph.x.shape[0]
     heads = DishHeads(torch.zeros(n), torch.zeros(n, 6), torch.tensor([0.5, 1.0, 3.0]))
     decision = decision_from_heads(graph, heads)
-    assert decision is not None and decision.tray_action.value == "toggle_bottom"
+    assert decision is not None and TrayAction.of(decision).value == "toggle_bottom"
     heads = DishHeads(torch.zeros(n), torch.zeros(n, 6), torch.tensor([2.0, 1.0, 3.0]))
     decision = decision_from_heads(graph, heads)
     assert decision is not None and decision.object_id == decision.goal_id == "rack_top"
@@ -174,7 +176,7 @@ def _ranked(s, liked: tuple[str, ...]):  # type: ignore[no-untyped-def]
 def test_ranked_alternatives_start_with_the_decision_and_offer_every_loadable_dish() -> None:
     s = _top_rack_out()
     ranked = _ranked(s, liked=("top_",))
-    kinds = [d.tray_action.value == "none" for d in ranked]
+    kinds = [TrayAction.of(d).value == "none" for d in ranked]
     toggles = kinds.index(False)
     # The toggle last: every placement into the open rack comes first (and the bottom rack
     # is not pulled out under the open top one).
@@ -193,7 +195,7 @@ def test_ranked_alternatives_start_with_the_decision_and_offer_every_loadable_di
     later = placements[len(s.objects) :]
     assert [d.object_id for d in later[: len(s.objects)]] == [d.object_id for d in first_round]
     for d in placements:
-        assert s.goal(d.goal_id).rack == "rack_top" and not s.goal(d.goal_id).filled
+        assert s.goal(d.goal_id).fixture == "rack_top" and not s.goal(d.goal_id).filled
 
 
 def test_a_rack_is_not_left_while_a_dish_may_still_go_into_it() -> None:
@@ -218,7 +220,7 @@ def test_a_rack_is_not_left_while_a_dish_may_still_go_into_it() -> None:
         )
     verdict = monitor.verdict(s)
     chosen = next(d for d in ranked if verdict.allows(d.pair))
-    assert chosen.tray_action.value == "none" and chosen.goal_id != best
+    assert TrayAction.of(chosen).value == "none" and chosen.goal_id != best
 
 
 def test_a_dish_standing_in_a_slot_is_never_an_alternative() -> None:
@@ -237,7 +239,7 @@ def test_a_dish_standing_in_a_slot_is_never_an_alternative() -> None:
     assert s is not None and s.object(bowl.id).filled
     ranked = _ranked(s, liked=("top_",))
     assert bowl.id not in {d.object_id for d in ranked[1:]}
-    assert any(d.object_id != bowl.id and d.tray_action.value == "none" for d in ranked)
+    assert any(d.object_id != bowl.id and TrayAction.of(d).value == "none" for d in ranked)
 
 
 def test_a_dish_whose_likeliest_slot_is_in_a_rack_pushed_in_waits_for_it() -> None:
@@ -246,10 +248,10 @@ def test_a_dish_whose_likeliest_slot_is_in_a_rack_pushed_in_waits_for_it() -> No
     top rack (nothing would take it out again)."""
     s = _top_rack_out()
     ranked = _ranked(s, liked=("top_bowl", "bottom_plate"))
-    placements = [d for d in ranked if d.tray_action.value == "none"]
+    placements = [d for d in ranked if TrayAction.of(d).value == "none"]
     assert {d.object_id for d in placements} == {o.id for o in s.objects if o.id.startswith("bowl")}
     assert all(d.goal_id.startswith("top_bowl") for d in placements)
-    assert {d.object_id for d in ranked if d.tray_action.value != "none"} == {"rack_top"}
+    assert {d.object_id for d in ranked if TrayAction.of(d).value != "none"} == {"rack_top"}
 
 
 def test_a_dish_on_the_counter_waiting_for_its_rack_makes_the_decision_a_toggle() -> None:
@@ -274,7 +276,7 @@ def test_a_dish_on_the_counter_waiting_for_its_rack_makes_the_decision_a_toggle(
     graph = dish_scene_to_graph(s)
     net = SlotLikingNet(graph.goal_ids, ("top_bowl", "bottom_plate"))
     decision = DishwasherGNNPolicy(net).decide(s)  # type: ignore[arg-type]
-    assert decision is not None and decision.tray_action is TrayAction.TOGGLE_TOP
+    assert decision is not None and TrayAction.of(decision) is TrayAction.TOGGLE_TOP
     # With every dish loaded but one that can go where it is wanted, it goes there.
     net = SlotLikingNet(graph.goal_ids, ("top_",))
     decision = DishwasherGNNPolicy(net).decide(s)  # type: ignore[arg-type]
@@ -288,7 +290,7 @@ def test_a_dish_waits_for_the_rack_its_kind_stands_in() -> None:
     the bowl into the bottom rack: it waits for the top one, and the plates go first."""
     backend, left = _one_bowl_loaded_the_bottom_rack_out()
     s = backend.scene(1.0)
-    assert s is not None and s.rack("rack_bottom").open and not s.object(left.id).filled
+    assert s is not None and rack_in(s, "rack_bottom").open and not s.object(left.id).filled
     ranked = _ranked(s, liked=("bottom_",))
     assert ranked[0].object_id.startswith("plate")
     assert left.id not in {d.object_id for d in ranked}
@@ -318,7 +320,7 @@ def test_a_toggle_for_a_waiting_dish_brings_its_rack_nearer(bottom_out: bool) ->
         decision = decision_from_heads(graph, DishHeads(torch.zeros(n), torch.zeros(n, 6), tray))
         assert decision is not None
         wanted = TrayAction.TOGGLE_BOTTOM if bottom_out else TrayAction.TOGGLE_TOP
-        assert decision.tray_action is wanted, favoured
+        assert TrayAction.of(decision) is wanted, favoured
 
 
 def test_a_dish_is_placed_as_its_slot_asks_when_the_orientation_head_says_otherwise() -> None:
@@ -386,7 +388,7 @@ def test_the_shipped_dishwasher_checkpoints_load_and_act(preference: str) -> Non
                 episode_id=f"e{seed}",
                 task="dishwasher",
                 objects=12,
-                preference=preference,
+                options={"preference": preference},
                 seed=20_000 + seed,
             ),
         ).success
@@ -442,8 +444,8 @@ def test_a_rack_is_never_pulled_out_under_the_other_one_pulled_out(favoured: int
     tray[favoured] = 5.0
     heads = DishHeads(torch.zeros(n), torch.zeros(n, 6), tray)
     decision = decision_from_heads(graph, heads)
-    assert decision is not None and decision.tray_action is not TrayAction.TOGGLE_BOTTOM
+    assert decision is not None and TrayAction.of(decision) is not TrayAction.TOGGLE_BOTTOM
     goal_ids = graph.goal_ids
     policy = DishwasherGNNPolicy(SlotLikingNet(goal_ids, ("top_bowl",)))  # type: ignore[arg-type]
-    assert all(d.tray_action is not TrayAction.TOGGLE_BOTTOM for d in policy.ranked(s))
-    assert any(d.tray_action is TrayAction.TOGGLE_TOP for d in policy.ranked(s))
+    assert all(TrayAction.of(d) is not TrayAction.TOGGLE_BOTTOM for d in policy.ranked(s))
+    assert any(TrayAction.of(d) is TrayAction.TOGGLE_TOP for d in policy.ranked(s))

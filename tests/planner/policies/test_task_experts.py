@@ -23,10 +23,10 @@ def test_the_block_family_demonstrates_with_expert() -> None:
 def test_the_dishwasher_demonstrates_with_the_expert_of_the_request_s_preference() -> None:
     dishwasher = FAMILIES["dishwasher"]
     assert type(dishwasher.expert(request("dishwasher"))) is TopBottomExpert  # the sim's default
-    assert type(dishwasher.expert(request("dishwasher", preference="top-bottom"))) is (
+    assert type(dishwasher.expert(request("dishwasher", options={"preference": "top-bottom"}))) is (
         TopBottomExpert
     )
-    assert type(dishwasher.expert(request("dishwasher", preference="left-right"))) is (
+    assert type(dishwasher.expert(request("dishwasher", options={"preference": "left-right"}))) is (
         LeftRightExpert
     )
 
