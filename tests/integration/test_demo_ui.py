@@ -29,9 +29,10 @@ from typing import Any
 
 import pytest
 
+from manigraph_dishwasher.fixtures import TrayAction
 from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import decode_log
-from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene, TrayAction
+from manigraph_shared.messages import Action, EpisodeEvent, EpisodePhase, Scene
 from manigraph_testkit.testing import Stack, free_port, stack
 
 pytestmark = pytest.mark.integration
@@ -155,7 +156,7 @@ class Person:
 
     def toggle(self, rack: str) -> None:
         self.wait_ready()
-        self.click("#toggle-top" if rack == "rack_top" else "#toggle-bottom")
+        self.click(f"#fixture-{rack}")
 
 
 @pytest.fixture
@@ -365,7 +366,7 @@ def _dish_plan(scene: dict[str, Any], rng: random.Random) -> tuple[list, list]:
         c: [o["id"] for o in scene["objects"] if o["category"] == c] for c in ("bowl", "plate")
     }
     slots = {
-        c: [g["id"] for g in scene["goals"] if g["rack"] == rack and g["category"] == c]
+        c: [g["id"] for g in scene["goals"] if g["fixture"] == rack and g["category"] == c]
         for c, rack in (("bowl", "rack_top"), ("plate", "rack_bottom"))
     }
     return (
@@ -430,9 +431,9 @@ def test_a_ten_dish_demonstration_takes_at_most_30_clicks_and_trains_the_dishwas
     ]
     assert events[-1].success
     assert len(pairs) == 14
-    toggles = [a.tray_action for _, a in pairs if a.tray_action is not TrayAction.NONE]
+    toggles = [TrayAction.of(a) for _, a in pairs if a.family_action is not None]
     assert toggles == [TrayAction.TOGGLE_TOP] * 2 + [TrayAction.TOGGLE_BOTTOM] * 2
-    placements = [a for _, a in pairs if a.tray_action is TrayAction.NONE]
+    placements = [a for _, a in pairs if a.family_action is None]
     assert all(
         a.orientation_index == (1 if a.object_id.startswith("bowl") else 2) for a in placements
     )
@@ -447,7 +448,7 @@ def test_a_ten_dish_demonstration_takes_at_most_30_clicks_and_trains_the_dishwas
     scene = pairs[1][0]  # the top rack pulled out: a bowl can go in, so there is a decision
     decision = policy.decide(scene)
     assert decision is not None
-    assert decision.object_id in {o.id for o in scene.objects} | {r.id for r in scene.racks}
+    assert decision.object_id in {o.id for o in scene.objects} | {f.id for f in scene.fixtures}
 
 
 @pytest.mark.timeout(600)

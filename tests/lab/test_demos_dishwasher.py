@@ -12,7 +12,7 @@ from manigraph_planner.policies import Policy
 from manigraph_shared.cli import main
 from manigraph_shared.errors import CONFIG_EXIT_CODE
 from manigraph_shared.mcap_log import read_log
-from manigraph_shared.messages import Action, Scene, TrayAction
+from manigraph_shared.messages import Action, Scene
 
 
 @pytest.mark.parametrize(
@@ -50,13 +50,13 @@ def test_demos_of_the_dishwasher_record_its_expert_s_decisions(
         assert action.policy == expert.name
         decision = expert.decide(scenes[action.scene_sequence])
         assert decision is not None
-        assert (action.object_id, action.goal_id, action.tray_action) == (
+        assert (action.object_id, action.goal_id, action.family_action) == (
             decision.object_id,
             decision.goal_id,
-            decision.tray_action,
+            decision.family_action,
         )
     # Each dish placed once; a rack pulled out and pushed back in per rack it loads.
-    trays = sum(a.tray_action is not TrayAction.NONE for a in actions)
+    trays = sum(a.family_action == "toggle" for a in actions)
     assert len(actions) - trays == dishes and trays == (4 if expert.name.endswith("bottom") else 2)
 
 

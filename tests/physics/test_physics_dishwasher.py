@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 import sapien
 
+from manigraph_dishwasher.fixtures import rack as rack_in
+from manigraph_dishwasher.fixtures import racks
 from manigraph_dishwasher.sim.physics import PHYSICAL_DISH_SIZE, RAIL, physical_counter_x
 from manigraph_dishwasher.skills.turn_over import quaternion_of
 from manigraph_lab.episode_loop import panda_driver, run_episode
@@ -21,7 +23,6 @@ from manigraph_shared.messages import (
     Scene,
     SkillState,
     SkillStatus,
-    TrayAction,
 )
 from manigraph_shared.orientations import ORIENTATIONS, UPSIDE_DOWN, up_axis_orientation
 from manigraph_shared.rotations import rotation_matrix
@@ -64,8 +65,7 @@ class DishLoop:
         return status
 
     def toggle(self, rack: str) -> SkillStatus:
-        tray = TrayAction.TOGGLE_TOP if rack == "rack_top" else TrayAction.TOGGLE_BOTTOM
-        return self.act(rack, rack, tray_action=tray)
+        return self.act(rack, rack, family_action="toggle")
 
 
 @pytest.fixture
@@ -89,13 +89,13 @@ def test_the_physics_scene_has_the_geometric_worlds_shape() -> None:
     assert ours is not None and theirs is not None
     assert [g.id for g in ours.goals] == [g.id for g in theirs.goals]
     # Slots and handles where the racks physically are: the geometric world's, to a hair.
-    assert [(g.orientation, g.rack) for g in ours.goals] == [
-        (g.orientation, g.rack) for g in theirs.goals
+    assert [(g.orientation, g.fixture) for g in ours.goals] == [
+        (g.orientation, g.fixture) for g in theirs.goals
     ]
     for mine_goal, their_goal in zip(ours.goals, theirs.goals, strict=True):
         assert mine_goal.position.as_tuple() == pytest.approx(their_goal.position.as_tuple())
-    assert [(r.id, r.open) for r in ours.racks] == [(r.id, r.open) for r in theirs.racks]
-    for mine_rack, their_rack in zip(ours.racks, theirs.racks, strict=True):
+    assert [(r.id, r.open) for r in racks(ours)] == [(r.id, r.open) for r in racks(theirs)]
+    for mine_rack, their_rack in zip(racks(ours), racks(theirs), strict=True):
         assert mine_rack.position.as_tuple() == pytest.approx(their_rack.position.as_tuple())
     for mine, other in zip(ours.objects, theirs.objects, strict=True):
         assert mine.id == other.id and mine.orientation == other.orientation
@@ -114,8 +114,8 @@ def test_racks_slide_out_and_in_on_their_rails_with_the_dishes_in_them(
     assert world.rack_travel("rack_top") == pytest.approx(RAIL, abs=0.005)
     assert world.rack_travel("rack_bottom") == pytest.approx(0.0, abs=0.002)
     # Out all the way on its rail, which the scene reports (12 cm: docs/dishwasher.md).
-    assert dish_loop.scene().rack("rack_top").open
-    assert dish_loop.scene().rack("rack_top").rail == pytest.approx(RAIL)
+    assert rack_in(dish_loop.scene(), "rack_top").open
+    assert rack_in(dish_loop.scene(), "rack_top").rail == pytest.approx(RAIL)
 
     loaded = dish_loop.act("bowl_3", "top_bowl_07", orientation_index=UPSIDE_DOWN)
     assert loaded.state is SkillState.SUCCEEDED, loaded
@@ -128,7 +128,7 @@ def test_racks_slide_out_and_in_on_their_rails_with_the_dishes_in_them(
     assert after - before == pytest.approx([RAIL, 0.0, 0.0], abs=0.01)
     assert scene.object("bowl_3").filled and scene.goal("top_bowl_07").filled
     assert up_axis_orientation(scene.object("bowl_3").orientation) == UPSIDE_DOWN
-    assert not scene.rack("rack_top").open
+    assert not rack_in(scene, "rack_top").open
 
 
 def test_the_loading_rules_refuse_before_any_motion(dish_loop: DishLoop) -> None:
@@ -164,7 +164,11 @@ def test_the_expert_loads_a_two_dish_episode_in_physics() -> None:
     orientations, both racks pushed in."""
     policy = load_policy("dishwasher-top-bottom")
     request = EpisodeRequest(
-        episode_id="s", task="dishwasher", objects=2, seed=SHORT_SEED, preference="top-bottom"
+        episode_id="s",
+        task="dishwasher",
+        objects=2,
+        seed=SHORT_SEED,
+        options={"preference": "top-bottom"},
     )
     record = run_episode(
         policy,
@@ -177,7 +181,7 @@ def test_the_expert_loads_a_two_dish_episode_in_physics() -> None:
     ]
     # Pull top, bowl, push top, pull bottom, plate, push bottom: no step wasted.
     assert len(record.steps) == 6
-    assert [s.action.tray_action for s in record.steps].count(TrayAction.NONE) == 2
+    assert [s.action.family_action for s in record.steps].count(None) == 2
 
 
 #: Validation seed 1000, 10 dishes: bowl_1 lies on its side (+x up) in the counter's middle,
@@ -249,11 +253,11 @@ def test_a_rack_part_of_the_way_out_is_seen_where_it_is_and_clicks_to_the_nearer
         qpos[list(world.rails).index("rack_top")] = -travel
         world.cabinet.set_qpos(qpos)
         seen = dish_loop.scene()
-        rack = seen.rack("rack_top")
+        rack = rack_in(seen, "rack_top")
         # Where it is, as a camera would see it: its handle and its slots moved that far.
         assert rack.travel == pytest.approx(travel, abs=1e-4)
         assert rack.open == (travel > RAIL / 2)
-        moved = rack.position.x - closed.rack("rack_top").position.x
+        moved = rack.position.x - rack_in(closed, "rack_top").position.x
         assert moved == pytest.approx(-travel, abs=1e-4)
         slot = seen.goal("top_bowl_07").position.x - closed.goal("top_bowl_07").position.x
         assert slot == pytest.approx(-travel, abs=1e-4)
@@ -268,7 +272,11 @@ def test_a_plate_on_its_rim_in_its_slot_is_loaded_whichever_edge_is_down() -> No
     fingers is), it is loaded upright all the same."""
     backend = PhysicsBackend()
     request = EpisodeRequest(
-        episode_id="r", task="dishwasher", objects=2, seed=SHORT_SEED, preference="top-bottom"
+        episode_id="r",
+        task="dishwasher",
+        objects=2,
+        seed=SHORT_SEED,
+        options={"preference": "top-bottom"},
     )
     backend.reset(request, 1.0)
     scene = backend.scene(1.0)
