@@ -61,6 +61,30 @@ Identifier = Annotated[
 Stamp = Annotated[float, Meta(ge=0.0, description="seconds since the Unix epoch")]
 Metres = Annotated[float, Meta(ge=-100.0, le=100.0, description="metres")]
 Unit = Annotated[float, Meta(ge=-1.0, le=1.0)]
+#: Attributes one object may carry (colour, label, ...), keys one goal's ``accepts`` may list,
+#: and the names a fixture's state or a request's family options may hold.
+MAX_ATTRIBUTES = 16
+AttributeName = Annotated[
+    str,
+    Meta(
+        pattern=r"^[a-z][a-z0-9_]{0,31}$",
+        description="attribute name: lower case, 1-32 of [a-z0-9_], starting with a letter",
+    ),
+]
+#: A name a family defines (a fixture's kind, a family action): lower case, like an attribute.
+FamilyName = Annotated[
+    str,
+    Meta(
+        pattern=r"^[a-z][a-z0-9_]{0,31}$",
+        description="a name the task's family defines: lower case, 1-32 of [a-z0-9_]",
+    ),
+]
+#: A scalar a family reads: a fixture's state, an episode request's option.
+FamilyScalar = (
+    bool
+    | Annotated[float, Meta(ge=-1e6, le=1e6)]
+    | Annotated[str, Meta(min_length=1, max_length=64)]
+)
 
 
 class Delivery(StrEnum):

@@ -8,8 +8,7 @@ from typing import Annotated, Any, ClassVar, Literal
 from msgspec import Meta
 
 from manigraph_shared.messages import legacy
-from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp
-from manigraph_shared.messages.scene import FamilyName
+from manigraph_shared.messages.base import Delivery, FamilyName, Identifier, Message, Stamp
 
 #: Why a policy's first choice was passed over (``Action.recovery``).
 RecoveryReason = Literal["no_progress", "repeated_pair", "escalated", "exhausted", "refused"]

@@ -9,12 +9,15 @@ import msgspec
 from msgspec import Meta
 
 from manigraph_shared.messages import legacy
-from manigraph_shared.messages.base import Delivery, Identifier, Message, Stamp
-from manigraph_shared.messages.scene import (
+from manigraph_shared.messages.base import (
     MAX_ATTRIBUTES,
     AttributeName,
+    Delivery,
     FamilyName,
     FamilyScalar,
+    Identifier,
+    Message,
+    Stamp,
 )
 
 

@@ -10,7 +10,11 @@ from msgspec import Meta
 
 from manigraph_shared.messages import legacy
 from manigraph_shared.messages.base import (
+    MAX_ATTRIBUTES,
+    AttributeName,
     Delivery,
+    FamilyName,
+    FamilyScalar,
     Identifier,
     Message,
     Quaternion,
@@ -22,16 +26,6 @@ from manigraph_shared.messages.base import (
 MAX_ENTITIES = 256
 #: Fixtures one scene may carry.
 MAX_FIXTURES = 16
-#: Attributes one object may carry (colour, label, ...), and keys one goal's ``accepts`` may list.
-MAX_ATTRIBUTES = 16
-
-AttributeName = Annotated[
-    str,
-    Meta(
-        pattern=r"^[a-z][a-z0-9_]{0,31}$",
-        description="attribute name: lower case, 1-32 of [a-z0-9_], starting with a letter",
-    ),
-]
 AttributeValue = (
     Annotated[str, Meta(min_length=1, max_length=64)] | Annotated[float, Meta(ge=-1e6, le=1e6)]
 )
@@ -67,20 +61,6 @@ Accepts = Annotated[
 ]
 
 
-#: A name a family defines (a fixture's kind, a family action): lower case, like an attribute.
-FamilyName = Annotated[
-    str,
-    Meta(
-        pattern=r"^[a-z][a-z0-9_]{0,31}$",
-        description="a name the task's family defines: lower case, 1-32 of [a-z0-9_]",
-    ),
-]
-#: A scalar a family reads: a fixture's state, an episode request's option.
-FamilyScalar = (
-    bool
-    | Annotated[float, Meta(ge=-1e6, le=1e6)]
-    | Annotated[str, Meta(min_length=1, max_length=64)]
-)
 FixtureState = Annotated[
     dict[AttributeName, FamilyScalar],
     Meta(
