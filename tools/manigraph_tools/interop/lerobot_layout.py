@@ -2,9 +2,9 @@
 each, written by the exporter and documented in docs/interop.md.
 
 One frame is one decision: the scene it was made on as padded per-node arrays (objects, then
-goals, then racks, in the scene's order, ``max_nodes`` rows; rows past a frame's own node
+goals, then fixtures, in the scene's order, ``max_nodes`` rows; rows past a frame's own node
 count are padding, ``observation.nodes.mask`` false) and the decision as node indices. The
-codes both the exporter and the planner's reader use (robot, categories, tray actions) are
+codes both the exporter and the planner's reader use (robot, categories, family actions) are
 :mod:`manigraph_shared.lerobot_codes`; the round-trip test checks the columns against the
 reader's.
 
