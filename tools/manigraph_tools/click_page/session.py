@@ -8,8 +8,8 @@ wires it to both). It follows the world as the planner does (:mod:`manigraph_pla
   planner, never acts on a stale world;
 * a click is checked before it is sent: a goal without an object, an id the scene does not
   have (or hides), an object sent to a goal of another category, a family action on a
-  fixture the world has not, and any click while a planner runs, are refused with a message for the page
-  and never reach the robot;
+  fixture the world has not, and any click while a planner runs, are refused with a message
+  for the page and never reach the robot;
 * what the skills (or the world behind them) refuse, e.g. ``rack_closed``, ``top_rack_open``,
   ``slot_taken``, ``object_covered``, comes back as a failed ``SkillStatus``: the page shows its
   reason and the step is **not** part of the demonstration;
