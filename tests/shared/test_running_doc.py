@@ -1,5 +1,6 @@
-"""docs/running.md stays true to the code: it names every registered task, and its exit-code
-table holds the codes ``manigraph_shared.errors`` defines."""
+"""docs/running.md stays true to the code: it names every registered task (a family package's
+own, there or in its package's README.md), and its exit-code table holds the codes
+``manigraph_shared.errors`` defines."""
 
 from __future__ import annotations
 
@@ -8,7 +9,8 @@ from pathlib import Path
 
 from manigraph_shared import errors
 
-RUNNING = Path(__file__).resolve().parents[2] / "docs" / "running.md"
+REPO = Path(__file__).resolve().parents[2]
+RUNNING = REPO / "docs" / "running.md"
 
 
 def _section(title: str) -> str:
@@ -18,11 +20,19 @@ def _section(title: str) -> str:
     return text[start : end if end >= 0 else None]
 
 
+def _named(text: str) -> set[str]:
+    return set(re.findall(r"`([a-z][a-z-]*)`", text))
+
+
 def test_every_registered_task_is_listed() -> None:
+    from manigraph_sim.family import FAMILIES
     from manigraph_sim.tasks import TASKS
 
-    tasks = _section("Tasks and task files").split("* **Your own layouts**")[0]
-    listed = set(re.findall(r"`([a-z][a-z-]*)`", tasks))
+    listed = _named(_section("Tasks and task files").split("* **Your own layouts**")[0])
+    for name, family in FAMILIES.items():
+        readme = REPO / "families" / name / "README.md"
+        if readme.is_file():
+            listed |= _named(readme.read_text()) & set(family.tasks)
     assert set(TASKS) - listed == set()
 
 
