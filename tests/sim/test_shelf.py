@@ -2,13 +2,19 @@
 
 from __future__ import annotations
 
+import msgspec
 import numpy as np
 import pytest
+import torch
 
 from manigraph_lab.episode_loop import run_episode
+from manigraph_planner.family import FAMILIES
+from manigraph_planner.gnn.features import FeatureSpec, scene_to_graph
+from manigraph_planner.gnn.task_features import TaskFeatures
 from manigraph_planner.policies.base import Decision, Policy
 from manigraph_shared.errors import SkillError, TaskError
 from manigraph_shared.messages import EpisodeRequest, Scene
+from manigraph_shelf.cupboard import BOARD, WALL
 from manigraph_shelf.shelf_geometry import BACK, FRONT, ROW_ATTRIBUTE, levels_for, slots_for
 from manigraph_shelf.sim.family import ShelfFamily
 from manigraph_shelf.sim.options import ShelfOptions
@@ -89,3 +95,28 @@ def test_front_slots_first_never_finish_the_shelf() -> None:
     assert not record.success
     assert record.end.goals_filled == 2  # the two front slots; their back slots refused
     assert any(step.reason == "slot_blocked" for step in record.steps)
+
+
+def test_the_cupboard_shows_as_fixtures_the_planner_leaves_out() -> None:
+    request = EpisodeRequest(episode_id="e", task="shelf", objects=14, seed=53930)
+    layout = get_task("shelf", ShelfOptions(objects=14)).layout(np.random.default_rng(53930))
+    scene = shelf_scene(ShelfWorld(layout), layout, "e", 0.0, 0, ended=False)
+    boards = sorted((f for f in scene.fixtures if f.kind == BOARD), key=lambda f: f.position.z)
+    assert len(boards) == layout.geometry.levels == 3
+    assert sum(f.kind == WALL for f in scene.fixtures) == 3  # two sides and the back
+    extents = [(b.position, b.size) for b in boards]
+    for slot in layout.slots:  # under its level's board, over the one below, inside their spans
+        over, over_size = extents[slot.level]
+        x, y, z = slot.position
+        assert over_size is not None and z < over.z - over_size.z / 2
+        assert abs(x - over.x) < over_size.x / 2 and abs(y - over.y) < over_size.y / 2
+        if slot.level > 0:
+            under, under_size = extents[slot.level - 1]
+            assert under_size is not None and z > under.z + under_size.z / 2
+    bare = msgspec.structs.replace(scene, fixtures=[])
+    spec = FeatureSpec.for_task(TaskFeatures.learn([scene]))
+    assert spec.task is not None and spec.task.goal_attributes == (ROW_ATTRIBUTE,)
+    graph, without = scene_to_graph(scene, spec), scene_to_graph(bare, spec)
+    assert torch.equal(graph.x, without.x) and torch.equal(graph.edge_index, without.edge_index)
+    expert = FAMILIES["shelf"].expert(request)
+    assert expert.decide(scene) == expert.decide(bare)

@@ -14,14 +14,22 @@ from dataclasses import dataclass
 
 from manigraph_shelf.shelf_geometry import ShelfGeometry
 
+#: The fixture kinds a shelf scene shows its cupboard as (``SceneFixture.kind``): a board a
+#: level stands under, and a side or back wall. No action operates them; they are there to
+#: be seen (Foxglove, the exports) and avoided.
+BOARD = "board"
+WALL = "wall"
+
 
 @dataclass(frozen=True)
 class Panel:
-    """One box of the cupboard: its name, centre and full size (x, y, z), metres."""
+    """One box of the cupboard: its name, centre and full size (x, y, z), metres, and its
+    kind (:data:`BOARD` or :data:`WALL`)."""
 
     name: str
     centre: tuple[float, float, float]
     size: tuple[float, float, float]
+    kind: str = WALL
 
     @property
     def low(self) -> tuple[float, float, float]:
@@ -32,10 +40,15 @@ class Panel:
         return tuple(c + s / 2 for c, s in zip(self.centre, self.size, strict=True))  # type: ignore[return-value]
 
 
-def _panel(name: str, low: tuple[float, float, float], high: tuple[float, float, float]) -> Panel:
+def _panel(
+    name: str,
+    low: tuple[float, float, float],
+    high: tuple[float, float, float],
+    kind: str = WALL,
+) -> Panel:
     centre = tuple((a + b) / 2 for a, b in zip(low, high, strict=True))
     size = tuple(b - a for a, b in zip(low, high, strict=True))
-    return Panel(name, centre, size)  # type: ignore[arg-type]
+    return Panel(name, centre, size, kind)  # type: ignore[arg-type]
 
 
 def board_name(level: int) -> str:
@@ -55,6 +68,7 @@ def cupboard_panels(geometry: ShelfGeometry) -> list[Panel]:
             board_name(level + 1),
             (x0, y0, g.board_underside(level)),
             (x1, y1, g.board_underside(level) + g.board_thickness),
+            BOARD,
         )
         for level in range(g.levels)
     ]
