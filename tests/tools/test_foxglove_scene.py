@@ -310,3 +310,30 @@ def test_objects_take_their_named_colour_and_goals_say_what_they_accept(
     # A goal that accepts one size is drawn that size, and needs no words for it.
     assert entities["goal/big_row"]["cubes"][0]["size"]["x"] == pytest.approx(0.07)
     assert not entities["goal/big_row"].get("texts")
+
+
+@pytest.mark.parametrize("task", ["shelf", "dishwasher"])
+def test_every_fixture_is_drawn_with_its_kind_whatever_its_family(
+    decode_protobuf: ProtobufDecoder, task: str
+) -> None:
+    from manigraph_shared.messages import EpisodeRequest
+    from manigraph_sim.geometric.backend import GeometricBackend
+
+    backend = GeometricBackend()
+    backend.reset(EpisodeRequest(episode_id="e", task=task, objects=4), 0.0)
+    scene = backend.scene(1.0)
+    assert scene is not None and scene.fixtures
+    entities = decoded_update(decode_protobuf, scene_update(scene))
+    for fixture in scene.fixtures:
+        entity = entities[f"fixture/{fixture.id}"]
+        assert {"key": "kind", "value": fixture.kind} in entity["metadata"]
+        cube = entity["cubes"][0]
+        assert xyz(cube["pose"]) == pytest.approx(fixture.position.as_tuple())
+        assert cube["color"]["a"] < 1.0  # translucent: what stands inside shows through
+        size = (cube["size"]["x"], cube["size"]["y"], cube["size"]["z"])
+        if fixture.size is not None:  # a shelf's board or wall: its own box
+            assert size == pytest.approx(fixture.size.as_tuple())
+        else:  # a rack: a marker at its handle
+            assert max(size) < 0.05
+        assert entity["texts"][0]["text"].startswith(f"kind {fixture.kind}")
+    assert {f"object/{o.id}" for o in scene.objects} <= entities.keys()

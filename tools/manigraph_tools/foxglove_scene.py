@@ -6,6 +6,9 @@ What Foxglove's 3D panel draws, in the scene's frame:
   **covers** as wooden plates; objects not visible now (inside a closed box) faded;
 * **goals** as translucent cubes of the size of the objects they take, green when filled,
   orange when free, fainter when not visible now;
+* **fixtures** of any kind (a rack, a shelf's board): a translucent cube of its size at its
+  pose, or a small marker at its handle when it has no size, labelled with its kind and state;
+  its metadata names its ``kind`` too;
 * **boxes**: the contract has no box entity, so a box is drawn under every cover goal that
   stands above the table (a lid's place), as four walls with the covers' footprint, up to the
   lid;
@@ -54,6 +57,7 @@ from manigraph_shared.messages import (
     GoalCategory,
     ObjectCategory,
     Scene,
+    SceneFixture,
     SceneGoal,
     SceneObject,
 )
@@ -85,6 +89,9 @@ COVER = (0.72, 0.53, 0.32)
 BOX = Color(r=0.55, g=0.45, b=0.35, a=0.6)
 GOAL_FILLED = (0.18, 0.80, 0.25)
 GOAL_FREE = (1.00, 0.55, 0.00)
+FIXTURE = Color(r=0.60, g=0.62, b=0.66, a=0.35)
+#: The edge of the marker drawn at a fixture with no size (at its handle), metres.
+FIXTURE_MARKER = 0.03
 ARROW = Color(r=0.85, g=0.10, b=0.85, a=1.0)
 ESTOP = Color(r=0.95, g=0.05, b=0.05, a=1.0)
 #: How far above an object or goal its label stands, metres.
@@ -211,6 +218,33 @@ class SceneEntities:
             label = self._label(goal.position.as_tuple(), z, accepts, "accepts ")
             self.add(f"goal/{goal.id}", cubes=[cube], texts=[label] if label else [])
 
+    def fixtures(self) -> None:
+        """Every fixture, whatever its family calls its kind: its own box, or a marker at its
+        handle when the family gives it no size."""
+        for fixture in self.scene.fixtures:
+            size = fixture.size.as_tuple() if fixture.size else (FIXTURE_MARKER,) * 3
+            cube = CubePrimitive(
+                pose=_pose(fixture.position.as_tuple(), fixture.orientation),
+                size=Vector3(x=size[0], y=size[1], z=size[2]),
+                color=FIXTURE,
+            )
+            label = self._label(
+                fixture.position.as_tuple(), size[2], {"kind": fixture.kind, **fixture.state}
+            )
+            self.entities.append(self._fixture_entity(fixture, cube, label))
+
+    def _fixture_entity(
+        self, fixture: SceneFixture, cube: CubePrimitive, label: TextPrimitive | None
+    ) -> SceneEntity:
+        return SceneEntity(
+            timestamp=self.timestamp,
+            frame_id=self.scene.frame_id,
+            id=f"fixture/{fixture.id}",
+            metadata=[*self.metadata, KeyValuePair(key="kind", value=fixture.kind)],
+            cubes=[cube],
+            texts=[label] if label else [],
+        )
+
     def boxes(self) -> None:
         outer_x, outer_y, thickness = _size_of(self.scene, ObjectCategory.COVER)
         for goal in self.scene.goals:
@@ -311,6 +345,7 @@ def scene_update(
     """Everything to draw for ``scene``; ``action`` and ``explanation`` only when they are
     about the scene's episode; ``estop`` (the latest stop or release) when it is engaged."""
     entities = SceneEntities(scene)
+    entities.fixtures()
     entities.boxes()
     entities.goals()
     entities.objects()
