@@ -1,6 +1,7 @@
 """The shelf in SAPIEN: a static cupboard of boxes (:mod:`manigraph_shelf.cupboard`: its
 boards, side walls and back wall, the bottom level standing on the table) and the layout's
-4 cm blocks as rigid bodies on the table, where the geometric world lays them out.
+4 cm blocks as rigid bodies on the table, on the geometric world's start cells spread
+further apart (:func:`physical_start`).
 
 The task's state is read back off the simulated poses as the geometric
 :class:`~manigraph_shelf.sim.shelf_world.ShelfWorld` (:meth:`PhysicsShelf.view`): each block
@@ -12,6 +13,7 @@ block square to its faces.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Final
 
 import numpy as np
@@ -19,6 +21,7 @@ import sapien
 
 from manigraph_shared.messages import Quaternion, Scene
 from manigraph_shelf.cupboard import cupboard_panels
+from manigraph_shelf.shelf_geometry import start_cells
 from manigraph_shelf.sim.layout import ShelfLayout
 from manigraph_shelf.sim.scene import shelf_scene
 from manigraph_shelf.sim.shelf_world import ShelfWorld
@@ -27,6 +30,28 @@ from manigraph_sim.physics.physics_world import PhysicsWorld
 
 #: The cupboard's colour when rendering (light wood).
 CUPBOARD_COLOUR: Final = [0.78, 0.66, 0.5, 1.0]
+#: The physical table's start cells: the geometric grid's rows (x = 0.24, 0.32, 0.40 m)
+#: moved to these, and its columns (8 cm apart across y) spread to ``START_COLUMN_SPREAD``
+#: times as far apart, each block as far off its cell's centre as in the geometric world.
+#: The Panda takes a block from its side, its hand pitched down behind the block: the hand
+#: is 21 cm wide and reaches 16 cm back along its approach, low over the table, so a block
+#: 8 cm beside or behind the one taken was in its way from every side (2 of 10 episodes at
+#: 4 blocks succeeded on validation seeds 53200-53209). Columns 12.8 cm apart leave a way in
+#: from the robot's side past a block diagonally in front. The near row is moved out of the
+#: arm's reach limit by its base (x = 0.24 m: no top-down grasp there).
+START_ROWS: Final = {0.24: 0.28, 0.32: 0.35, 0.40: 0.42}
+START_COLUMN_SPREAD: Final = 1.6
+
+
+def physical_start(position: np.ndarray) -> np.ndarray:
+    """Where a block the geometric layout starts at ``position`` starts on the physical
+    table."""
+    cell = min(start_cells(), key=lambda c: float(np.hypot(c[0] - position[0], c[1] - position[1])))
+    row = min(START_ROWS, key=lambda x: abs(x - cell[0]))
+    moved = position.copy()
+    moved[0] = START_ROWS[row] + (position[0] - cell[0])
+    moved[1] = START_COLUMN_SPREAD * cell[1] + (position[1] - cell[1])
+    return moved
 
 
 class PhysicsShelf(PhysicsTaskWorld):
@@ -84,7 +109,7 @@ def physics_shelf(
     family: SimFamily, layout: ShelfLayout, make_world: MakePhysicsWorld, goal_tolerance: float
 ) -> PhysicsShelf:
     """The shelf episode of ``layout`` in a new simulator, settled."""
-    world = make_world(list(layout.bodies))
+    world = make_world([replace(b, position=physical_start(b.position)) for b in layout.bodies])
     shelf = PhysicsShelf(world, layout, family, goal_tolerance)
     world.step(round(world.config.settle_time / world.config.timestep))
     return shelf
