@@ -69,7 +69,7 @@ def expected_nodes(scene: Scene) -> dict[str, list[Any]]:
     nodes: list[Any] = [*scene.objects, *scene.goals, *scene.fixtures]
     categories = [f"object:{o.category.value}" for o in scene.objects]
     categories += [f"goal:{g.category.value}" for g in scene.goals]
-    categories += [f.kind for f in scene.fixtures]
+    categories += [codes.FIXTURE for _ in scene.fixtures]  # its kind in the fixtures column
     return {
         "ids": [node.id for node in nodes],
         "category": [codes.NODE_CATEGORIES.index(c) for c in categories],

@@ -20,7 +20,15 @@ from typing import Any
 import pyarrow.parquet as pq
 
 from manigraph_shared.errors import ConfigError
-from manigraph_shared.lerobot_codes import FAMILY_ACTIONS, NODE_CATEGORIES, NODES, ROBOT_TYPE
+from manigraph_shared.lerobot_codes import (
+    FAMILY_ACTIONS,
+    FIXTURE,
+    FIXTURES,
+    GOAL_ATTRIBUTES,
+    NODE_CATEGORIES,
+    NODES,
+    ROBOT_TYPE,
+)
 from manigraph_shared.messages import (
     Action,
     GoalCategory,
@@ -51,6 +59,9 @@ REQUIRED_COLUMNS = {
     "episode_index": "int64",
     "frame_index": "int64",
 }
+#: Columns read where a dataset has them: a dataset written before each existed reads as none
+#: (no attributes; fixtures as the ``rack`` code and ``open`` column say).
+OPTIONAL_COLUMNS = (f"{NODES}.attributes", GOAL_ATTRIBUTES, FIXTURES)
 #: The policy named on the rebuilt actions.
 POLICY = "lerobot-dataset"
 
@@ -98,7 +109,7 @@ def read_lerobot(root: Path) -> Iterator[Scene | Action]:
         for column in REQUIRED_COLUMNS:
             if column not in table.column_names:
                 raise ConfigError("dataset", f"column '{column}' is missing from {path}")
-        names = list(REQUIRED_COLUMNS)
+        names = list(REQUIRED_COLUMNS) + [c for c in OPTIONAL_COLUMNS if c in table.column_names]
         for row in table.select(names).to_pylist():
             episode = episode_ids.get(row["episode_index"], f"lerobot-{row['episode_index']}")
             scene = frame_scene(row, episode)
@@ -128,13 +139,10 @@ def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
     fixtures = {
         k: ids[k] for k in range(count) if ":" not in _category(row[f"{NODES}.category"][k])
     }
-    # Datasets exported before attributes existed have no such column: none then.
-    attributes = json.loads(row.get(f"{NODES}.attributes") or "[]") or [{}] * count
-    if len(attributes) != count:
-        raise ConfigError(
-            "dataset",
-            f"column '{NODES}.attributes' names {len(attributes)} nodes where the mask has {count}",
-        )
+    # Datasets exported before a column existed lack it: none of what it holds then.
+    attributes = _per_node(row, f"{NODES}.attributes", {}, count)
+    goal_attributes = _per_node(row, GOAL_ATTRIBUTES, {}, count)
+    described = _per_node(row, FIXTURES, None, count)
     objects, goals, scene_fixtures = [], [], []
     for k in range(count):
         kind, _, name = _category(row[f"{NODES}.category"][k]).partition(":")
@@ -169,16 +177,12 @@ def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
                     visible=visible,
                     fixture=fixtures.get(fixture) if fixture >= 0 else None,
                     accepts=attributes[k],
+                    attributes=goal_attributes[k],
                 )
             )
         else:
             scene_fixtures.append(
-                SceneFixture(
-                    id=ids[k],
-                    kind=kind,
-                    position=position,
-                    state={"open": bool(row[f"{NODES}.open"][k])},
-                )
+                _fixture(ids[k], kind, position, orientation, described[k], row[f"{NODES}.open"][k])
             )
     return Scene(
         episode_id=episode_id,
@@ -187,6 +191,42 @@ def frame_scene(row: dict[str, Any], episode_id: str) -> Scene:
         objects=objects,
         goals=goals,
         fixtures=scene_fixtures,
+    )
+
+
+def _per_node(row: dict[str, Any], column: str, absent: Any, count: int) -> list[Any]:
+    """``column``'s JSON list, one entry per node; ``absent`` for each where the dataset was
+    written before the column existed."""
+    values = json.loads(row.get(column) or "[]") or [absent] * count
+    if len(values) != count:
+        raise ConfigError(
+            "dataset", f"column '{column}' names {len(values)} nodes where the mask has {count}"
+        )
+    return list(values)
+
+
+def _fixture(
+    node_id: str,
+    category: str,
+    position: Vector3,
+    orientation: Quaternion,
+    described: dict[str, Any] | None,
+    open_: bool,
+) -> SceneFixture:
+    """A fixture node back: kind, state and size from the fixtures column; a dataset of
+    contract v3 named its one kind by code and kept only its ``open`` flag."""
+    if described is None:
+        if category == FIXTURE:
+            raise ConfigError("dataset", f"fixture '{node_id}' has no entry in '{FIXTURES}'")
+        return SceneFixture(id=node_id, kind=category, position=position, state={"open": open_})
+    size = described.get("size")
+    return SceneFixture(
+        id=node_id,
+        kind=described["kind"],
+        position=position,
+        orientation=orientation,
+        size=None if size is None else Vector3(x=size[0], y=size[1], z=size[2]),
+        state=described.get("state") or {},
     )
 
 

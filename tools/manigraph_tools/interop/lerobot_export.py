@@ -25,7 +25,15 @@ from typing import Any, TextIO
 
 from manigraph_shared import lerobot_codes as codes
 from manigraph_shared.errors import ConfigError, LogError
-from manigraph_shared.messages import Action, CompressedImage, EpisodeEvent, EpisodePhase, Scene
+from manigraph_shared.messages import (
+    Action,
+    CompressedImage,
+    EpisodeEvent,
+    EpisodePhase,
+    Scene,
+    SceneFixture,
+    SceneGoal,
+)
 from manigraph_tools.interop import lerobot_layout as layout
 from manigraph_tools.interop.lerobot_frames import LatestFrames
 from manigraph_tools.interop.source import SourceLog, check_paths, choose_cell
@@ -165,6 +173,8 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
     columns.update({name: [] for name in ("filled", "visible", "open", "rack")})
     ids: list[str] = []
     attributes: list[dict[str, Any]] = []
+    described: list[dict[str, Any] | None] = []
+    goal_attributes: list[dict[str, Any]] = []
 
     def node(
         category: str,
@@ -186,9 +196,13 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
         fixture = getattr(entity, "fixture", None)
         columns["rack"].append(fixtures.get(fixture, -1) if fixture is not None else -1)
         ids.append(entity.id)
-        attributes.append(
-            dict(getattr(entity, "attributes", None) or getattr(entity, "accepts", {}))
-        )
+        if isinstance(entity, SceneGoal):  # what it accepts; its own attributes apart
+            attributes.append(dict(entity.accepts))
+            goal_attributes.append(dict(entity.attributes))
+        else:
+            attributes.append(dict(getattr(entity, "attributes", {})))
+            goal_attributes.append({})
+        described.append(_fixture_columns(entity) if isinstance(entity, SceneFixture) else None)
 
     for obj in scene.objects:
         node(
@@ -196,8 +210,9 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
         )
     for goal in scene.goals:
         node(f"goal:{goal.category.value}", goal, [0.0] * 3, goal.filled, goal.visible)
-    for item in scene.fixtures:
-        node(item.kind, item, [0.0] * 3, False, True, bool(item.state.get("open", False)))
+    for item in scene.fixtures:  # any kind: named in the fixtures column, not by a code
+        size = list(item.size.as_tuple()) if item.size else [0.0] * 3
+        node(codes.FIXTURE, item, size, False, True, bool(item.state.get("open", False)))
     padding = max_nodes - len(ids)
     pads: dict[str, Any] = {"mask": False, "category": -1, "position": [0.0] * 3}
     pads.update({"orientation": [0.0] * 4, "size": [0.0] * 3, "filled": False})
@@ -207,7 +222,15 @@ def scene_nodes(scene: Scene, max_nodes: int) -> dict[str, Any]:
     }
     row[f"{codes.NODES}.ids"] = json.dumps(ids)
     row[f"{codes.NODES}.attributes"] = json.dumps(attributes)
+    row[codes.GOAL_ATTRIBUTES] = json.dumps(goal_attributes)
+    row[codes.FIXTURES] = json.dumps(described)
     return row
+
+
+def _fixture_columns(fixture: SceneFixture) -> dict[str, Any]:
+    """What the fixtures column keeps of ``fixture``: all a reader needs to rebuild it."""
+    size = list(fixture.size.as_tuple()) if fixture.size else None
+    return {"kind": fixture.kind, "state": dict(fixture.state), "size": size}
 
 
 def decision(action: Action, ids: list[str]) -> list[int]:

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from manigraph_shared.lerobot_codes import NODES, ROBOT_TYPE
+from manigraph_shared.lerobot_codes import FIXTURES, GOAL_ATTRIBUTES, NODES, ROBOT_TYPE
 
 #: The LeRobot dataset format written (``meta/info.json``'s ``codebase_version``).
 CODEBASE_VERSION = "v3.0"
@@ -52,6 +52,10 @@ def node_features(max_nodes: int) -> dict[str, dict[str, Any]]:
         f"{NODES}.ids": {"dtype": "string", "shape": [1], "names": None},
         #: JSON: per node, an object's attributes or a goal's accepts ({} for neither).
         f"{NODES}.attributes": {"dtype": "string", "shape": [1], "names": None},
+        #: JSON: per node, a goal's own attributes ({} for objects and fixtures).
+        GOAL_ATTRIBUTES: {"dtype": "string", "shape": [1], "names": None},
+        #: JSON: per node, a fixture's kind, state and size (null for objects and goals).
+        FIXTURES: {"dtype": "string", "shape": [1], "names": None},
     }
 
 

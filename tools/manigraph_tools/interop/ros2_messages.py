@@ -65,6 +65,9 @@ AS_JSON: tuple[type[Message], ...] = (Action, Explanation, EpisodeEvent)
 CUBE, ADD, DELETEALL = 1, 0, 3
 GOAL_ALPHA = 0.35
 DEFAULT_SIZE = (0.04, 0.04, 0.04)
+#: A fixture of any kind: translucent grey; one without a size is a marker of this edge.
+FIXTURE_RGBA = (0.6, 0.62, 0.66, 0.35)
+FIXTURE_MARKER = 0.03
 
 
 @cache
@@ -226,8 +229,10 @@ def _pose(position: Any, orientation: Any) -> Any:
 
 
 def scene_markers(scene: Scene) -> Any:
-    """A ``DELETEALL`` marker, then one cube per object (``ns`` objects) and per goal (``ns``
-    goals, translucent; green when filled, orange when free), ids stable per entity id.
+    """A ``DELETEALL`` marker, then one cube per object (``ns`` objects), per goal (``ns``
+    goals, translucent; green when filled, orange when free) and per fixture of any kind
+    (``ns`` fixtures, translucent grey, its size or a small marker at its handle, its text
+    ``id (kind ..., state)``), ids stable per entity id.
 
     A goal is drawn the size of the scene's first object of its category (the contract gives
     goals no size)."""
@@ -253,6 +258,12 @@ def scene_markers(scene: Scene) -> Any:
         )
         if goal.accepts:
             cube.text = f"{goal.id} (accepts {describe(goal.accepts)})"
+        markers.append(cube)
+    for fixture in scene.fixtures:
+        size = fixture.size.as_tuple() if fixture.size else (FIXTURE_MARKER,) * 3
+        pose = _pose(fixture.position, fixture.orientation)
+        cube = _cube("fixtures", fixture.id, stamp, frame, pose, size, _colour(*FIXTURE_RGBA))
+        cube.text = f"{fixture.id} ({describe({'kind': fixture.kind, **fixture.state})})"
         markers.append(cube)
     return _new(MARKER_ARRAY, markers=markers)
 
