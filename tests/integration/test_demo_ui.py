@@ -530,3 +530,36 @@ def test_up_refuses_a_proposing_policy_without_the_page_to_show_it() -> None:
     )
     assert result.returncode == CONFIG_EXIT_CODE
     assert "propose: only with --policy human" in result.stderr
+
+
+@needs_chromium
+@pytest.mark.timeout(600)
+def test_a_shelf_demonstration_is_clicked_with_its_cupboard_drawn_and_no_fixture_button(
+    world: Stack, open_page: Any
+) -> None:
+    person, output = open_page("--task", "shelf", "--objects", "2", "--seed", "53951")
+    episode = person.start_episode()
+    scene = person.state()["scene"]
+    panels = {f["id"] for f in scene["fixtures"]}
+    assert len(panels) == 5  # two boards, two sides and the back wall
+    for view in ("#top-view", "#side-view"):  # every panel drawn as its box, in both views
+        drawn = person.page.locator(f"{view} .fixture-box").evaluate_all(
+            "nodes => nodes.map(n => n.dataset.fixture)"
+        )
+        assert set(drawn) == panels
+    assert person.page.locator("#fixture-buttons button").count() == 0
+    assert person.page.locator("#fixtures").is_hidden()
+    assert person.page.locator("#orientations").is_hidden()  # no slot stands in a fixture
+
+    for row in ("back", "front"):  # a column is filled back first
+        person.wait_ready()
+        scene = person.state()["scene"]
+        slot = next(g["id"] for g in scene["goals"] if g["id"].endswith(row))
+        block = next(o["id"] for o in scene["objects"] if not o["filled"])
+        person.move(block, slot)
+    person.wait_message("demonstration 1 recorded")
+
+    events, pairs = recorded(output)
+    assert events[-1].success and events[-1].episode_id == episode
+    assert len(pairs) == 2 and all(s.fixtures for s, _ in pairs)
+    assert all(a.orientation_index is None and a.family_action is None for _, a in pairs)

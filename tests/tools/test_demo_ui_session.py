@@ -524,3 +524,23 @@ def test_the_proposer_asks_the_policy_in_its_own_thread_and_a_bad_policy_is_refu
     assert session.pending is None and session.step == 0
     with pytest.raises(ConfigError, match="propose: policy: 'nobody'"):
         load_proposer("nobody")
+
+
+def test_a_shelf_episode_plays_on_the_page_its_cupboard_drawn_and_given_no_button() -> None:
+    from manigraph_tools.click_page.service import _family_fields
+
+    world = World(EpisodeRequest(episode_id="ep-shelf", task="shelf", objects=4, seed=53950))
+    scene = world.scene()
+    view = scene_view(scene)
+    fixtures = {f["id"]: f for f in view["fixtures"]}  # type: ignore[union-attr]
+    assert {f["kind"] for f in fixtures.values()} == {"board", "wall"}
+    for fixture in scene.fixtures:  # upright boxes: their extents are their sizes
+        assert fixture.size is not None
+        assert fixtures[fixture.id]["extent"] == pytest.approx(fixture.size.as_tuple())
+    actions = _family_fields()["fixture_actions"]
+    assert not {"board", "wall"} & set(actions)  # the page draws no button for them
+    session, _ = session_on(world)
+    slot = next(g for g in scene.goals if g.attributes["shelf_row"] == "back")
+    place = session.act(Click("block_0", slot.id))
+    # a plain pick and place: no orientation for a slot that stands in no fixture
+    assert (place.goal_id, place.orientation_index, place.family_action) == (slot.id, None, None)

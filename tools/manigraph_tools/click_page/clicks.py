@@ -77,8 +77,8 @@ def action_for(
             )
         if orientation is not None and not 0 <= orientation < NUM_ORIENTATIONS:
             raise ClickRefused(f"orientation_index: must be in 0..{NUM_ORIENTATIONS - 1}")
-        if orientation is None and scene.fixtures:
-            orientation = nearest_orientation(goal.orientation)  # the slot's own
+        if orientation is None and goal.fixture is not None:
+            orientation = nearest_orientation(goal.orientation)  # the fixture's slot's own
     return Action(
         decision_id=derived_id(episode_id, ":", str(step)),
         episode_id=episode_id,

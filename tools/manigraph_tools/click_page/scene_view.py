@@ -112,9 +112,18 @@ def scene_view(scene: Scene) -> dict[str, object]:
         }
         for goal in scene.goals
     ]
-    # A fixture's state beside its position (``open`` of a rack): what the page draws it by.
+    # A fixture's state beside its position (``open`` of a rack): what the page draws it by;
+    # its extents where its family gives it a size (a shelf's board is drawn as its box).
     fixtures = [
-        {**fixture.state, "id": fixture.id, "kind": fixture.kind, **_xyz(fixture.position)}
+        {
+            **fixture.state,
+            "id": fixture.id,
+            "kind": fixture.kind,
+            **_xyz(fixture.position),
+            "extent": None
+            if fixture.size is None
+            else world_extent(fixture.size.as_tuple(), fixture.orientation),
+        }
         for fixture in scene.fixtures
     ]
     return {

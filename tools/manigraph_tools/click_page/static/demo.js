@@ -202,7 +202,8 @@ function render() {
   renderMessages(state.messages);
   const fixtures = state.scene ? state.scene.fixtures : [];
   renderFixtureButtons(fixtures, state.defaults.fixture_actions || {});
-  $("orientations").hidden = fixtures.length === 0;
+  // Orientations matter where goals stand in a fixture (a rack's slots), not for every fixture.
+  $("orientations").hidden = !(state.scene && state.scene.goals.some((g) => g.fixture));
   if (page.selected && !objectInScene(page.selected)) page.selected = null;
   renderSelection();
   renderOrientations();
@@ -412,7 +413,10 @@ function growBounds(name, view, scene) {
     const [eu, ev] = extents(view, item);
     points.push([view.u(item) - eu / 2, view.v(item) - ev / 2], [view.u(item) + eu / 2, view.v(item) + ev / 2]);
   }
-  for (const fixture of scene.fixtures) points.push([view.u(fixture), view.v(fixture)]);
+  for (const fixture of scene.fixtures) {
+    const [eu, ev] = fixture.extent ? extents(view, fixture) : [0, 0];
+    points.push([view.u(fixture) - eu / 2, view.v(fixture) - ev / 2], [view.u(fixture) + eu / 2, view.v(fixture) + ev / 2]);
+  }
   points.push([0, 0]); // the robot (top view) or the table under it (side view)
   let box = page.bounds[name];
   for (const [u, v] of points) {
@@ -477,13 +481,27 @@ function rackBox(scene, rack, view) {
 }
 
 function rackName(fixture) {
-  return `${fixture.id.replace(/_/g, " ")} (${fixture.open ? "out" : "in"})`;
+  const state = "open" in fixture ? ` (${fixture.open ? "out" : "in"})` : ` (${fixture.kind})`;
+  return `${fixture.id.replace(/_/g, " ")}${state}`;
+}
+
+// A fixture its family gives a size (a shelf's board or wall) is drawn as its own box, in
+// both views, under everything else; named in its tooltip, not in words on the page.
+function drawFixtureBox(svg, view, fixture) {
+  const [eu, ev] = extents(view, fixture).map((e) => Math.max(e, 4));
+  const group = element("g", { class: "fixture-box", "data-fixture": fixture.id }, svg);
+  element("rect", { x: view.u(fixture) - eu / 2, y: view.v(fixture) - ev / 2, width: eu, height: ev }, group);
+  element("title", {}, group).textContent = rackName(fixture);
 }
 
 function drawRacks(svg, view, scene) {
   // The lower fixture under the upper one (the bottom rack under the top one).
   const racks = [...scene.fixtures].sort((a, b) => a.z - b.z);
   for (const rack of racks) {
+    if (rack.extent) {
+      drawFixtureBox(svg, view, rack);
+      continue;
+    }
     const box = rackBox(scene, rack, view);
     const group = element("g", { class: `rack ${rack.open ? "open" : "closed"}`, "data-rack": rack.id }, svg);
     element("rect", { x: box.u0, y: box.v0, width: box.u1 - box.u0, height: box.v1 - box.v0 }, group);
@@ -494,6 +512,10 @@ function drawRacks(svg, view, scene) {
 
 function drawRackLevels(svg, view, scene, box) {
   for (const rack of scene.fixtures) {
+    if (rack.extent) {
+      drawFixtureBox(svg, view, rack);
+      continue;
+    }
     const level = view.v(rack);
     const group = element("g", { class: `rack ${rack.open ? "open" : "closed"}` }, svg);
     element("line", { x1: box.u0 + 20, x2: box.u1 - 20, y1: level, y2: level }, group);
