@@ -31,6 +31,7 @@ from manigraph_shared.messages import (
     SkillStatus,
     Vector3,
 )
+from manigraph_shelf.shelf_geometry import is_shelf_scene
 from manigraph_shelf.skills.front_motion import (
     MAX_TILT,
     PICK_PITCHES,
@@ -98,7 +99,9 @@ def place_from_front(
             raise SkillError("outside_workspace", f"{name} at {point.as_tuple()}")
     status(SkillState.RUNNING)
     driver = runner.driver
-    if not isinstance(driver, PandaMotionDriver):
+    # A driver that moves objects as told, or a scene of another family whose goal ids look
+    # like slots (``SkillFamily.takes`` sees the action only): the plain pick and place.
+    if not isinstance(driver, PandaMotionDriver) or not is_shelf_scene(scene):
         pick, place = choose_grasps(scene, item, goal.position)
         driver.pick(Motion(action.decision_id, item.id, item.position, item.orientation, pick))
         driver.place(Motion(action.decision_id, item.id, goal.position, goal.orientation, place))
