@@ -33,3 +33,20 @@ def test_a_shelf_scene_is_the_shelf_familys_and_demonstrated_by_its_expert() -> 
     record = run_episode(load_policy("shelf-expert"), request)
     assert family_of(record.steps[0].scene).name == "shelf"
     assert FAMILIES["shelf"].expert(request).decide(record.steps[0].scene) is not None
+
+
+def test_after_a_refusal_the_expert_offers_the_other_blocks_then_the_other_slots() -> None:
+    """A refused pick (no grasp for one block where it lies) must not end the episode: the
+    ranking holds every loose block for the drawn slot, then the other free back slots, and
+    never a front slot while a back one is free."""
+    request = EpisodeRequest(episode_id="e", task="shelf", objects=6, seed=53914)
+    scene = run_episode(load_policy("shelf-expert"), request).steps[0].scene
+    expert = load_policy("shelf-expert")
+    ranked = expert.ranked(scene)
+    assert ranked[0] == expert.decide(scene)
+    loose = {obj.id for obj in scene.objects if not obj.filled}
+    backs = {g.id for g in scene.goals if g.attributes[ROW_ATTRIBUTE] == BACK and not g.filled}
+    assert len(ranked) == len(loose) * len(backs) == len(set(ranked))
+    assert {d.goal_id for d in ranked} == backs
+    first_slot = [d for d in ranked if d.goal_id == ranked[0].goal_id]
+    assert ranked[: len(loose)] == first_slot and {d.object_id for d in first_slot} == loose

@@ -22,8 +22,8 @@ from manigraph_shelf.shelf_geometry import BACK, FRONT, ROW_ATTRIBUTE
 _T = TypeVar("_T", SceneGoal, SceneObject)
 
 
-def _drawn(items: Sequence[_T], key: str) -> _T:
-    return min(items, key=lambda item: (zlib.crc32((key + item.id).encode()), item.id))
+def _in_drawn_order(items: Sequence[_T], key: str) -> list[_T]:
+    return sorted(items, key=lambda item: (zlib.crc32((key + item.id).encode()), item.id))
 
 
 @register_policy("shelf-expert")
@@ -32,9 +32,18 @@ class ShelfExpert(Policy):
     then into a free front slot; nothing once every slot is filled."""
 
     def decide(self, scene: Scene) -> Decision | None:
+        ranked = self.ranked(scene)
+        return ranked[0] if ranked else None
+
+    def ranked(self, scene: Scene) -> list[Decision]:
+        """Every block still on the table into every free slot of the row being filled (back
+        while one is free): the drawn slot with each block in drawn order first, then the next
+        slot. A refused pick (no grasp for that block where it lies, the commonest refusal in
+        physics) is followed by another block for the same slot; never by a front slot while a
+        back one is free, which would block it."""
         loose = [obj for obj in scene.objects if not obj.filled]
         if not loose:
-            return None
+            return []
         for row in (BACK, FRONT):
             free = [
                 goal
@@ -43,5 +52,10 @@ class ShelfExpert(Policy):
             ]
             if free:
                 key = f"{scene.episode_id}/{len(loose)}/"
-                return Decision(_drawn(loose, key).id, _drawn(free, key).id)
-        return None
+                blocks = _in_drawn_order(loose, key)
+                return [
+                    Decision(block.id, slot.id)
+                    for slot in _in_drawn_order(free, key)
+                    for block in blocks
+                ]
+        return []
