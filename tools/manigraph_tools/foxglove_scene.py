@@ -6,7 +6,7 @@ What Foxglove's 3D panel draws, in the scene's frame:
   **covers** as wooden plates; objects not visible now (inside a closed box) faded;
 * **goals** as translucent cubes of the size of the objects they take, green when filled,
   orange when free, fainter when not visible now;
-* **fixtures** of any kind (a rack, a shelf's board): a translucent cube of its size at its
+* **fixtures** of any kind (a rack, a board): a translucent cube of its size at its
   pose, or a small marker at its handle when it has no size, labelled with its kind and state;
   its metadata names its ``kind`` too;
 * **boxes**: the contract has no box entity, so a box is drawn under every cover goal that

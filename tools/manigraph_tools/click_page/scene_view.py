@@ -113,7 +113,7 @@ def scene_view(scene: Scene) -> dict[str, object]:
         for goal in scene.goals
     ]
     # A fixture's state beside its position (``open`` of a rack): what the page draws it by;
-    # its extents where its family gives it a size (a shelf's board is drawn as its box).
+    # its extents where its family gives it a size (a board or a wall is drawn as its box).
     fixtures = [
         {
             **fixture.state,

@@ -485,7 +485,7 @@ function rackName(fixture) {
   return `${fixture.id.replace(/_/g, " ")}${state}`;
 }
 
-// A fixture its family gives a size (a shelf's board or wall) is drawn as its own box, in
+// A fixture its family gives a size (a board, a wall) is drawn as its own box, in
 // both views, under everything else; named in its tooltip, not in words on the page.
 function drawFixtureBox(svg, view, fixture) {
   const [eu, ev] = extents(view, fixture).map((e) => Math.max(e, 4));
