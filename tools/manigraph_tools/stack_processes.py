@@ -121,10 +121,12 @@ def cell_specs(
 def planner_policy(args: argparse.Namespace) -> str:
     """The policy the planner plays: the one named, or for the default (``expert``) the expert
     of the task's family (its tools part's ``expert_of``; blocks and task files: ``expert``)."""
-    family = family_of_task(args.task) if getattr(args, "task_file", None) is None else None
-    if args.policy != DEFAULT_EXPERT or family is None or family.expert_of is None:
+    if args.policy != DEFAULT_EXPERT or getattr(args, "task_file", None) is not None:
         return str(args.policy)
-    return family.expert_of(vars(args))
+    family = family_of_task(args.task)
+    return (
+        args.policy if family is None or family.expert_of is None else family.expert_of(vars(args))
+    )
 
 
 def planner_argv(args: argparse.Namespace, plan: EpisodePlan | None) -> list[str]:
