@@ -50,7 +50,7 @@ def _where(module_name: str) -> str:
 
 def _options(registry: Registry[object]) -> str:
     names = []
-    for name in registry:
+    for name in sorted(registry):
         options = registry.entry(name).options
         label = options.__name__ if options is not None else "none"
         if label not in names:
@@ -64,7 +64,8 @@ def registry_table() -> str:
     for attribute, module_name, filler in _rows():
         importlib.import_module(filler)
         registry: Registry[object] = getattr(importlib.import_module(module_name), attribute)
-        entries = ", ".join(registry.names()) or "(none)"
+        # by name: the order entries register in depends on what a process imported first
+        entries = ", ".join(sorted(registry.names())) or "(none)"
         rows.append(
             f"| `{attribute}` | `{_where(module_name)}` | {entries} | {_options(registry)} |"
         )
