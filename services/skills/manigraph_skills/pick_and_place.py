@@ -10,7 +10,14 @@ import time
 from collections.abc import Callable
 
 from manigraph_shared.errors import SkillError
-from manigraph_shared.messages import Action, Scene, SkillState, SkillStatus
+from manigraph_shared.messages import (
+    Action,
+    Scene,
+    SceneGoal,
+    SceneObject,
+    SkillState,
+    SkillStatus,
+)
 from manigraph_shared.orientations import orientation
 from manigraph_shared.workspace import Workspace
 from manigraph_skills.drivers.base import Motion, RobotDriver
@@ -27,6 +34,23 @@ class PickAndPlace:
         self.driver = driver
         self.workspace = workspace
         self.clock = clock
+
+    def object_and_goal(self, action: Action, scene: Scene) -> tuple[SceneObject, SceneGoal]:
+        """The action's object and goal in ``scene``, both within the workspace
+        (``SkillError``: ``unknown_object``, ``unknown_goal``, ``outside_workspace``); a
+        family's own place action checks its pair the same way."""
+        try:
+            item = scene.object(action.object_id)
+        except KeyError:
+            raise SkillError("unknown_object", action.object_id) from None
+        try:
+            goal = scene.goal(action.goal_id)
+        except KeyError:
+            raise SkillError("unknown_goal", action.goal_id) from None
+        for name, point in (("object", item.position), ("goal", goal.position)):
+            if not self.workspace.contains(point):
+                raise SkillError("outside_workspace", f"{name} at {point.as_tuple()}")
+        return item, goal
 
     def execute(
         self, action: Action, scene: Scene | None, report: Callable[[SkillStatus], None]
@@ -54,17 +78,7 @@ class PickAndPlace:
                 owner.part("run_action")(self, action, scene, status)
                 return status(SkillState.SUCCEEDED)
 
-            try:
-                item = scene.object(action.object_id)
-            except KeyError:
-                raise SkillError("unknown_object", action.object_id) from None
-            try:
-                goal = scene.goal(action.goal_id)
-            except KeyError:
-                raise SkillError("unknown_goal", action.goal_id) from None
-            for name, point in (("object", item.position), ("goal", goal.position)):
-                if not self.workspace.contains(point):
-                    raise SkillError("outside_workspace", f"{name} at {point.as_tuple()}")
+            item, goal = self.object_and_goal(action, scene)
             turn = goal.orientation
             if action.orientation_index is not None:
                 turn = orientation(action.orientation_index)

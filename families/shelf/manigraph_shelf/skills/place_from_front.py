@@ -86,17 +86,7 @@ def place_from_front(
     status: Callable[[SkillState], SkillStatus],
 ) -> None:
     """Put the action's block into the action's slot."""
-    try:
-        item = scene.object(action.object_id)
-    except KeyError:
-        raise SkillError("unknown_object", action.object_id) from None
-    try:
-        goal = scene.goal(action.goal_id)
-    except KeyError:
-        raise SkillError("unknown_goal", action.goal_id) from None
-    for name, point in (("object", item.position), ("goal", goal.position)):
-        if not runner.workspace.contains(point):
-            raise SkillError("outside_workspace", f"{name} at {point.as_tuple()}")
+    item, goal = runner.object_and_goal(action, scene)
     status(SkillState.RUNNING)
     driver = runner.driver
     # A driver that moves objects as told, or a scene of another family whose goal ids look
