@@ -66,8 +66,10 @@ def test_a_physics_episode_with_perception_as_the_only_scene_source(tmp_path) ->
     images = list(read_log(log, ["manigraph/camera/front/image"]))
     assert images and isinstance(images[0].decode(), CompressedImage)
     scenes = list(read_log(log, [Scene.key]))
-    # Perception makes at most one Scene per frame; the sim (10 Hz) would have made many more.
-    assert 0 < len(scenes) <= len(images)
+    # Perception makes at most one Scene per frame; the sim (10 Hz) would have made many more
+    # (tens over the episode). The log may miss a frame or two that perception saw: once, in a
+    # fresh-clone run at load ~1.5, it held 5 scenes and 4 images.
+    assert 0 < len(scenes) <= len(images) + 2
 
 
 @pytest.mark.slow
